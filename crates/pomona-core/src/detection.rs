@@ -1,0 +1,63 @@
+//! What a detector reports: one record per fruit found, one file per frame.
+
+use nalgebra::{Point3, Unit, Vector3};
+use serde::{Deserialize, Serialize};
+
+use crate::PixelBox;
+
+/// A detected fruit. Higher `score` means more confident; scores are comparable only within one
+/// pipeline (they are SVM decision values or similar, not probabilities, unless stated).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Detection {
+    /// Estimated fruit centre in the camera frame, metres.
+    pub center_m: Point3<f64>,
+    /// Confidence; higher is more confident.
+    pub score: f64,
+    /// Estimated diameter, metres, when the method measures size.
+    #[serde(default)]
+    pub diameter_m: Option<f64>,
+    /// Estimated symmetry axis, when the method estimates one.
+    #[serde(default, with = "crate::truth::unit_axis")]
+    pub axis: Option<Unit<Vector3<f64>>>,
+    /// Image-space box, when the method has one.
+    #[serde(default)]
+    pub bbox_px: Option<PixelBox>,
+    /// Fruit kind, when the method distinguishes kinds.
+    #[serde(default)]
+    pub kind: Option<String>,
+}
+
+/// All detections of one frame (`<out>/<frame>.json`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FrameDetections {
+    /// Frame stem the detections belong to.
+    pub frame: String,
+    /// Name of the pipeline that produced them.
+    pub pipeline: String,
+    /// The detections, in any order.
+    pub detections: Vec<Detection>,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn round_trips_through_json() {
+        let d = FrameDetections {
+            frame: "000001".into(),
+            pipeline: "shape-fit".into(),
+            detections: vec![Detection {
+                center_m: Point3::new(0.1, -0.2, 0.7),
+                score: 1.25,
+                diameter_m: Some(0.08),
+                axis: Some(Vector3::y_axis()),
+                bbox_px: Some(PixelBox::new(1.0, 2.0, 3.0, 4.0).unwrap()),
+                kind: None,
+            }],
+        };
+        let json = serde_json::to_string(&d).unwrap();
+        assert!(json.contains(r#""center_m":[0.1,-0.2,0.7]"#));
+        assert_eq!(serde_json::from_str::<FrameDetections>(&json).unwrap(), d);
+    }
+}

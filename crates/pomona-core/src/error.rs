@@ -1,0 +1,51 @@
+//! Errors raised when a value cannot form a valid core type.
+
+/// Why a core value was rejected.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum CoreError {
+    /// A camera parameter is not finite or not positive.
+    #[error("camera parameter `{name}` must be finite and positive, got {value}")]
+    InvalidCameraParameter {
+        /// Parameter name as it appears in `camera.json`.
+        name: &'static str,
+        /// The offending value.
+        value: f64,
+    },
+    /// A buffer's length does not match the declared image or cloud size.
+    #[error("{what}: expected {expected} elements for {width}x{height}, got {actual}")]
+    SizeMismatch {
+        /// Which buffer.
+        what: &'static str,
+        /// Declared width.
+        width: u32,
+        /// Declared height.
+        height: u32,
+        /// Elements implied by the declared size.
+        expected: usize,
+        /// Elements actually supplied.
+        actual: usize,
+    },
+    /// Two images (or an image and the camera) that must have the same size do not.
+    #[error("{what}: {a_w}x{a_h} does not match {b_w}x{b_h}")]
+    DimensionsDisagree {
+        /// Which pair.
+        what: &'static str,
+        /// First width.
+        a_w: u32,
+        /// First height.
+        a_h: u32,
+        /// Second width.
+        b_w: u32,
+        /// Second height.
+        b_h: u32,
+    },
+    /// A depth unit that is not finite and positive.
+    #[error("depth unit must be finite and positive, got {0}")]
+    InvalidDepthUnit(f64),
+    /// A vector that must be normalised has zero or non-finite length.
+    #[error("{0} must be a finite non-zero vector")]
+    DegenerateVector(&'static str),
+    /// A bounding box whose corners are out of order or not finite.
+    #[error("bounding box [{0}, {1}, {2}, {3}] must be finite with xmin <= xmax and ymin <= ymax")]
+    InvalidBox(f64, f64, f64, f64),
+}

@@ -1,0 +1,116 @@
+//! Ground truth for one frame: which fruit are there, where, how big, how visible.
+//!
+//! Every geometric field is optional because real annotations are partial (a caliper diameter and
+//! a 2D box but no 3D centre, say). Keys this version does not know are kept in `extra` and written
+//! back unchanged, so tools can round-trip files made by newer tools or by hand.
+
+use nalgebra::{Point3, Unit, Vector3};
+use serde::{Deserialize, Serialize};
+
+use crate::PixelBox;
+
+/// Annotation of one frame (`truth/<frame>.json`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FrameTruth {
+    /// `true` when every fruit in the frame is annotated; `false` means unannotated fruit exist,
+    /// so precision cannot be measured on this frame.
+    pub complete: bool,
+    /// The annotated fruit.
+    #[serde(default)]
+    pub fruits: Vec<FruitTruth>,
+    /// Keys not part of the format, kept verbatim.
+    #[serde(flatten)]
+    pub extra: serde_json::Map<String, serde_json::Value>,
+}
+
+/// One annotated fruit.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FruitTruth {
+    /// Identifier, unique within the frame (stable across frames when the source tracks fruit).
+    pub id: String,
+    /// Fruit kind, for example `"pepper"` or `"apple"`.
+    pub kind: String,
+    /// Centre of the whole fruit body in the camera frame, metres.
+    #[serde(default)]
+    pub center_m: Option<Point3<f64>>,
+    /// Largest equatorial diameter, metres.
+    #[serde(default)]
+    pub diameter_m: Option<f64>,
+    /// Unit symmetry axis in the camera frame (its reflection-symmetry planes contain it).
+    #[serde(default, with = "unit_axis")]
+    pub axis: Option<Unit<Vector3<f64>>>,
+    /// Box around the visible pixels.
+    #[serde(default)]
+    pub bbox_px: Option<PixelBox>,
+    /// Visible pixels divided by the pixels the fruit would cover alone, in `[0, 1]`.
+    #[serde(default)]
+    pub visibility: Option<f64>,
+    /// Keys not part of the format, kept verbatim.
+    #[serde(flatten)]
+    pub extra: serde_json::Map<String, serde_json::Value>,
+}
+
+/// Serde for an optional unit vector stored as a plain `[x, y, z]` array. Reading normalises and
+/// rejects zero or non-finite vectors, so a `Unit` is always a unit.
+pub(crate) mod unit_axis {
+    use nalgebra::{Unit, Vector3};
+    use serde::{de::Error, Deserialize, Deserializer, Serialize, Serializer};
+
+    pub fn serialize<S: Serializer>(
+        v: &Option<Unit<Vector3<f64>>>,
+        s: S,
+    ) -> Result<S::Ok, S::Error> {
+        v.map(|u| [u.x, u.y, u.z]).serialize(s)
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(
+        d: D,
+    ) -> Result<Option<Unit<Vector3<f64>>>, D::Error> {
+        let Some(a) = Option::<[f64; 3]>::deserialize(d)? else {
+            return Ok(None);
+        };
+        let v = Vector3::from(a);
+        let n = v.norm();
+        if !(n.is_finite() && n > 0.0) {
+            return Err(D::Error::custom("axis must be a finite non-zero vector"));
+        }
+        Ok(Some(Unit::new_unchecked(v / n)))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn reads_partial_annotations_and_keeps_unknown_keys() {
+        let json = r#"{"complete": false, "note": "hand made",
+            "fruits": [{"id": "7", "kind": "apple", "bbox_px": [1, 2, 30, 40],
+                        "diameter_m": 0.07, "height_m": 0.068, "center_m": null}]}"#;
+        let t: FrameTruth = serde_json::from_str(json).unwrap();
+        assert!(!t.complete);
+        assert_eq!(t.extra["note"], "hand made");
+        let f = &t.fruits[0];
+        assert_eq!(f.center_m, None);
+        assert_eq!(f.bbox_px.unwrap().xmax, 30.0);
+        assert_eq!(f.extra["height_m"], 0.068);
+        let back: FrameTruth = serde_json::from_str(&serde_json::to_string(&t).unwrap()).unwrap();
+        assert_eq!(back, t);
+    }
+
+    #[test]
+    fn axis_is_normalised_and_zero_axis_rejected() {
+        let json = r#"{"id": "a", "kind": "eggplant", "axis": [0, 3, 4]}"#;
+        let f: FruitTruth = serde_json::from_str(json).unwrap();
+        let a = f.axis.unwrap();
+        assert!((a.y - 0.6).abs() < 1e-12 && (a.z - 0.8).abs() < 1e-12);
+        let bad = r#"{"id": "a", "kind": "eggplant", "axis": [0, 0, 0]}"#;
+        assert!(serde_json::from_str::<FruitTruth>(bad).is_err());
+    }
+
+    #[test]
+    fn inverted_box_is_rejected() {
+        let bad = r#"{"id": "a", "kind": "x", "bbox_px": [10, 0, 5, 4]}"#;
+        assert!(serde_json::from_str::<FruitTruth>(bad).is_err());
+    }
+}

@@ -211,6 +211,15 @@ impl PointCloud {
         (u < w && v < h).then(|| &self.points[v as usize * w as usize + u as usize])
     }
 
+    /// Replaces every position by `f(position)`, keeping layout and attributes (for example to
+    /// transform a cloud, or to invalidate points by returning `NaN`).
+    pub fn map_points(mut self, f: impl Fn(&Point3<f32>) -> Point3<f32>) -> Self {
+        for p in &mut self.points {
+            *p = f(p);
+        }
+        self
+    }
+
     /// A copy without invalid points (the layout becomes unorganised).
     pub fn without_invalid(&self) -> Self {
         let keep: Vec<usize> = (0..self.points.len())

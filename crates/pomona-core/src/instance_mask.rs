@@ -35,7 +35,11 @@ impl InstanceMask {
 
     /// An all-background mask.
     pub fn background(width: u32, height: u32) -> Self {
-        Self { width, height, ids: vec![0; width as usize * height as usize] }
+        Self {
+            width,
+            height,
+            ids: vec![0; width as usize * height as usize],
+        }
     }
 
     /// Width in pixels.

@@ -51,7 +51,11 @@ mod tests {
         );
         assert!(r.is_err());
         assert_eq!(std::fs::read_to_string(&path).unwrap(), "old");
-        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1, "temp file cleaned up");
+        assert_eq!(
+            std::fs::read_dir(dir.path()).unwrap().count(),
+            1,
+            "temp file cleaned up"
+        );
         write_atomically(&path, |w| w.write_all(b"new"), |_, e| e).unwrap();
         assert_eq!(std::fs::read_to_string(&path).unwrap(), "new");
     }

@@ -32,9 +32,15 @@ impl CameraFile {
     /// expected JSON, [`DatasetError::InvalidCamera`] when a value is not finite and positive.
     pub fn read(path: &Path) -> Result<Self, DatasetError> {
         let text = std::fs::read_to_string(path).map_err(|e| DatasetError::io(path, e))?;
-        let file: Self = serde_json::from_str(&text)
-            .map_err(|source| DatasetError::Json { path: path.to_owned(), source })?;
-        file.validate().map_err(|source| DatasetError::InvalidCamera { path: path.to_owned(), source })?;
+        let file: Self = serde_json::from_str(&text).map_err(|source| DatasetError::Json {
+            path: path.to_owned(),
+            source,
+        })?;
+        file.validate()
+            .map_err(|source| DatasetError::InvalidCamera {
+                path: path.to_owned(),
+                source,
+            })?;
         Ok(file)
     }
 

@@ -68,33 +68,56 @@ impl Dataset {
     pub fn open(root: impl AsRef<Path>) -> Result<Self, DatasetError> {
         let root = root.as_ref().to_owned();
         if !root.is_dir() {
-            return Err(DatasetError::Missing { path: root, what: "dataset folder" });
+            return Err(DatasetError::Missing {
+                path: root,
+                what: "dataset folder",
+            });
         }
         let camera_path = root.join("camera.json");
         if !camera_path.is_file() {
-            return Err(DatasetError::Missing { path: camera_path, what: "camera intrinsics file" });
+            return Err(DatasetError::Missing {
+                path: camera_path,
+                what: "camera intrinsics file",
+            });
         }
         let camera_file = CameraFile::read(&camera_path)?;
         let depth_dir = root.join("depth");
         if !depth_dir.is_dir() {
-            return Err(DatasetError::Missing { path: depth_dir, what: "folder of 16-bit depth PNGs" });
+            return Err(DatasetError::Missing {
+                path: depth_dir,
+                what: "folder of 16-bit depth PNGs",
+            });
         }
         let depth_files = list_stems(&depth_dir, DEPTH_EXTENSIONS)?;
         let color_dir = root.join("color");
         let color_files = if color_dir.is_dir() {
             let color = list_stems(&color_dir, COLOR_EXTENSIONS)?;
             if let Some((frame, path)) = color.iter().find(|(s, _)| !depth_files.contains_key(*s)) {
-                return Err(DatasetError::UnpairedFrame { path: path.clone(), frame: frame.clone(), missing: "depth" });
+                return Err(DatasetError::UnpairedFrame {
+                    path: path.clone(),
+                    frame: frame.clone(),
+                    missing: "depth",
+                });
             }
             if let Some((frame, path)) = depth_files.iter().find(|(s, _)| !color.contains_key(*s)) {
-                return Err(DatasetError::UnpairedFrame { path: path.clone(), frame: frame.clone(), missing: "colour" });
+                return Err(DatasetError::UnpairedFrame {
+                    path: path.clone(),
+                    frame: frame.clone(),
+                    missing: "colour",
+                });
             }
             Some(color)
         } else {
             None
         };
         let frames = depth_files.keys().cloned().collect();
-        Ok(Self { root, camera_file, frames, depth_files, color_files })
+        Ok(Self {
+            root,
+            camera_file,
+            frames,
+            depth_files,
+            color_files,
+        })
     }
 
     /// The dataset folder.
@@ -123,10 +146,13 @@ impl Dataset {
     }
 
     fn depth_path(&self, frame: &str) -> Result<&Path, DatasetError> {
-        self.depth_files.get(frame).map(PathBuf::as_path).ok_or_else(|| DatasetError::UnknownFrame {
-            root: self.root.clone(),
-            frame: frame.to_owned(),
-        })
+        self.depth_files
+            .get(frame)
+            .map(PathBuf::as_path)
+            .ok_or_else(|| DatasetError::UnknownFrame {
+                root: self.root.clone(),
+                frame: frame.to_owned(),
+            })
     }
 
     fn size(&self) -> (u32, u32) {
@@ -183,7 +209,9 @@ impl Dataset {
             return Ok(None);
         }
         let text = std::fs::read_to_string(&path).map_err(|e| DatasetError::io(&path, e))?;
-        serde_json::from_str(&text).map(Some).map_err(|source| DatasetError::Json { path, source })
+        serde_json::from_str(&text)
+            .map(Some)
+            .map_err(|source| DatasetError::Json { path, source })
     }
 
     /// Reads a frame's instance mask; `None` when the frame has none.

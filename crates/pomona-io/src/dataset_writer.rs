@@ -24,8 +24,10 @@ pub fn write_json(path: &Path, value: &impl serde::Serialize) -> Result<(), Data
     write_atomically(
         path,
         |w| {
-            serde_json::to_writer_pretty(&mut *w, value)
-                .map_err(|source| DatasetError::Json { path: path.to_owned(), source })?;
+            serde_json::to_writer_pretty(&mut *w, value).map_err(|source| DatasetError::Json {
+                path: path.to_owned(),
+                source,
+            })?;
             std::io::Write::write_all(w, b"\n").map_err(|e| DatasetError::io(path, e))
         },
         |p: &Path, e| DatasetError::io(p, e),
@@ -37,13 +39,23 @@ impl DatasetWriter {
     ///
     /// # Errors
     /// [`DatasetError::InvalidCamera`] for invalid intrinsics or unit; I/O errors naming the path.
-    pub fn create(root: impl AsRef<Path>, camera: &PinholeCamera, depth_unit_m: f64) -> Result<Self, DatasetError> {
+    pub fn create(
+        root: impl AsRef<Path>,
+        camera: &PinholeCamera,
+        depth_unit_m: f64,
+    ) -> Result<Self, DatasetError> {
         let root = root.as_ref().to_owned();
-        let camera_file = CameraFile { camera: *camera, depth_unit_m };
+        let camera_file = CameraFile {
+            camera: *camera,
+            depth_unit_m,
+        };
         let camera_path = root.join("camera.json");
         camera_file
             .validate()
-            .map_err(|source| DatasetError::InvalidCamera { path: camera_path.clone(), source })?;
+            .map_err(|source| DatasetError::InvalidCamera {
+                path: camera_path.clone(),
+                source,
+            })?;
         std::fs::create_dir_all(&root).map_err(|e| DatasetError::io(&root, e))?;
         write_json(&camera_path, &camera_file)?;
         Ok(Self { root, camera_file })
@@ -117,7 +129,12 @@ impl DatasetWriter {
     ///
     /// # Errors
     /// As the individual writers (a frame of another size is a [`DatasetError::SizeMismatch`]).
-    pub fn write_frame(&self, frame: &str, rgbd: &RgbdFrame, truth: Option<&FrameTruth>) -> Result<(), DatasetError> {
+    pub fn write_frame(
+        &self,
+        frame: &str,
+        rgbd: &RgbdFrame,
+        truth: Option<&FrameTruth>,
+    ) -> Result<(), DatasetError> {
         self.write_depth(frame, rgbd.depth())?;
         if let Some(color) = rgbd.color() {
             self.write_color(frame, color)?;

@@ -49,7 +49,9 @@ pub enum DatasetError {
         found: String,
     },
     /// An image's size differs from `camera.json`.
-    #[error("{path}: image is {width}x{height} but camera.json says {expected_width}x{expected_height}")]
+    #[error(
+        "{path}: image is {width}x{height} but camera.json says {expected_width}x{expected_height}"
+    )]
     SizeMismatch {
         /// The image file.
         path: PathBuf,
@@ -108,6 +110,9 @@ pub enum DatasetError {
 
 impl DatasetError {
     pub(crate) fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
-        Self::Io { path: path.into(), source }
+        Self::Io {
+            path: path.into(),
+            source,
+        }
     }
 }

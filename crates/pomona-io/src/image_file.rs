@@ -13,11 +13,11 @@ use crate::atomic_write::write_atomically;
 use crate::DatasetError;
 
 /// Opens an image and checks that its size is `expected` (width, height), returning the decoder.
-fn open_checked(
-    path: &Path,
-    expected: (u32, u32),
-) -> Result<impl ImageDecoder, DatasetError> {
-    let image_err = |source| DatasetError::Image { path: path.to_owned(), source };
+fn open_checked(path: &Path, expected: (u32, u32)) -> Result<impl ImageDecoder, DatasetError> {
+    let image_err = |source| DatasetError::Image {
+        path: path.to_owned(),
+        source,
+    };
     let reader = ImageReader::open(path)
         .map_err(|e| DatasetError::io(path, e))?
         .with_guessed_format()
@@ -41,10 +41,15 @@ fn read_u16_plane(path: &Path, expected: (u32, u32)) -> Result<Vec<u16>, Dataset
     let decoder = open_checked(path, expected)?;
     let color = decoder.color_type();
     if color != ColorType::L16 {
-        return Err(DatasetError::DepthNotSixteenBit { path: path.to_owned(), found: format!("{color:?}") });
+        return Err(DatasetError::DepthNotSixteenBit {
+            path: path.to_owned(),
+            found: format!("{color:?}"),
+        });
     }
-    let image = DynamicImage::from_decoder(decoder)
-        .map_err(|source| DatasetError::Image { path: path.to_owned(), source })?;
+    let image = DynamicImage::from_decoder(decoder).map_err(|source| DatasetError::Image {
+        path: path.to_owned(),
+        source,
+    })?;
     Ok(image.into_luma16().into_raw())
 }
 
@@ -53,10 +58,18 @@ fn read_u16_plane(path: &Path, expected: (u32, u32)) -> Result<Vec<u16>, Dataset
 /// # Errors
 /// [`DatasetError::SizeMismatch`], [`DatasetError::DepthNotSixteenBit`], [`DatasetError::Image`]
 /// for a corrupt or truncated file, [`DatasetError::Io`] when it cannot be opened.
-pub fn read_depth_png(path: &Path, expected: (u32, u32), unit_m: f64) -> Result<DepthImage, DatasetError> {
+pub fn read_depth_png(
+    path: &Path,
+    expected: (u32, u32),
+    unit_m: f64,
+) -> Result<DepthImage, DatasetError> {
     let raw = read_u16_plane(path, expected)?;
-    DepthImage::from_u16(expected.0, expected.1, &raw, unit_m)
-        .map_err(|source| DatasetError::Core { path: path.to_owned(), source })
+    DepthImage::from_u16(expected.0, expected.1, &raw, unit_m).map_err(|source| {
+        DatasetError::Core {
+            path: path.to_owned(),
+            source,
+        }
+    })
 }
 
 /// Reads a 16-bit instance mask PNG of the expected size.
@@ -65,8 +78,10 @@ pub fn read_depth_png(path: &Path, expected: (u32, u32), unit_m: f64) -> Result<
 /// As [`read_depth_png`].
 pub fn read_mask_png(path: &Path, expected: (u32, u32)) -> Result<InstanceMask, DatasetError> {
     let ids = read_u16_plane(path, expected)?;
-    InstanceMask::from_ids(expected.0, expected.1, ids)
-        .map_err(|source| DatasetError::Core { path: path.to_owned(), source })
+    InstanceMask::from_ids(expected.0, expected.1, ids).map_err(|source| DatasetError::Core {
+        path: path.to_owned(),
+        source,
+    })
 }
 
 /// Reads a colour image (PNG or JPEG, any 8- or 16-bit layout; converted to 8-bit RGB).
@@ -75,19 +90,34 @@ pub fn read_mask_png(path: &Path, expected: (u32, u32)) -> Result<InstanceMask, 
 /// [`DatasetError::SizeMismatch`], [`DatasetError::Image`], [`DatasetError::Io`].
 pub fn read_color_image(path: &Path, expected: (u32, u32)) -> Result<ColorImage, DatasetError> {
     let decoder = open_checked(path, expected)?;
-    let image = DynamicImage::from_decoder(decoder)
-        .map_err(|source| DatasetError::Image { path: path.to_owned(), source })?;
-    ColorImage::from_rgb(expected.0, expected.1, image.into_rgb8().into_raw())
-        .map_err(|source| DatasetError::Core { path: path.to_owned(), source })
+    let image = DynamicImage::from_decoder(decoder).map_err(|source| DatasetError::Image {
+        path: path.to_owned(),
+        source,
+    })?;
+    ColorImage::from_rgb(expected.0, expected.1, image.into_rgb8().into_raw()).map_err(|source| {
+        DatasetError::Core {
+            path: path.to_owned(),
+            source,
+        }
+    })
 }
 
-fn write_png(path: &Path, bytes: &[u8], width: u32, height: u32, color: ColorType) -> Result<(), DatasetError> {
+fn write_png(
+    path: &Path,
+    bytes: &[u8],
+    width: u32,
+    height: u32,
+    color: ColorType,
+) -> Result<(), DatasetError> {
     write_atomically(
         path,
         |w| {
             PngEncoder::new_with_quality(w, CompressionType::Fast, FilterType::Adaptive)
                 .write_image(bytes, width, height, color.into())
-                .map_err(|source| DatasetError::Image { path: path.to_owned(), source })
+                .map_err(|source| DatasetError::Image {
+                    path: path.to_owned(),
+                    source,
+                })
         },
         |p: &Path, e| DatasetError::io(p, e),
     )
@@ -102,7 +132,13 @@ fn u16_bytes(values: &[u16]) -> Vec<u8> {
 /// # Errors
 /// [`DatasetError::Io`] or [`DatasetError::Image`]; the destination is untouched on failure.
 pub fn write_color_png(path: &Path, image: &ColorImage) -> Result<(), DatasetError> {
-    write_png(path, image.as_rgb(), image.width(), image.height(), ColorType::Rgb8)
+    write_png(
+        path,
+        image.as_rgb(),
+        image.width(),
+        image.height(),
+        ColorType::Rgb8,
+    )
 }
 
 /// Writes a 16-bit depth PNG with `value = round(z / unit_m)`, 0 where there is no reading.
@@ -110,8 +146,17 @@ pub fn write_color_png(path: &Path, image: &ColorImage) -> Result<(), DatasetErr
 /// # Errors
 /// [`DatasetError::Core`] for an invalid unit, otherwise as [`write_color_png`].
 pub fn write_depth_png(path: &Path, depth: &DepthImage, unit_m: f64) -> Result<(), DatasetError> {
-    let raw = depth.to_u16(unit_m).map_err(|source| DatasetError::Core { path: path.to_owned(), source })?;
-    write_png(path, &u16_bytes(&raw), depth.width(), depth.height(), ColorType::L16)
+    let raw = depth.to_u16(unit_m).map_err(|source| DatasetError::Core {
+        path: path.to_owned(),
+        source,
+    })?;
+    write_png(
+        path,
+        &u16_bytes(&raw),
+        depth.width(),
+        depth.height(),
+        ColorType::L16,
+    )
 }
 
 /// Writes a 16-bit instance mask PNG.
@@ -119,5 +164,11 @@ pub fn write_depth_png(path: &Path, depth: &DepthImage, unit_m: f64) -> Result<(
 /// # Errors
 /// As [`write_color_png`].
 pub fn write_mask_png(path: &Path, mask: &InstanceMask) -> Result<(), DatasetError> {
-    write_png(path, &u16_bytes(mask.as_slice()), mask.width(), mask.height(), ColorType::L16)
+    write_png(
+        path,
+        &u16_bytes(mask.as_slice()),
+        mask.width(),
+        mask.height(),
+        ColorType::L16,
+    )
 }

@@ -7,18 +7,25 @@ use pomona_core::{ColorImage, DepthImage, FrameTruth, InstanceMask, PinholeCamer
 use pomona_io::{Dataset, DatasetError, DatasetWriter};
 
 fn shared_data(rel: &str) -> Option<PathBuf> {
-    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/data").join(rel);
+    let p = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/data")
+        .join(rel);
     if p.exists() {
         Some(p)
     } else {
-        eprintln!("skipped: {} is absent (real data lives in ../shared/data)", p.display());
+        eprintln!(
+            "skipped: {} is absent (real data lives in ../shared/data)",
+            p.display()
+        );
         None
     }
 }
 
 #[test]
 fn reads_real_azure_kinect_apples() {
-    let Some(root) = shared_data("ak-apples") else { return };
+    let Some(root) = shared_data("ak-apples") else {
+        return;
+    };
     let ds = Dataset::open(&root).unwrap();
     assert_eq!(ds.frames(), ["121804", "123505", "125309"]);
     let cam = ds.camera();
@@ -28,7 +35,10 @@ fn reads_real_azure_kinect_apples() {
     for frame in ds.frames() {
         let rgbd = ds.load_frame(frame).unwrap();
         let valid = rgbd.depth().valid_fraction();
-        assert!((0.2..0.35).contains(&valid), "frame {frame}: valid depth {valid}");
+        assert!(
+            (0.2..0.35).contains(&valid),
+            "frame {frame}: valid depth {valid}"
+        );
         let (lo, hi) = rgbd.depth().range_m().unwrap();
         assert!(lo > 0.2 && hi < 20.0, "depth range {lo}..{hi}");
         let truth = ds.load_truth(frame).unwrap().unwrap();
@@ -36,10 +46,15 @@ fn reads_real_azure_kinect_apples() {
         assert_eq!(truth.fruits.len(), 28);
         // Every 3D centre projects inside (or on the edge of) its annotated box.
         for fruit in &truth.fruits {
-            let (Some(c), Some(b)) = (fruit.center_m, fruit.bbox_px) else { continue };
+            let (Some(c), Some(b)) = (fruit.center_m, fruit.bbox_px) else {
+                continue;
+            };
             let px = cam.project(&c).unwrap();
             assert!(
-                px.x > b.xmin - 10.0 && px.x < b.xmax + 10.0 && px.y > b.ymin - 10.0 && px.y < b.ymax + 10.0,
+                px.x > b.xmin - 10.0
+                    && px.x < b.xmax + 10.0
+                    && px.y > b.ymin - 10.0
+                    && px.y < b.ymax + 10.0,
                 "fruit {} centre projects to {px} outside {b:?}",
                 fruit.id
             );
@@ -56,9 +71,13 @@ fn camera() -> PinholeCamera {
 fn write_small(root: &Path) -> DatasetWriter {
     let w = DatasetWriter::create(root, &camera(), 0.001).unwrap();
     for (i, frame) in ["a", "b"].iter().enumerate() {
-        let raw: Vec<u16> = (0..12).map(|k| if k == 5 { 0 } else { 500 + 10 * k + i as u16 }).collect();
-        w.write_depth(frame, &DepthImage::from_u16(4, 3, &raw, 0.001).unwrap()).unwrap();
-        w.write_color(frame, &ColorImage::filled(4, 3, [200, 30, 20])).unwrap();
+        let raw: Vec<u16> = (0..12)
+            .map(|k| if k == 5 { 0 } else { 500 + 10 * k + i as u16 })
+            .collect();
+        w.write_depth(frame, &DepthImage::from_u16(4, 3, &raw, 0.001).unwrap())
+            .unwrap();
+        w.write_color(frame, &ColorImage::filled(4, 3, [200, 30, 20]))
+            .unwrap();
     }
     let truth: FrameTruth = serde_json::from_str(
         r#"{"complete": true, "fruits": [{"id": "1", "kind": "pepper", "center_m": [0.0, 0.0, 0.5],
@@ -105,7 +124,10 @@ fn unknown_frame_is_an_error() {
     let dir = tempfile::tempdir().unwrap();
     write_small(dir.path());
     let ds = Dataset::open(dir.path()).unwrap();
-    assert!(matches!(ds.load_frame("zz"), Err(DatasetError::UnknownFrame { .. })));
+    assert!(matches!(
+        ds.load_frame("zz"),
+        Err(DatasetError::UnknownFrame { .. })
+    ));
 }
 
 fn broken(edit: impl FnOnce(&Path)) -> (tempfile::TempDir, Result<(), DatasetError>) {
@@ -143,20 +165,38 @@ fn truncated_png_is_an_image_error() {
 #[test]
 fn eight_bit_depth_is_rejected() {
     let (_d, r) = broken(|root| {
-        image::GrayImage::from_raw(4, 3, vec![7; 12]).unwrap().save(root.join("depth/a.png")).unwrap();
+        image::GrayImage::from_raw(4, 3, vec![7; 12])
+            .unwrap()
+            .save(root.join("depth/a.png"))
+            .unwrap();
     });
     let err = r.unwrap_err();
-    assert!(matches!(err, DatasetError::DepthNotSixteenBit { ref found, .. } if found == "L8"), "{err:?}");
+    assert!(
+        matches!(err, DatasetError::DepthNotSixteenBit { ref found, .. } if found == "L8"),
+        "{err:?}"
+    );
     assert_names_file(&err, "a.png");
 }
 
 #[test]
 fn colour_of_wrong_size_is_rejected() {
     let (_d, r) = broken(|root| {
-        image::RgbImage::new(5, 3).save(root.join("color/b.png")).unwrap();
+        image::RgbImage::new(5, 3)
+            .save(root.join("color/b.png"))
+            .unwrap();
     });
     let err = r.unwrap_err();
-    assert!(matches!(err, DatasetError::SizeMismatch { width: 5, expected_width: 4, .. }), "{err:?}");
+    assert!(
+        matches!(
+            err,
+            DatasetError::SizeMismatch {
+                width: 5,
+                expected_width: 4,
+                ..
+            }
+        ),
+        "{err:?}"
+    );
     assert_names_file(&err, "color/b.png");
 }
 
@@ -165,13 +205,23 @@ fn nan_and_negative_intrinsics_are_rejected() {
     for bad in [r#""fx": NaN"#, r#""fx": -10.0"#, r#""fy": 0"#] {
         let (_d, r) = broken(|root| {
             let text = std::fs::read_to_string(root.join("camera.json")).unwrap();
-            let text = text.replace(r#""fx": 10.0"#, bad).replace(r#""fy": 10.0"#, if bad.contains("fy") { bad } else { r#""fy": 10.0"# });
+            let text = text.replace(r#""fx": 10.0"#, bad).replace(
+                r#""fy": 10.0"#,
+                if bad.contains("fy") {
+                    bad
+                } else {
+                    r#""fy": 10.0"#
+                },
+            );
             std::fs::write(root.join("camera.json"), text).unwrap();
         });
         let err = r.unwrap_err();
         // serde_json has no NaN literal: that case is a JSON error; the others are range errors.
         assert!(
-            matches!(err, DatasetError::InvalidCamera { .. } | DatasetError::Json { .. }),
+            matches!(
+                err,
+                DatasetError::InvalidCamera { .. } | DatasetError::Json { .. }
+            ),
             "{bad}: {err:?}"
         );
         assert_names_file(&err, "camera.json");
@@ -191,16 +241,38 @@ fn bad_depth_unit_is_rejected() {
 fn unpaired_frames_are_rejected() {
     let (_d, r) = broken(|root| std::fs::remove_file(root.join("depth/b.png")).unwrap());
     let err = r.unwrap_err();
-    assert!(matches!(err, DatasetError::UnpairedFrame { missing: "depth", .. }), "{err:?}");
+    assert!(
+        matches!(
+            err,
+            DatasetError::UnpairedFrame {
+                missing: "depth",
+                ..
+            }
+        ),
+        "{err:?}"
+    );
     assert_names_file(&err, "b.png");
     let (_d, r) = broken(|root| std::fs::remove_file(root.join("color/a.png")).unwrap());
-    assert!(matches!(r.unwrap_err(), DatasetError::UnpairedFrame { missing: "colour", .. }));
+    assert!(matches!(
+        r.unwrap_err(),
+        DatasetError::UnpairedFrame {
+            missing: "colour",
+            ..
+        }
+    ));
 }
 
 #[test]
 fn duplicate_stems_are_rejected() {
-    let (_d, r) = broken(|root| std::fs::copy(root.join("color/a.png"), root.join("color/a.jpg")).map(|_| ()).unwrap());
-    assert!(matches!(r.unwrap_err(), DatasetError::DuplicateFrame { .. }));
+    let (_d, r) = broken(|root| {
+        std::fs::copy(root.join("color/a.png"), root.join("color/a.jpg"))
+            .map(|_| ())
+            .unwrap()
+    });
+    assert!(matches!(
+        r.unwrap_err(),
+        DatasetError::DuplicateFrame { .. }
+    ));
 }
 
 #[test]
@@ -215,7 +287,11 @@ fn missing_pieces_are_named() {
 
 #[test]
 fn malformed_truth_is_a_json_error() {
-    for bad in [r#"{"fruits": []}"#, r#"{"complete": true, "fruits": [{"id": "1", "kind": "x", "axis": [0,0,0]}]}"#, "{"] {
+    for bad in [
+        r#"{"fruits": []}"#,
+        r#"{"complete": true, "fruits": [{"id": "1", "kind": "x", "axis": [0,0,0]}]}"#,
+        "{",
+    ] {
         let (_d, r) = broken(|root| std::fs::write(root.join("truth/a.json"), bad).unwrap());
         let err = r.unwrap_err();
         assert!(matches!(err, DatasetError::Json { .. }), "{bad}: {err:?}");
@@ -241,7 +317,13 @@ fn absurd_png_size_is_rejected_before_decoding() {
         std::fs::write(root.join("depth/a.png"), png).unwrap();
     });
     let err = r.unwrap_err();
-    assert!(matches!(err, DatasetError::SizeMismatch { width: 100_000, .. } | DatasetError::Image { .. }), "{err:?}");
+    assert!(
+        matches!(
+            err,
+            DatasetError::SizeMismatch { width: 100_000, .. } | DatasetError::Image { .. }
+        ),
+        "{err:?}"
+    );
 }
 
 #[test]
@@ -251,7 +333,10 @@ fn failed_write_keeps_existing_file() {
     let before = std::fs::read(dir.path().join("depth/a.png")).unwrap();
     let err = w.write_depth("a", &DepthImage::empty(5, 5)).unwrap_err();
     assert!(matches!(err, DatasetError::SizeMismatch { .. }));
-    assert_eq!(std::fs::read(dir.path().join("depth/a.png")).unwrap(), before);
+    assert_eq!(
+        std::fs::read(dir.path().join("depth/a.png")).unwrap(),
+        before
+    );
 }
 
 /// CRC-32 (IEEE) for hand-built PNG chunks.
@@ -260,7 +345,11 @@ fn crc32(bytes: &[u8]) -> u32 {
     for &b in bytes {
         crc ^= b as u32;
         for _ in 0..8 {
-            crc = if crc & 1 != 0 { (crc >> 1) ^ 0xEDB8_8320 } else { crc >> 1 };
+            crc = if crc & 1 != 0 {
+                (crc >> 1) ^ 0xEDB8_8320
+            } else {
+                crc >> 1
+            };
         }
     }
     !crc

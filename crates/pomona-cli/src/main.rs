@@ -1,1 +1,46 @@
-fn main() {}
+//! `pomona`: find fruit in 3D from RGB-D data — the command-line front end.
+//!
+//! Each subcommand lives in `commands/<name>.rs` with its clap arguments and a `run` function;
+//! this file only dispatches and turns errors into one line on stderr and a non-zero exit code.
+
+mod commands;
+mod progress;
+
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+/// Find fruit in 3D from RGB-D cameras and point clouds.
+#[derive(Debug, Parser)]
+#[command(name = "pomona", version, about, propagate_version = true)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Summarise a dataset: frames, resolution, depth coverage, annotations.
+    Info(commands::info::InfoArgs),
+    /// Export one frame of a dataset as a coloured point cloud (.ply or .pcd).
+    Cloud(commands::cloud::CloudArgs),
+    /// Convert a point cloud between PCD and PLY.
+    Convert(commands::convert::ConvertArgs),
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match &cli.command {
+        Command::Info(args) => commands::info::run(args),
+        Command::Cloud(args) => commands::cloud::run(args),
+        Command::Convert(args) => commands::convert::run(args),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(err) => {
+            // One line: the context chain joined, outermost first.
+            eprintln!("error: {err:#}");
+            ExitCode::FAILURE
+        }
+    }
+}

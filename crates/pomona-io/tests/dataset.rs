@@ -1,6 +1,8 @@
 //! Dataset layout: reading the real Azure Kinect orchard data, round trips through the writer,
 //! and one test per way a dataset can be broken (each must give its typed error, never panic).
 
+#![allow(clippy::unwrap_used, clippy::expect_used)] // test helpers outside #[test] functions
+
 use std::path::{Path, PathBuf};
 
 use pomona_core::{ColorImage, DepthImage, FrameTruth, InstanceMask, PinholeCamera};

@@ -1,0 +1,5 @@
+//! One module per subcommand.
+
+pub mod cloud;
+pub mod convert;
+pub mod info;

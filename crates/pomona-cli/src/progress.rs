@@ -1,0 +1,15 @@
+//! Progress bars for long-running commands, on stderr so stdout stays clean for `--json` and
+//! pipes; indicatif hides them when stderr is not a terminal (CI logs, redirection).
+
+use indicatif::{ProgressBar, ProgressStyle};
+
+/// A bar counting `len` items, labelled with what is being done.
+pub fn progress_bar(len: usize, what: &str) -> ProgressBar {
+    let bar = ProgressBar::new(len as u64);
+    let style = ProgressStyle::with_template("{msg:>16} [{bar:40}] {pos}/{len} {elapsed}<{eta}")
+        .map(|s| s.progress_chars("=> "))
+        .unwrap_or_else(|_| ProgressStyle::default_bar());
+    bar.set_style(style);
+    bar.set_message(what.to_owned());
+    bar
+}

@@ -26,6 +26,9 @@ enum Command {
     Cloud(commands::cloud::CloudArgs),
     /// Convert a point cloud between PCD and PLY.
     Convert(commands::convert::ConvertArgs),
+    /// Score detections against truth: AP (VOC 11-point and all-point), precision/recall,
+    /// centre and diameter errors.
+    Eval(commands::eval::EvalArgs),
 }
 
 fn main() -> ExitCode {
@@ -34,6 +37,7 @@ fn main() -> ExitCode {
         Command::Info(args) => commands::info::run(args),
         Command::Cloud(args) => commands::cloud::run(args),
         Command::Convert(args) => commands::convert::run(args),
+        Command::Eval(args) => commands::eval::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -167,3 +167,45 @@ fn convert_reports_missing_input() {
         stderr(&out)
     );
 }
+
+#[test]
+fn eval_scores_hand_made_detections() {
+    let dir = tempfile::tempdir().unwrap();
+    small_dataset(dir.path());
+    let truth = r#"{"complete": true, "fruits": [
+        {"id": "1", "kind": "apple", "center_m": [0.0, 0.0, 0.5], "diameter_m": 0.07, "visibility": 1.0},
+        {"id": "2", "kind": "apple", "center_m": [0.2, 0.0, 0.5], "diameter_m": 0.08, "visibility": 1.0}]}"#;
+    std::fs::create_dir_all(dir.path().join("truth")).unwrap();
+    std::fs::write(dir.path().join("truth/f0.json"), truth).unwrap();
+    let det_dir = dir.path().join("det");
+    std::fs::create_dir_all(&det_dir).unwrap();
+    // One hit 10 mm off with score 2, one false positive with score 1; fruit 2 is missed.
+    let dets = r#"{"frame": "f0", "pipeline": "hand", "detections": [
+        {"center_m": [0.01, 0.0, 0.5], "score": 2.0, "diameter_m": 0.072},
+        {"center_m": [-0.3, 0.0, 0.5], "score": 1.0}]}"#;
+    std::fs::write(det_dir.join("f0.json"), dets).unwrap();
+    let report = dir.path().join("report.json");
+    let out = pomona(&[
+        "eval",
+        "--data",
+        dir.path().to_str().unwrap(),
+        "--detections",
+        det_dir.to_str().unwrap(),
+        "--json",
+        report.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let r: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+    assert_eq!(r["fruits"], 2);
+    assert_eq!(r["precision"], 0.5);
+    assert_eq!(r["recall"], 0.5);
+    // PR points: (r 0.5, p 1.0) then (0.5, 0.5): VOC 11-point = 6/11 (recall 0..0.5 at p = 1).
+    assert!(
+        (r["ap_voc11"].as_f64().unwrap() - 6.0 / 11.0).abs() < 1e-9,
+        "{r}"
+    );
+    assert!((r["center_error_m"]["median"].as_f64().unwrap() - 0.01).abs() < 1e-9);
+    assert!((r["diameter_error_m"]["mean_abs"].as_f64().unwrap() - 0.002).abs() < 1e-9);
+    assert!(stdout(&out).contains("AP (VOC 11-point)"));
+}

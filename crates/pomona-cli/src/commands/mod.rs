@@ -2,4 +2,5 @@
 
 pub mod cloud;
 pub mod convert;
+pub mod eval;
 pub mod info;

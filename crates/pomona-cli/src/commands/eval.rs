@@ -1,0 +1,152 @@
+//! `pomona eval`: score a folder of detections against a dataset's truth — PASCAL VOC 11-point
+//! and all-point AP, precision and recall at a threshold, centre and diameter errors — as a
+//! Markdown summary on stdout, optionally a JSON report and a precision-recall PNG.
+//!
+//! The semantics (greedy matching within a 3D tolerance, ignored low-visibility truth, 2D-box
+//! truth, incomplete frames) live in `pomona-eval`; this module only reads files and reports.
+
+use std::path::PathBuf;
+
+use anyhow::{bail, Context, Result};
+use pomona_eval::{evaluate, load_detections, write_pr_plot, EvalConfig, FrameInput};
+use pomona_io::Dataset;
+
+/// Frames listed by name in a warning before the rest are only counted.
+const WARN_LIST: usize = 10;
+
+/// Arguments of `pomona eval`.
+#[derive(Debug, clap::Args)]
+pub struct EvalArgs {
+    /// Dataset folder (camera.json, depth/, truth/).
+    #[arg(long)]
+    pub data: PathBuf,
+    /// Folder of detection files, one `<frame>.json` per frame.
+    #[arg(long)]
+    pub detections: PathBuf,
+    /// Largest centre distance, millimetres, at which a detection matches a fruit.
+    #[arg(long, default_value_t = 50.0)]
+    pub tolerance_mm: f64,
+    /// Truth fruit less visible than this (0–1) are ignored: neither found nor missed.
+    #[arg(long, default_value_t = 0.5)]
+    pub min_visibility: f64,
+    /// Score threshold of the reported precision/recall (default 0, an SVM's decision boundary).
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    pub threshold: f64,
+    /// Write the full JSON report here.
+    #[arg(long, value_name = "REPORT")]
+    pub json: Option<PathBuf>,
+    /// Write the precision-recall curve here as a PNG.
+    #[arg(long, value_name = "PR.png")]
+    pub plot: Option<PathBuf>,
+}
+
+fn warn_frames(frames: &[String], what: &str) {
+    if frames.is_empty() {
+        return;
+    }
+    let shown: Vec<&str> = frames.iter().take(WARN_LIST).map(String::as_str).collect();
+    let more = frames
+        .len()
+        .checked_sub(WARN_LIST)
+        .filter(|&n| n > 0)
+        .map_or(String::new(), |n| format!(" and {n} more"));
+    eprintln!(
+        "warning: {} frame(s) {what}: {}{more}",
+        frames.len(),
+        shown.join(", ")
+    );
+}
+
+/// Runs `pomona eval`.
+///
+/// # Errors
+/// Unreadable dataset, truth or detection files (naming the file), a detection file for a frame
+/// the dataset does not have, a dataset without any truth, invalid parameters, unwritable outputs.
+pub fn run(args: &EvalArgs) -> Result<()> {
+    let config = EvalConfig {
+        tolerance_m: args.tolerance_mm / 1000.0,
+        min_visibility: args.min_visibility,
+        threshold: args.threshold,
+    };
+    config.validate()?;
+    let dataset = Dataset::open(&args.data)
+        .with_context(|| format!("cannot open dataset {}", args.data.display()))?;
+    let mut detections = load_detections(&args.detections, &dataset)?;
+    warn_frames(
+        &detections.missing,
+        &format!(
+            "have no detection file in {} and count as having no detections",
+            args.detections.display()
+        ),
+    );
+    let mut pipelines: Vec<String> = detections
+        .by_frame
+        .values()
+        .map(|d| d.pipeline.clone())
+        .collect();
+    pipelines.sort();
+    pipelines.dedup();
+    if pipelines.len() > 1 {
+        eprintln!(
+            "warning: detection files come from several pipelines ({}); their scores may not be comparable",
+            pipelines.join(", ")
+        );
+    }
+
+    let mut frames = Vec::new();
+    let mut without_truth = Vec::new();
+    for frame in dataset.frames() {
+        let Some(truth) = dataset.load_truth(frame)? else {
+            without_truth.push(frame.clone());
+            continue;
+        };
+        let detections = detections
+            .by_frame
+            .remove(frame)
+            .map(|d| d.detections)
+            .unwrap_or_default();
+        frames.push(FrameInput {
+            frame: frame.clone(),
+            truth,
+            detections,
+        });
+    }
+    warn_frames(&without_truth, "have no truth file and are not evaluated");
+    if frames.is_empty() {
+        bail!(
+            "{}: no frame has a truth file (truth/<frame>.json), nothing to evaluate",
+            args.data.display()
+        );
+    }
+
+    let report = evaluate(&frames, dataset.camera(), &config)?;
+    if let Some(path) = &args.json {
+        pomona_io::write_json(path, &report)?;
+    }
+    if let Some(path) = &args.plot {
+        match &report.pr_curve {
+            Some(curve) => {
+                let title = format!(
+                    "{} on {} frames",
+                    if pipelines.is_empty() {
+                        "detections".to_owned()
+                    } else {
+                        pipelines.join(" + ")
+                    },
+                    report.frames
+                );
+                write_pr_plot(path, curve, &title, config.threshold)?;
+            }
+            None => eprintln!(
+                "warning: no precision-recall curve, {} not written: {}",
+                path.display(),
+                report
+                    .null_reasons
+                    .get("ap")
+                    .map_or("AP is undefined", String::as_str)
+            ),
+        }
+    }
+    print!("{}", report.to_markdown());
+    Ok(())
+}

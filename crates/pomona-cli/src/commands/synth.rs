@@ -1,0 +1,380 @@
+//! `pomona synth`: generate a synthetic RGB-D dataset of fruit in a crop row, with exact truth
+//! and instance masks, for training detectors and benchmarking them.
+//!
+//! Thin layer over `pomona_synth::generate_dataset`: parses the options, guards the output
+//! folder (never mixes two datasets), and shows progress.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{bail, Context, Result};
+use clap::ValueEnum;
+use pomona_synth::{
+    generate_dataset, CameraPreset, DatasetSpec, FruitChoice, FruitKind, LightPreset, NoiseModel,
+    SceneSpec, StereoRig,
+};
+
+use crate::progress::progress_bar;
+
+/// Arguments of `pomona synth`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct SynthArgs {
+    /// Output dataset folder; created if missing, and must be empty unless --force.
+    #[arg(long, value_name = "DIR")]
+    pub out: PathBuf,
+    /// Number of frames to render.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
+    pub frames: u32,
+    /// Dataset seed: the same arguments and seed give byte-identical files.
+    #[arg(long, value_name = "S")]
+    pub seed: u64,
+    /// Fruit kind; `mixed` draws one kind per frame.
+    #[arg(long, value_enum, default_value_t = FruitArg::Pepper)]
+    pub fruit: FruitArg,
+    /// Camera model (image size and field of view).
+    #[arg(long, value_enum, default_value_t = CameraArg::KinectV2)]
+    pub camera: CameraArg,
+    /// Depth noise: exact, structured-light-like, or time-of-flight-like.
+    #[arg(long, value_enum, default_value_t = NoiseArg::None)]
+    pub noise: NoiseArg,
+    /// Illumination.
+    #[arg(long, value_enum, default_value_t = LightArg::Day)]
+    pub light: LightArg,
+    /// Fraction of peppers coloured like the leaves, 0 to 1.
+    #[arg(long, value_name = "F", default_value_t = 0.0, value_parser = parse_fraction)]
+    pub green_fraction: f64,
+    /// Also render every frame from a second, rotated pose into DIR/stereo (pose in DIR/rig.json).
+    #[arg(long)]
+    pub stereo: bool,
+    /// Worker threads (default: all cores); never changes the output.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=1024))]
+    pub threads: Option<u64>,
+    /// Replace a dataset already in DIR (removes its camera.json, color/, depth/, truth/, mask/,
+    /// stereo/, rig.json, synth.json; other files are left alone).
+    #[arg(long)]
+    pub force: bool,
+}
+
+/// `--fruit` values.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum FruitArg {
+    /// Sweet pepper.
+    Pepper,
+    /// Eggplant.
+    Eggplant,
+    /// Guava.
+    Guava,
+    /// Apple.
+    Apple,
+    /// Orange.
+    Orange,
+    /// One kind drawn per frame.
+    Mixed,
+}
+
+/// `--camera` values.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum CameraArg {
+    /// 512×424, fx = 365.
+    KinectV2,
+    /// 176×144, 43.6° horizontal field of view.
+    Sr4000,
+    /// 640×480, fx = 615.
+    D435,
+    /// 1920×1080, fx = 917.
+    AzureKinect,
+}
+
+/// `--noise` values.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum NoiseArg {
+    /// Exact depth.
+    None,
+    /// Structured-light-like: σ grows with z².
+    Low,
+    /// Time-of-flight-like: 4–8 mm, flying pixels, dropouts, 1 mm steps.
+    Tof,
+}
+
+/// `--light` values.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum LightArg {
+    /// Moderate daylight.
+    Day,
+    /// Weak light, more image noise.
+    Dim,
+    /// Strong sun, little ambient light.
+    Harsh,
+}
+
+fn parse_fraction(s: &str) -> Result<f64, String> {
+    let f: f64 = s.parse().map_err(|e| format!("not a number: {e}"))?;
+    if (0.0..=1.0).contains(&f) {
+        Ok(f)
+    } else {
+        Err(format!("must be between 0 and 1, got {f}"))
+    }
+}
+
+impl SynthArgs {
+    /// The library spec these arguments describe.
+    pub fn to_spec(&self) -> DatasetSpec {
+        let fruit = match self.fruit {
+            FruitArg::Pepper => FruitChoice::Only(FruitKind::Pepper),
+            FruitArg::Eggplant => FruitChoice::Only(FruitKind::Eggplant),
+            FruitArg::Guava => FruitChoice::Only(FruitKind::Guava),
+            FruitArg::Apple => FruitChoice::Only(FruitKind::Apple),
+            FruitArg::Orange => FruitChoice::Only(FruitKind::Orange),
+            FruitArg::Mixed => FruitChoice::Mixed,
+        };
+        let camera = match self.camera {
+            CameraArg::KinectV2 => CameraPreset::KinectV2,
+            CameraArg::Sr4000 => CameraPreset::Sr4000,
+            CameraArg::D435 => CameraPreset::D435,
+            CameraArg::AzureKinect => CameraPreset::AzureKinect,
+        };
+        let noise = match self.noise {
+            NoiseArg::None => NoiseModel::None,
+            NoiseArg::Low => NoiseModel::Low,
+            NoiseArg::Tof => NoiseModel::Tof,
+        };
+        let light = match self.light {
+            LightArg::Day => LightPreset::Day,
+            LightArg::Dim => LightPreset::Dim,
+            LightArg::Harsh => LightPreset::Harsh,
+        };
+        let scene = SceneSpec {
+            fruit,
+            camera: camera.camera(),
+            noise,
+            light,
+            green_fraction: self.green_fraction,
+            ..SceneSpec::default()
+        };
+        let mut spec = DatasetSpec::new(scene, self.frames, self.seed);
+        spec.stereo = self.stereo.then(StereoRig::default);
+        spec.threads = self.threads.map(|n| n as usize);
+        spec
+    }
+}
+
+/// What a generated dataset consists of; `--force` removes exactly these before writing.
+const DATASET_ENTRIES: [&str; 8] = [
+    "camera.json",
+    "synth.json",
+    "rig.json",
+    "color",
+    "depth",
+    "truth",
+    "mask",
+    "stereo",
+];
+
+/// Makes sure writing into `out` cannot mix two datasets.
+fn prepare_output(out: &Path, force: bool) -> Result<()> {
+    if !out.exists() {
+        return Ok(());
+    }
+    if !out.is_dir() {
+        bail!("{} exists and is not a folder", out.display());
+    }
+    let mut entries =
+        std::fs::read_dir(out).with_context(|| format!("cannot list {}", out.display()))?;
+    if entries.next().is_none() {
+        return Ok(());
+    }
+    if !force {
+        bail!(
+            "{} is not empty; choose a new folder or pass --force to replace the dataset in it",
+            out.display()
+        );
+    }
+    for name in DATASET_ENTRIES {
+        let path = out.join(name);
+        let removed = if path.is_dir() {
+            std::fs::remove_dir_all(&path)
+        } else if path.exists() {
+            std::fs::remove_file(&path)
+        } else {
+            Ok(())
+        };
+        removed.with_context(|| format!("cannot remove {}", path.display()))?;
+    }
+    Ok(())
+}
+
+/// Runs `pomona synth`.
+///
+/// # Errors
+/// A non-empty output folder without `--force`, an invalid option, or a file that could not be
+/// written (the message names it).
+pub fn run(args: &SynthArgs) -> Result<()> {
+    let spec = args.to_spec();
+    prepare_output(&args.out, args.force)?;
+    let bar = progress_bar(args.frames as usize, "rendering");
+    let started = Instant::now();
+    let summary = generate_dataset(&spec, &args.out, &|_| bar.inc(1))
+        .with_context(|| format!("generating a synthetic dataset in {}", args.out.display()))?;
+    bar.finish_and_clear();
+    println!(
+        "wrote {} frames{} with {} visible fruit to {} in {:.1} s",
+        summary.frames,
+        if args.stereo { " (+ stereo views)" } else { "" },
+        summary.fruits,
+        args.out.display(),
+        started.elapsed().as_secs_f64()
+    );
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::Parser;
+
+    #[derive(Debug, Parser)]
+    struct Cli {
+        #[command(flatten)]
+        args: SynthArgs,
+    }
+
+    fn parse(extra: &[&str]) -> Result<SynthArgs, clap::Error> {
+        let base = [
+            "pomona-synth",
+            "--out",
+            "/tmp/x",
+            "--frames",
+            "3",
+            "--seed",
+            "9",
+        ];
+        Cli::try_parse_from(base.iter().chain(extra)).map(|c| c.args)
+    }
+
+    #[test]
+    fn defaults_and_required_options() {
+        let a = parse(&[]).unwrap();
+        assert_eq!(a.out, PathBuf::from("/tmp/x"));
+        assert_eq!((a.frames, a.seed), (3, 9));
+        assert_eq!(a.fruit, FruitArg::Pepper);
+        assert_eq!(a.camera, CameraArg::KinectV2);
+        assert_eq!(a.noise, NoiseArg::None);
+        assert_eq!(a.light, LightArg::Day);
+        assert_eq!(a.green_fraction, 0.0);
+        assert!(!a.stereo && !a.force && a.threads.is_none());
+        assert!(Cli::try_parse_from(["p", "--frames", "1", "--seed", "1"]).is_err());
+        assert!(Cli::try_parse_from(["p", "--out", "d", "--seed", "1"]).is_err());
+        assert!(Cli::try_parse_from(["p", "--out", "d", "--frames", "1"]).is_err());
+    }
+
+    #[test]
+    fn every_option_value_parses_into_the_spec() {
+        for (v, kind) in [
+            ("pepper", Some(FruitKind::Pepper)),
+            ("eggplant", Some(FruitKind::Eggplant)),
+            ("guava", Some(FruitKind::Guava)),
+            ("apple", Some(FruitKind::Apple)),
+            ("orange", Some(FruitKind::Orange)),
+            ("mixed", None),
+        ] {
+            let spec = parse(&["--fruit", v]).unwrap().to_spec();
+            let expected = kind.map_or(FruitChoice::Mixed, FruitChoice::Only);
+            assert_eq!(spec.scene.fruit, expected);
+        }
+        for preset in CameraPreset::ALL {
+            let spec = parse(&["--camera", preset.name()]).unwrap().to_spec();
+            assert_eq!(spec.scene.camera, preset.camera());
+        }
+        for model in NoiseModel::ALL {
+            let spec = parse(&["--noise", model.name()]).unwrap().to_spec();
+            assert_eq!(spec.scene.noise, model);
+        }
+        for light in LightPreset::ALL {
+            let spec = parse(&["--light", light.name()]).unwrap().to_spec();
+            assert_eq!(spec.scene.light, light);
+        }
+        let a = parse(&[
+            "--green-fraction",
+            "0.25",
+            "--stereo",
+            "--threads",
+            "2",
+            "--force",
+        ])
+        .unwrap();
+        let spec = a.to_spec();
+        assert_eq!(spec.scene.green_fraction, 0.25);
+        assert_eq!(spec.stereo, Some(StereoRig::default()));
+        assert_eq!(spec.threads, Some(2));
+        assert_eq!((spec.frames, spec.seed), (3, 9));
+        assert!(a.force);
+    }
+
+    #[test]
+    fn bad_values_are_refused() {
+        for bad in [
+            &["--fruit", "banana"][..],
+            &["--camera", "kinect"],
+            &["--noise", "high"],
+            &["--light", "night"],
+            &["--green-fraction", "1.5"],
+            &["--green-fraction", "-0.1"],
+            &["--green-fraction", "x"],
+            &["--threads", "0"],
+        ] {
+            assert!(parse(bad).is_err(), "{bad:?} accepted");
+        }
+        assert!(Cli::try_parse_from(["p", "--out", "d", "--frames", "0", "--seed", "1"]).is_err());
+    }
+
+    #[test]
+    fn run_writes_a_dataset_and_guards_the_folder() {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("ds");
+        let out_s = out.to_str().unwrap();
+        let args = |frames: &str, extra: &[&str]| {
+            let base = ["p", "--out", out_s, "--frames", frames, "--seed", "5"];
+            let base = base
+                .iter()
+                .chain(["--camera", "sr4000", "--fruit", "mixed"].iter());
+            Cli::try_parse_from(base.chain(extra)).unwrap().args
+        };
+        run(&args(
+            "3",
+            &["--noise", "tof", "--stereo", "--light", "harsh"],
+        ))
+        .unwrap();
+        assert!(out.join("depth/000002.png").exists());
+        assert!(out.join("stereo/mask/000002.png").exists());
+        assert!(out.join("rig.json").exists());
+
+        // Refuses to mix datasets, naming the folder.
+        let err = run(&args("1", &[])).unwrap_err();
+        assert!(format!("{err:#}").contains(out_s), "{err:#}");
+        assert!(out.join("depth/000002.png").exists());
+
+        // --force replaces the dataset: no stale frames or stereo view survive; other files do.
+        std::fs::write(out.join("notes.txt"), "mine").unwrap();
+        run(&args("1", &["--force"])).unwrap();
+        assert!(out.join("depth/000000.png").exists());
+        assert!(!out.join("depth/000002.png").exists());
+        assert!(!out.join("stereo").exists() && !out.join("rig.json").exists());
+        assert!(out.join("notes.txt").exists());
+
+        // A file in the way is an error that names it.
+        let file = dir.path().join("file");
+        std::fs::write(&file, "x").unwrap();
+        let a = Cli::try_parse_from([
+            "p",
+            "--out",
+            file.to_str().unwrap(),
+            "--frames",
+            "1",
+            "--seed",
+            "1",
+        ])
+        .unwrap()
+        .args;
+        assert!(format!("{:#}", run(&a).unwrap_err()).contains("file"));
+    }
+}

@@ -1,0 +1,99 @@
+//! Reading a folder of detection files (`<dir>/<frame>.json`) against a dataset.
+//!
+//! A frame without a file is taken to have no detections (the detector may skip empty frames)
+//! and reported in [`DetectionSet::missing`] so the caller can warn; a file for a frame the
+//! dataset does not have is an error naming the file, because it almost always means the wrong
+//! folder or dataset was given.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use pomona_core::FrameDetections;
+use pomona_io::Dataset;
+
+use crate::EvalError;
+
+/// Detections of a dataset's frames.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DetectionSet {
+    /// Detections per frame that has a file.
+    pub by_frame: BTreeMap<String, FrameDetections>,
+    /// Dataset frames without a detection file, in frame order.
+    pub missing: Vec<String>,
+}
+
+fn read_one(path: &Path, stem: &str) -> Result<FrameDetections, EvalError> {
+    let text = std::fs::read_to_string(path).map_err(|source| EvalError::Io {
+        path: path.to_owned(),
+        source,
+    })?;
+    let d: FrameDetections =
+        serde_json::from_str(&text).map_err(|source| EvalError::DetectionJson {
+            path: path.to_owned(),
+            source,
+        })?;
+    if d.frame != stem {
+        return Err(EvalError::FrameMismatch {
+            path: path.to_owned(),
+            stem: stem.to_owned(),
+            frame: d.frame,
+        });
+    }
+    if let Some(index) = d
+        .detections
+        .iter()
+        .position(|x| !(x.score.is_finite() && x.center_m.iter().all(|c| c.is_finite())))
+    {
+        return Err(EvalError::NonFiniteDetection {
+            path: path.to_owned(),
+            index,
+        });
+    }
+    Ok(d)
+}
+
+/// Reads every `*.json` in `dir` (hidden files and other extensions are skipped).
+///
+/// # Errors
+/// [`EvalError::Io`] for an unreadable folder or file, [`EvalError::DetectionJson`],
+/// [`EvalError::FrameMismatch`], [`EvalError::NonFiniteDetection`], and
+/// [`EvalError::UnknownFrame`] for a file whose frame is not in `dataset`.
+pub fn load_detections(dir: &Path, dataset: &Dataset) -> Result<DetectionSet, EvalError> {
+    let io = |source| EvalError::Io {
+        path: dir.to_owned(),
+        source,
+    };
+    let mut files: Vec<(String, PathBuf)> = Vec::new();
+    for entry in std::fs::read_dir(dir).map_err(io)? {
+        let path = entry.map_err(io)?.path();
+        let is_json = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .is_some_and(|e| e.eq_ignore_ascii_case("json"));
+        let Some(stem) = path.file_stem().and_then(|s| s.to_str()) else {
+            continue;
+        };
+        if !is_json || stem.starts_with('.') || !path.is_file() {
+            continue;
+        }
+        files.push((stem.to_owned(), path.clone()));
+    }
+    files.sort();
+    let known: std::collections::BTreeSet<&str> =
+        dataset.frames().iter().map(String::as_str).collect();
+    let mut by_frame = BTreeMap::new();
+    for (stem, path) in files {
+        if !known.contains(stem.as_str()) {
+            return Err(EvalError::UnknownFrame { path, frame: stem });
+        }
+        let d = read_one(&path, &stem)?;
+        by_frame.insert(stem, d);
+    }
+    let missing = dataset
+        .frames()
+        .iter()
+        .filter(|f| !by_frame.contains_key(*f))
+        .cloned()
+        .collect();
+    Ok(DetectionSet { by_frame, missing })
+}

@@ -1,0 +1,60 @@
+//! The knobs of an evaluation: match tolerance, visibility below which truth is ignored, and the
+//! score threshold of the reported operating point.
+
+use serde::{Deserialize, Serialize};
+
+use crate::EvalError;
+
+/// Evaluation parameters. Defaults follow seed 000: 50 mm centre tolerance, fruit less than 50 %
+/// visible ignored, threshold 0 (an SVM's decision boundary).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct EvalConfig {
+    /// Largest centre distance, metres, at which a detection matches a truth fruit.
+    pub tolerance_m: f64,
+    /// Truth with `visibility` below this is ignored; truth without a visibility is counted.
+    pub min_visibility: f64,
+    /// Detections scoring at least this form the reported operating point.
+    pub threshold: f64,
+}
+
+impl Default for EvalConfig {
+    fn default() -> Self {
+        Self {
+            tolerance_m: 0.05,
+            min_visibility: 0.5,
+            threshold: 0.0,
+        }
+    }
+}
+
+impl EvalConfig {
+    /// Checks the parameters.
+    ///
+    /// # Errors
+    /// [`EvalError::InvalidParameter`] for a tolerance that is not finite and positive, a
+    /// visibility outside `[0, 1]`, or a NaN threshold.
+    pub fn validate(&self) -> Result<(), EvalError> {
+        if !(self.tolerance_m.is_finite() && self.tolerance_m > 0.0) {
+            return Err(EvalError::InvalidParameter {
+                name: "tolerance_m",
+                value: self.tolerance_m,
+                reason: "must be finite and > 0",
+            });
+        }
+        if !(0.0..=1.0).contains(&self.min_visibility) {
+            return Err(EvalError::InvalidParameter {
+                name: "min_visibility",
+                value: self.min_visibility,
+                reason: "must be in [0, 1]",
+            });
+        }
+        if self.threshold.is_nan() {
+            return Err(EvalError::InvalidParameter {
+                name: "threshold",
+                value: self.threshold,
+                reason: "must not be NaN",
+            });
+        }
+        Ok(())
+    }
+}

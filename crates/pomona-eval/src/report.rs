@@ -1,0 +1,148 @@
+//! The evaluation report: JSON with stable keys, and a short Markdown summary.
+//!
+//! Key order and names are fixed (`frames, fruits, ignored, tolerance_m, ap_voc11, ap, precision,
+//! recall, threshold, center_error_m, diameter_error_m, per_frame`, then supporting keys) so that
+//! scripts and later releases can rely on them. A figure that cannot be measured is `null`, and
+//! `null_reasons` says why (for example, frames whose truth is incomplete make precision
+//! meaningless).
+
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+
+use serde::{Deserialize, Serialize};
+
+use crate::PrCurve;
+
+/// Centre error of true positives, metres.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct CenterError {
+    /// Median (`null` without 3D-matched true positives).
+    pub median: Option<f64>,
+    /// Mean.
+    pub mean: Option<f64>,
+}
+
+/// Diameter error of true positives where both sides have a diameter, metres.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct DiameterError {
+    /// Mean absolute error.
+    pub mean_abs: Option<f64>,
+}
+
+/// Figures of one frame at the threshold.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FrameReport {
+    /// Frame stem.
+    pub frame: String,
+    /// Whether the frame's truth is complete.
+    pub complete: bool,
+    /// Counted truth fruit.
+    pub fruits: usize,
+    /// Ignored truth fruit.
+    pub ignored: usize,
+    /// Detections in the file (any score).
+    pub detections: usize,
+    /// True positives at the threshold.
+    pub true_positives: usize,
+    /// False positives at the threshold.
+    pub false_positives: usize,
+    /// Precision at the threshold (`null` for incomplete truth or no detections).
+    pub precision: Option<f64>,
+    /// Recall at the threshold (`null` without counted fruit).
+    pub recall: Option<f64>,
+}
+
+/// The whole evaluation.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct EvalReport {
+    /// Frames evaluated.
+    pub frames: usize,
+    /// Counted truth fruit.
+    pub fruits: usize,
+    /// Ignored truth fruit (too occluded or not locatable).
+    pub ignored: usize,
+    /// Match tolerance, metres.
+    pub tolerance_m: f64,
+    /// PASCAL VOC 11-point AP.
+    pub ap_voc11: Option<f64>,
+    /// All-point AP.
+    pub ap: Option<f64>,
+    /// Precision at the threshold.
+    pub precision: Option<f64>,
+    /// Recall at the threshold.
+    pub recall: Option<f64>,
+    /// Score threshold of the operating point.
+    pub threshold: f64,
+    /// Centre error of true positives at the threshold.
+    pub center_error_m: CenterError,
+    /// Diameter error of true positives at the threshold.
+    pub diameter_error_m: DiameterError,
+    /// Per-frame figures, in frame order.
+    pub per_frame: Vec<FrameReport>,
+    /// Visibility below which truth was ignored.
+    pub min_visibility: f64,
+    /// True positives at the threshold.
+    pub true_positives: usize,
+    /// False positives at the threshold.
+    pub false_positives: usize,
+    /// Why figures are `null`, keyed by figure name.
+    pub null_reasons: BTreeMap<String, String>,
+    /// The precision/recall curve (`null` when precision cannot be measured).
+    pub pr_curve: Option<PrCurve>,
+}
+
+fn fmt_ratio(v: Option<f64>) -> String {
+    v.map_or_else(|| "n/a".into(), |v| format!("{v:.3}"))
+}
+
+fn fmt_mm(v: Option<f64>) -> String {
+    v.map_or_else(|| "n/a".into(), |v| format!("{:.1} mm", v * 1000.0))
+}
+
+impl EvalReport {
+    /// A short Markdown summary (a heading, a table, and the reasons for any `n/a`).
+    pub fn to_markdown(&self) -> String {
+        let mut s = String::new();
+        let _ = writeln!(
+            s,
+            "## Evaluation: {} frames, {} fruits ({} ignored), tolerance {:.0} mm\n",
+            self.frames,
+            self.fruits,
+            self.ignored,
+            self.tolerance_m * 1000.0
+        );
+        let _ = writeln!(s, "| metric | value |\n|---|---|");
+        let rows = [
+            ("AP (VOC 11-point)", fmt_ratio(self.ap_voc11)),
+            ("AP (all points)", fmt_ratio(self.ap)),
+            (
+                &*format!("precision at score ≥ {}", self.threshold),
+                fmt_ratio(self.precision),
+            ),
+            (
+                &*format!("recall at score ≥ {}", self.threshold),
+                fmt_ratio(self.recall),
+            ),
+            (
+                "true / false positives",
+                format!("{} / {}", self.true_positives, self.false_positives),
+            ),
+            ("centre error median", fmt_mm(self.center_error_m.median)),
+            ("centre error mean", fmt_mm(self.center_error_m.mean)),
+            (
+                "diameter error mean abs",
+                fmt_mm(self.diameter_error_m.mean_abs),
+            ),
+        ];
+        for (k, v) in rows {
+            let _ = writeln!(s, "| {k} | {v} |");
+        }
+        if !self.null_reasons.is_empty() {
+            let _ = writeln!(s);
+            for (k, v) in &self.null_reasons {
+                let _ = writeln!(s, "* `{k}` n/a: {v}");
+            }
+        }
+        s
+    }
+}

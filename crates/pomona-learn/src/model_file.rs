@@ -1,0 +1,145 @@
+//! One versioned JSON file per trained detector:
+//!
+//! ```json
+//! {"format": "pomona-model", "version": 1, "pipeline": "shape-fit",
+//!  "stage_params": {...}, "scaler": {...} | null, "svm": {...}}
+//! ```
+//!
+//! `stage_params` holds whatever the pipeline's non-learnt stages need (thresholds, window sizes)
+//! so a model file alone reproduces a detector. `format` and `version` are checked before anything
+//! else is parsed, so a file from a newer release fails with a version error rather than a
+//! confusing missing-field message; a model loaded by the wrong pipeline is rejected as well.
+//! Numbers are written in shortest round-trip form and parsed with correct rounding, so every
+//! `f64` survives a save and load bit for bit.
+
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+
+use crate::{MinMaxScaler, ModelFileError, RbfSvm, SvmClassifier};
+
+/// Value of the `format` key.
+pub const MODEL_FORMAT: &str = "pomona-model";
+/// Format version this build writes and reads.
+pub const MODEL_VERSION: u32 = 1;
+
+/// Contents of a model file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ModelFile {
+    /// Always [`MODEL_FORMAT`].
+    pub format: String,
+    /// Always [`MODEL_VERSION`] for files this build writes.
+    pub version: u32,
+    /// Name of the pipeline the model belongs to.
+    pub pipeline: String,
+    /// Parameters of the pipeline's other stages, pipeline-defined.
+    pub stage_params: serde_json::Value,
+    /// Feature scaling, when the model was trained on scaled features.
+    pub scaler: Option<MinMaxScaler>,
+    /// The SVM.
+    pub svm: RbfSvm,
+}
+
+impl ModelFile {
+    /// Packages a trained classifier for `pipeline`.
+    pub fn new(
+        pipeline: impl Into<String>,
+        stage_params: serde_json::Value,
+        classifier: &SvmClassifier,
+    ) -> Self {
+        Self {
+            format: MODEL_FORMAT.into(),
+            version: MODEL_VERSION,
+            pipeline: pipeline.into(),
+            stage_params,
+            scaler: classifier.scaler.clone(),
+            svm: classifier.svm.clone(),
+        }
+    }
+
+    /// The classifier stored in the file.
+    pub fn classifier(&self) -> SvmClassifier {
+        SvmClassifier {
+            scaler: self.scaler.clone(),
+            svm: self.svm.clone(),
+            info: None,
+        }
+    }
+
+    /// Writes the file atomically (temporary file, then rename).
+    ///
+    /// # Errors
+    /// [`ModelFileError::Write`] naming the file.
+    pub fn save(&self, path: impl AsRef<Path>) -> Result<(), ModelFileError> {
+        pomona_io::write_json(path.as_ref(), self)?;
+        Ok(())
+    }
+
+    /// Reads a model file and checks it was made for `pipeline` by this format version.
+    ///
+    /// # Errors
+    /// [`ModelFileError::Io`], [`ModelFileError::Json`], [`ModelFileError::NotAModel`],
+    /// [`ModelFileError::Version`], [`ModelFileError::Pipeline`], [`ModelFileError::Invalid`];
+    /// each names the file.
+    pub fn load(path: impl AsRef<Path>, pipeline: &str) -> Result<Self, ModelFileError> {
+        let path = path.as_ref();
+        let text = std::fs::read_to_string(path).map_err(|source| ModelFileError::Io {
+            path: path.to_owned(),
+            source,
+        })?;
+        Self::from_json(&text, path, pipeline)
+    }
+
+    /// Parses model JSON; `path` is only used in error messages.
+    ///
+    /// # Errors
+    /// As [`ModelFile::load`] except for I/O.
+    pub fn from_json(text: &str, path: &Path, pipeline: &str) -> Result<Self, ModelFileError> {
+        let json_err = |source| ModelFileError::Json {
+            path: path.to_owned(),
+            source,
+        };
+        let value: serde_json::Value = serde_json::from_str(text).map_err(json_err)?;
+        let format = value.get("format").and_then(|f| f.as_str());
+        if format != Some(MODEL_FORMAT) {
+            return Err(ModelFileError::NotAModel {
+                path: path.to_owned(),
+                found: value.get("format").map(|f| f.to_string()),
+            });
+        }
+        let version = value.get("version").and_then(serde_json::Value::as_u64);
+        if version != Some(u64::from(MODEL_VERSION)) {
+            return Err(ModelFileError::Version {
+                path: path.to_owned(),
+                found: version.unwrap_or(0),
+                supported: MODEL_VERSION,
+            });
+        }
+        let found = value.get("pipeline").and_then(|p| p.as_str()).unwrap_or("");
+        if found != pipeline {
+            return Err(ModelFileError::Pipeline {
+                path: path.to_owned(),
+                found: found.to_owned(),
+                expected: pipeline.to_owned(),
+            });
+        }
+        // Parse from the text, not the Value, so numbers keep their exact decimal form.
+        let model: Self = serde_json::from_str(text).map_err(json_err)?;
+        let invalid = |source| ModelFileError::Invalid {
+            path: path.to_owned(),
+            source,
+        };
+        model.svm.validate().map_err(invalid)?;
+        if let Some(s) = &model.scaler {
+            s.validate().map_err(invalid)?;
+            if s.n_features() != model.svm.n_features {
+                return Err(invalid(crate::LearnError::InconsistentModel(format!(
+                    "scaler has {} features, svm {}",
+                    s.n_features(),
+                    model.svm.n_features
+                ))));
+            }
+        }
+        Ok(model)
+    }
+}

@@ -29,6 +29,8 @@ enum Command {
     /// Score detections against truth: AP (VOC 11-point and all-point), precision/recall,
     /// centre and diameter errors.
     Eval(commands::eval::EvalArgs),
+    /// Generate a synthetic RGB-D dataset of crop rows with exact fruit truth.
+    Synth(commands::synth::SynthArgs),
 }
 
 fn main() -> ExitCode {
@@ -38,6 +40,7 @@ fn main() -> ExitCode {
         Command::Cloud(args) => commands::cloud::run(args),
         Command::Convert(args) => commands::convert::run(args),
         Command::Eval(args) => commands::eval::run(args),
+        Command::Synth(args) => commands::synth::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -4,3 +4,4 @@ pub mod cloud;
 pub mod convert;
 pub mod eval;
 pub mod info;
+pub mod synth;

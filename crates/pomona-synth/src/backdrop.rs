@@ -1,0 +1,101 @@
+//! The background behind the crop row: a large plane with a procedural texture of dark, out of
+//! focus foliage and soil. It gives every pixel a depth reading and keeps the colour histogram
+//! realistic (mostly dark green) without modelling the next row.
+
+use nalgebra::{Point3, Unit, Vector3};
+
+use crate::rng::mix64;
+use crate::Material;
+
+/// An infinite textured plane.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Backdrop {
+    /// A point on the plane, scene frame, metres.
+    pub point: Point3<f64>,
+    /// Unit normal, facing the camera.
+    pub normal: Unit<Vector3<f64>>,
+    /// Seed of the texture.
+    pub texture_seed: u64,
+}
+
+impl Backdrop {
+    /// Ray parameter `t > 0` where `origin + t·dir` meets the plane.
+    pub fn intersect(&self, origin: &Point3<f64>, dir: &Vector3<f64>) -> Option<f64> {
+        let denom = self.normal.dot(dir);
+        if denom.abs() < 1e-12 {
+            return None;
+        }
+        let t = self.normal.dot(&(self.point - origin)) / denom;
+        (t > 1e-9).then_some(t)
+    }
+
+    /// The material at a point of the plane: a blend of dark foliage and soil by value noise.
+    pub fn material_at(&self, p: &Point3<f64>) -> Material {
+        // Two in-plane coordinates (any orthonormal pair will do).
+        let n = self.normal.as_ref();
+        let e1 = n.cross(&Vector3::y()).normalize();
+        let e2 = n.cross(&e1);
+        let v = p - self.point;
+        let (x, y) = (v.dot(&e1), v.dot(&e2));
+        let coarse = value_noise(x / 0.06, y / 0.06, self.texture_seed);
+        let fine = value_noise(x / 0.015, y / 0.015, self.texture_seed ^ 0xA5A5);
+        let soil = smooth(0.55, 0.8, coarse);
+        let foliage = [0.01 + 0.015 * fine, 0.03 + 0.04 * fine, 0.006 + 0.01 * fine];
+        let earth = [0.06 + 0.03 * fine, 0.04 + 0.02 * fine, 0.02 + 0.01 * fine];
+        let mut albedo = [0.0; 3];
+        for c in 0..3 {
+            albedo[c] = foliage[c] * (1.0 - soil) + earth[c] * soil;
+        }
+        Material {
+            albedo,
+            specular: 0.0,
+            shininess: 1.0,
+        }
+    }
+}
+
+/// Smooth step from 0 at `lo` to 1 at `hi`.
+fn smooth(lo: f64, hi: f64, x: f64) -> f64 {
+    let t = ((x - lo) / (hi - lo)).clamp(0.0, 1.0);
+    t * t * (3.0 - 2.0 * t)
+}
+
+/// Bilinear value noise in `[0, 1]` over an integer lattice hashed with `seed`.
+fn value_noise(x: f64, y: f64, seed: u64) -> f64 {
+    let (xf, yf) = (x.floor(), y.floor());
+    let (ix, iy) = (xf as i64, yf as i64);
+    let (fx, fy) = (x - xf, y - yf);
+    let (sx, sy) = (fx * fx * (3.0 - 2.0 * fx), fy * fy * (3.0 - 2.0 * fy));
+    let h = |i: i64, j: i64| {
+        let k = mix64(seed ^ mix64((i as u64).wrapping_mul(0x9E37) ^ (j as u64).rotate_left(32)));
+        (k >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let top = h(ix, iy) * (1.0 - sx) + h(ix + 1, iy) * sx;
+    let bottom = h(ix, iy + 1) * (1.0 - sx) + h(ix + 1, iy + 1) * sx;
+    top * (1.0 - sy) + bottom * sy
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn plane_hit_and_texture_are_deterministic() {
+        let b = Backdrop {
+            point: Point3::new(0.0, 0.0, 1.5),
+            normal: Unit::new_normalize(Vector3::new(0.0, 0.0, -1.0)),
+            texture_seed: 5,
+        };
+        let t = b
+            .intersect(&Point3::origin(), &Vector3::new(0.1, 0.2, 1.0))
+            .unwrap();
+        assert!((t - 1.5).abs() < 1e-12);
+        let p = Point3::new(0.15, 0.3, 1.5);
+        assert_eq!(b.material_at(&p), b.material_at(&p));
+        for c in b.material_at(&p).albedo {
+            assert!((0.0..=1.0).contains(&c));
+        }
+        let v = value_noise(3.3, -7.1, 9);
+        assert!((0.0..=1.0).contains(&v));
+    }
+}

@@ -53,7 +53,7 @@ impl PrCurve {
             } else {
                 fp += 1;
             }
-            let last_of_group = sorted.get(k + 1).map_or(true, |next| next.0 != score);
+            let last_of_group = sorted.get(k + 1).is_none_or(|next| next.0 != score);
             if last_of_group {
                 points.push(PrPoint {
                     threshold: score,

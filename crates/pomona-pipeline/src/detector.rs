@@ -1,0 +1,74 @@
+//! A method by name ([`Pipeline`]) and its trained form ([`Detector`]).
+//!
+//! Both are object-safe so the CLI keeps a list of `Box<dyn Pipeline>` and `pomona train`,
+//! `detect` and `experiment` work for every method without knowing any of them.
+
+use pomona_core::{Detection, RgbdFrame};
+use pomona_learn::ModelFile;
+
+use crate::{FrameSource, PipelineError, StageTimings};
+
+/// A trained detector.
+pub trait Detector: Send + Sync {
+    /// Name of the pipeline that made it (written into detection files).
+    fn pipeline(&self) -> &'static str;
+
+    /// Finds fruit in one frame; stage times are added to `timings`.
+    ///
+    /// # Errors
+    /// [`PipelineError::MissingColor`] when the method needs colour the frame lacks; stage
+    /// errors otherwise.
+    fn detect(
+        &self,
+        frame: &RgbdFrame,
+        timings: &mut StageTimings,
+    ) -> Result<Vec<Detection>, PipelineError>;
+}
+
+/// Options shared by every pipeline's training.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct TrainOptions {
+    /// Seed for every random choice (sampling, folds, consensus).
+    pub seed: u64,
+    /// Cross-validation folds for the classifier's grid search.
+    pub folds: usize,
+    /// Whether to run the full LIBSVM grid search (slow) or a narrower default grid.
+    pub full_grid: bool,
+}
+
+impl Default for TrainOptions {
+    fn default() -> Self {
+        Self {
+            seed: 0,
+            folds: 5,
+            full_grid: false,
+        }
+    }
+}
+
+/// A detection method: trains a model and turns a model back into a [`Detector`].
+pub trait Pipeline: Send + Sync {
+    /// The method's name on the command line and in model files, e.g. `"shape-fit"`.
+    fn name(&self) -> &'static str;
+
+    /// Whether frames must have colour.
+    fn needs_color(&self) -> bool;
+
+    /// Trains a model from labelled frames. `progress` is called with (frames done, total).
+    ///
+    /// # Errors
+    /// Data errors, [`PipelineError::NotEnoughTrainingData`], classifier errors.
+    fn train(
+        &self,
+        frames: &dyn FrameSource,
+        options: &TrainOptions,
+        progress: &(dyn Fn(usize, usize) + Sync),
+    ) -> Result<ModelFile, PipelineError>;
+
+    /// Builds a detector from a model made by [`Pipeline::train`].
+    ///
+    /// # Errors
+    /// [`PipelineError::StageParams`] when the model's stage parameters do not parse or are
+    /// invalid.
+    fn load(&self, model: &ModelFile) -> Result<Box<dyn Detector>, PipelineError>;
+}

@@ -1,0 +1,109 @@
+//! Labelled frames for training and experiments, loaded on demand.
+//!
+//! Training sets can be hundreds of frames; loading lazily keeps memory flat and lets
+//! experiments split datasets by frame index without copying anything.
+
+use pomona_core::{FrameTruth, InstanceMask, RgbdFrame};
+use pomona_io::Dataset;
+
+use crate::PipelineError;
+
+/// A frame with its truth and, when the dataset has one, its instance mask.
+#[derive(Debug, Clone)]
+pub struct LabelledFrame {
+    /// `"<dataset folder>/<frame stem>"`, for messages.
+    pub name: String,
+    /// The RGB-D frame.
+    pub frame: RgbdFrame,
+    /// Its ground truth.
+    pub truth: FrameTruth,
+    /// Instance ids, when available.
+    pub mask: Option<InstanceMask>,
+}
+
+/// An indexable collection of labelled frames.
+pub trait FrameSource: Sync {
+    /// Number of frames.
+    fn len(&self) -> usize;
+
+    /// Whether there are no frames.
+    fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Loads frame `i` (0-based).
+    ///
+    /// # Errors
+    /// Dataset errors naming the file.
+    fn load(&self, i: usize) -> Result<LabelledFrame, PipelineError>;
+}
+
+/// Frames drawn from one or more datasets; only frames that have truth are included.
+#[derive(Debug, Clone, Default)]
+pub struct DatasetFrames {
+    frames: Vec<(usize, String)>,
+    datasets: Vec<Dataset>,
+}
+
+impl DatasetFrames {
+    /// Every frame with a truth file from every dataset, in dataset then frame order.
+    pub fn new(datasets: Vec<Dataset>) -> Self {
+        let frames = datasets
+            .iter()
+            .enumerate()
+            .flat_map(|(d, ds)| {
+                ds.frames()
+                    .iter()
+                    .filter(|f| ds.truth_path(f).is_file())
+                    .map(move |f| (d, f.clone()))
+            })
+            .collect();
+        Self { frames, datasets }
+    }
+
+    /// A subset by position (for train/test splits); out-of-range indices are skipped.
+    pub fn subset(&self, indices: &[usize]) -> Self {
+        Self {
+            frames: indices
+                .iter()
+                .filter_map(|&i| self.frames.get(i).cloned())
+                .collect(),
+            datasets: self.datasets.clone(),
+        }
+    }
+
+    /// `(dataset, frame stem)` of frame `i`.
+    pub fn frame_ref(&self, i: usize) -> Option<(&Dataset, &str)> {
+        let (d, f) = self.frames.get(i)?;
+        Some((&self.datasets[*d], f.as_str()))
+    }
+}
+
+impl FrameSource for DatasetFrames {
+    fn len(&self) -> usize {
+        self.frames.len()
+    }
+
+    fn load(&self, i: usize) -> Result<LabelledFrame, PipelineError> {
+        let (ds, stem) = self
+            .frame_ref(i)
+            .ok_or_else(|| PipelineError::InvalidParameter {
+                name: "frame index".into(),
+                reason: format!("{i} is beyond the {} frames", self.frames.len()),
+            })?;
+        let frame = ds.load_frame(stem)?;
+        let truth = ds
+            .load_truth(stem)?
+            .ok_or_else(|| PipelineError::NotEnoughTrainingData {
+                pipeline: "any",
+                reason: format!("{} has no truth", ds.truth_path(stem).display()),
+            })?;
+        let mask = ds.load_mask(stem)?;
+        Ok(LabelledFrame {
+            name: format!("{}/{stem}", ds.root().display()),
+            frame,
+            truth,
+            mask,
+        })
+    }
+}

@@ -1,0 +1,26 @@
+//! # pomona-pipeline
+//!
+//! The small framework every detector is built on, so that detectors are interchangeable in the
+//! CLI, in experiments and in a robot's code:
+//!
+//! * [`Stage`]: one step of a detector (colour mask, region growing, shape fit, features,
+//!   classifier...). A detector holds its stages as trait objects, so a stage can be replaced,
+//!   removed or benchmarked alone — the papers call their stages plug-and-play; this makes it so.
+//! * [`StageTimings`]: wall time per stage, filled in by [`run_stage`], reported by `--timings`.
+//! * [`Detector`]: a trained detector: frame in, detections out.
+//! * [`Pipeline`]: a method by name: trains a [`ModelFile`] from labelled frames and loads a
+//!   [`Detector`] from one.
+//! * [`FrameSource`]: labelled frames for training, loaded lazily from datasets.
+
+mod detector;
+mod error;
+mod frame_source;
+mod stage;
+mod timings;
+
+pub use detector::{Detector, Pipeline, TrainOptions};
+pub use error::PipelineError;
+pub use frame_source::{DatasetFrames, FrameSource, LabelledFrame};
+pub use pomona_learn::ModelFile;
+pub use stage::{run_stage, Stage};
+pub use timings::StageTimings;

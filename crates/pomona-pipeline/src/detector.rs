@@ -65,6 +65,12 @@ pub trait Pipeline: Send + Sync {
         progress: &(dyn Fn(usize, usize) + Sync),
     ) -> Result<ModelFile, PipelineError>;
 
+    /// The model compiled into the binary (JSON text of a [`ModelFile`]), if the project ships
+    /// one for this pipeline; `pomona detect` without `--model` uses it.
+    fn default_model(&self) -> Option<&'static str> {
+        None
+    }
+
     /// Builds a detector from a model made by [`Pipeline::train`].
     ///
     /// # Errors

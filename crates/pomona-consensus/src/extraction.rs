@@ -1,0 +1,345 @@
+//! Repeated shape extraction — seed 002 Algorithm 1.
+//!
+//! One MSAC run finds one shape, but a region-growing cluster may hold several touching fruits.
+//! Algorithm 1 therefore repeats: fit, and if the best model passes the acceptance test, record it
+//! with its inliers, remove those inliers from the cluster and fit again; stop when the cluster is
+//! exhausted or no model passes. [`extract_repeated`] is that loop for any
+//! [`Consensus`]/[`Estimator`] pair; [`ShapeExtractor`] runs it with spheres and/or cylinders.
+//!
+//! ## Sphere or cylinder
+//! The paper names both models but picks one per crop (spheres for peppers and guavas, cylinders
+//! for eggplants) and does not describe a competition between them. [`ShapeChoice`] offers that
+//! per-crop choice, plus [`ShapeChoice::Both`] (our addition): each round fits both and keeps the
+//! accepted model with the lower MSAC cost; ties go to the sphere, the simpler model.
+//!
+//! ## Details the paper leaves open
+//! * Points with non-finite positions are skipped up front (cylinders also skip points without a
+//!   normal); indices in the results always refer to the caller's slice.
+//! * The loop also stops once fewer points remain than `min_points`, after `max_shapes` shapes, or
+//!   when an accepted model has fewer than `min_inliers` inliers (so it always makes progress).
+//! * Each round and shape kind draws from its own ChaCha stream derived from the seed (SplitMix64
+//!   of seed and stream number), so results are reproducible and independent of thread count.
+
+use serde::{Deserialize, Serialize};
+
+use crate::{
+    Consensus, ConsensusError, Cylinder, CylinderEstimator, CylinderEstimatorParams, Estimator,
+    Fit, Msac, MsacParams, OrientedPoint, Positioned, Sampler, Sphere, SphereEstimator,
+    SphereEstimatorParams, UniformSampler,
+};
+
+/// A model found by repeated extraction, with its inliers (indices into the caller's data).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Extracted<M> {
+    /// The accepted model.
+    pub model: M,
+    /// Indices of its inliers in the input slice, ascending.
+    pub inliers: Vec<usize>,
+    /// Its consensus cost over the points remaining when it was found (see [`Fit::cost`]).
+    pub cost: f64,
+}
+
+/// Limits of the repetition in [`extract_repeated`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct RepeatLimits {
+    /// Stop when fewer points than this remain (never less than the minimal sample).
+    pub min_points: usize,
+    /// Discard (and stop at) an accepted model with fewer inliers than this (at least 1).
+    pub min_inliers: usize,
+    /// Stop after this many shapes.
+    pub max_shapes: usize,
+}
+
+impl Default for RepeatLimits {
+    fn default() -> Self {
+        Self {
+            min_points: 1,
+            min_inliers: 1,
+            max_shapes: 64,
+        }
+    }
+}
+
+/// Mixes a base seed with a stream number (SplitMix64 finaliser) for independent sub-streams.
+pub(crate) fn derive_seed(seed: u64, stream: u64) -> u64 {
+    let mut z = seed ^ stream.wrapping_add(1).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
+
+/// Algorithm 1 for one estimator: fit, accept, remove inliers, repeat. `make_sampler(round)`
+/// gives the sampler of each round.
+///
+/// Data the estimator rejects are skipped. Stops silently when too few points remain.
+///
+/// # Errors
+/// None in practice today (fits on too few points end the loop instead); the `Result` leaves room
+/// for consensus loops that can fail.
+pub fn extract_repeated<D, C, E, S>(
+    consensus: &C,
+    estimator: &E,
+    data: &[D],
+    limits: &RepeatLimits,
+    mut make_sampler: impl FnMut(usize) -> S,
+) -> Result<Vec<Extracted<E::Model>>, ConsensusError>
+where
+    D: Clone,
+    C: Consensus,
+    E: Estimator<D>,
+    S: Sampler,
+{
+    let mut remaining: Vec<usize> = (0..data.len())
+        .filter(|&i| estimator.is_datum_valid(&data[i]))
+        .collect();
+    let mut out = Vec::new();
+    let min_points = limits.min_points.max(estimator.min_samples()).max(1);
+    let mut round = 0;
+    while remaining.len() >= min_points && out.len() < limits.max_shapes {
+        let subset: Vec<D> = remaining.iter().map(|&i| data[i].clone()).collect();
+        let mut sampler = make_sampler(round);
+        round += 1;
+        let fit = match consensus.fit(estimator, &subset, &mut sampler) {
+            Ok(Some(fit)) => fit,
+            Ok(None) | Err(ConsensusError::TooFewPoints { .. }) => break,
+            Err(e) => return Err(e),
+        };
+        if !fit.accepted || fit.inliers.len() < limits.min_inliers.max(1) {
+            break;
+        }
+        out.push(take(fit, &mut remaining));
+    }
+    Ok(out)
+}
+
+/// Turns a fit on `remaining`'s subset into original indices and removes its inliers.
+fn take<M>(fit: Fit<M>, remaining: &mut Vec<usize>) -> Extracted<M> {
+    let inliers: Vec<usize> = fit.inliers.iter().map(|&k| remaining[k]).collect();
+    let mut is_inlier = vec![false; remaining.len()];
+    for &k in &fit.inliers {
+        is_inlier[k] = true;
+    }
+    let mut k = 0;
+    remaining.retain(|_| {
+        let keep = !is_inlier[k];
+        k += 1;
+        keep
+    });
+    Extracted {
+        model: fit.model,
+        inliers,
+        cost: fit.cost,
+    }
+}
+
+/// Which shape models to look for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub enum ShapeChoice {
+    /// Spheres only (peppers, guavas, apples, oranges).
+    #[default]
+    Sphere,
+    /// Cylinders only (eggplants); needs normals.
+    Cylinder,
+    /// Both each round; the accepted one with the lower cost wins.
+    Both,
+}
+
+/// A fitted fruit shape.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub enum Shape {
+    /// A sphere.
+    Sphere(Sphere),
+    /// A cylinder (with its inliers' extent along the axis).
+    Cylinder(Cylinder),
+}
+
+impl Shape {
+    /// The fruit centre: the sphere centre, or the cylinder's axis midpoint.
+    pub fn center(&self) -> nalgebra::Point3<f64> {
+        match self {
+            Shape::Sphere(s) => s.center,
+            Shape::Cylinder(c) => c.midpoint(),
+        }
+    }
+
+    /// Radius, metres.
+    pub fn radius_m(&self) -> f64 {
+        match self {
+            Shape::Sphere(s) => s.radius_m,
+            Shape::Cylinder(c) => c.radius_m,
+        }
+    }
+}
+
+/// Parameters of [`ShapeExtractor`] (paper defaults inside); validate with
+/// [`ShapeExtractionParams::check`].
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct ShapeExtractionParams {
+    /// The MSAC loop (T = 25 mm, d = 2 mm, L = 500).
+    pub msac: MsacParams,
+    /// Sphere estimator (radius prior).
+    pub sphere: SphereEstimatorParams,
+    /// Cylinder estimator (radius prior, optional normal-angle test).
+    pub cylinder: CylinderEstimatorParams,
+    /// Which models to fit.
+    pub shapes: ShapeChoice,
+    /// Repetition limits.
+    pub limits: RepeatLimits,
+    /// Seed of every random draw (default 0).
+    pub seed: u64,
+}
+
+impl ShapeExtractionParams {
+    /// Validates every part into a [`ShapeExtractor`].
+    ///
+    /// # Errors
+    /// [`ConsensusError::InvalidParameter`] from any part, or `max_shapes == 0`.
+    pub fn check(self) -> Result<ShapeExtractor, ConsensusError> {
+        if self.limits.max_shapes == 0 {
+            return Err(ConsensusError::InvalidParameter {
+                name: "limits.max_shapes",
+                value: 0.0,
+                reason: "must be at least 1",
+            });
+        }
+        Ok(ShapeExtractor {
+            msac: self.msac.check()?,
+            sphere: self.sphere.check()?,
+            cylinder: self.cylinder.check()?,
+            params: self,
+        })
+    }
+}
+
+/// Seed 002's MSAC shape detection on one cluster; build with [`ShapeExtractionParams::check`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ShapeExtractor {
+    params: ShapeExtractionParams,
+    msac: Msac,
+    sphere: SphereEstimator,
+    cylinder: CylinderEstimator,
+}
+
+impl ShapeExtractor {
+    /// The validated parameters.
+    pub fn params(&self) -> &ShapeExtractionParams {
+        &self.params
+    }
+
+    /// Extracts shapes from one cluster (Algorithm 1), in the order they were found.
+    ///
+    /// Points with non-finite positions are skipped; cylinders use only points with normals.
+    ///
+    /// # Errors
+    /// [`ConsensusError::TooFewPoints`] when the cluster has fewer valid points than the smallest
+    /// minimal sample of the chosen shapes (a cluster that merely yields no shape is `Ok(vec![])`).
+    pub fn extract(&self, data: &[OrientedPoint]) -> Result<Vec<Extracted<Shape>>, ConsensusError> {
+        let p = &self.params;
+        let seed = p.seed;
+        let valid = data.iter().filter(|d| d.has_finite_position()).count();
+        let needed = match p.shapes {
+            ShapeChoice::Sphere => 4,
+            ShapeChoice::Cylinder | ShapeChoice::Both => 2,
+        };
+        if valid < needed {
+            return Err(ConsensusError::TooFewPoints {
+                what: "shape extraction",
+                needed,
+                valid,
+            });
+        }
+        let sampler = |round: usize, kind: u64| {
+            UniformSampler::new(derive_seed(seed, 2 * round as u64 + kind))
+        };
+        match p.shapes {
+            ShapeChoice::Sphere => {
+                Ok(
+                    extract_repeated(&self.msac, &self.sphere, data, &p.limits, |r| sampler(r, 0))?
+                        .into_iter()
+                        .map(|e| Extracted {
+                            model: Shape::Sphere(e.model),
+                            inliers: e.inliers,
+                            cost: e.cost,
+                        })
+                        .collect(),
+                )
+            }
+            ShapeChoice::Cylinder => {
+                Ok(
+                    extract_repeated(&self.msac, &self.cylinder, data, &p.limits, |r| {
+                        sampler(r, 1)
+                    })?
+                    .into_iter()
+                    .map(|e| Extracted {
+                        model: Shape::Cylinder(e.model),
+                        inliers: e.inliers,
+                        cost: e.cost,
+                    })
+                    .collect(),
+                )
+            }
+            ShapeChoice::Both => self.extract_both(data, &sampler),
+        }
+    }
+
+    fn extract_both(
+        &self,
+        data: &[OrientedPoint],
+        sampler: &impl Fn(usize, u64) -> UniformSampler,
+    ) -> Result<Vec<Extracted<Shape>>, ConsensusError> {
+        let limits = &self.params.limits;
+        let mut remaining: Vec<usize> = (0..data.len())
+            .filter(|&i| data[i].has_finite_position())
+            .collect();
+        let mut out = Vec::new();
+        let mut round = 0;
+        while remaining.len() >= limits.min_points.max(2) && out.len() < limits.max_shapes {
+            let subset: Vec<OrientedPoint> = remaining.iter().map(|&i| data[i]).collect();
+            let sphere = accepted(
+                self.msac.fit(&self.sphere, &subset, &mut sampler(round, 0)),
+                limits,
+            )?;
+            let cylinder = accepted(
+                self.msac
+                    .fit(&self.cylinder, &subset, &mut sampler(round, 1)),
+                limits,
+            )?;
+            round += 1;
+            let chosen = match (sphere, cylinder) {
+                (Some(s), Some(c)) if c.cost < s.cost => {
+                    take_shape(c, Shape::Cylinder, &mut remaining)
+                }
+                (Some(s), _) => take_shape(s, Shape::Sphere, &mut remaining),
+                (None, Some(c)) => take_shape(c, Shape::Cylinder, &mut remaining),
+                (None, None) => break,
+            };
+            out.push(chosen);
+        }
+        Ok(out)
+    }
+}
+
+/// The fit if it passed acceptance and has enough inliers; "too few points" means no candidate.
+fn accepted<M>(
+    fit: Result<Option<Fit<M>>, ConsensusError>,
+    limits: &RepeatLimits,
+) -> Result<Option<Fit<M>>, ConsensusError> {
+    match fit {
+        Ok(Some(f)) if f.accepted && f.inliers.len() >= limits.min_inliers.max(1) => Ok(Some(f)),
+        Ok(_) | Err(ConsensusError::TooFewPoints { .. }) => Ok(None),
+        Err(e) => Err(e),
+    }
+}
+
+fn take_shape<M>(
+    fit: Fit<M>,
+    wrap: impl Fn(M) -> Shape,
+    remaining: &mut Vec<usize>,
+) -> Extracted<Shape> {
+    let e = take(fit, remaining);
+    Extracted {
+        model: wrap(e.model),
+        inliers: e.inliers,
+        cost: e.cost,
+    }
+}

@@ -1,0 +1,382 @@
+//! Spheres: the model, the 4-point estimator of seed 002 Eq. 6, and least-squares refits.
+//!
+//! Eq. 6 writes a sphere as `x² + y² + z² − 2ax − 2by − 2cz + d = 0`, linear in `(a, b, c, d)`,
+//! so four points determine it. Subtracting the equation of the first point removes `d` and leaves
+//! a 3×3 linear system for the centre; we solve it in coordinates relative to that first point,
+//! which keeps it well conditioned far from the camera. Four coplanar (or collinear, or repeated)
+//! points make the system singular — every sphere through their circle fits — so such samples are
+//! rejected, as are spheres outside the fruit-size radius prior.
+//!
+//! The refit (not in the paper) minimises the geometric distance `Σ (‖pᵢ − c‖ − r)²` by damped
+//! Gauss–Newton from the MSAC model; [`Sphere::fit_least_squares`] provides the algebraic
+//! (Kåsa) fit as a starting point when there is no model yet.
+
+use nalgebra::{Matrix3, Matrix4, Point3, Vector3, Vector4};
+use serde::{Deserialize, Serialize};
+
+use crate::consensus::check_positive;
+use crate::{ConsensusError, Estimator, Model, Positioned};
+
+/// A sphere, metres.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Sphere {
+    /// Centre.
+    pub center: Point3<f64>,
+    /// Radius, metres.
+    pub radius_m: f64,
+}
+
+/// Relative volume below which four points count as coplanar: `|q₁·(q₂×q₃)| / (‖q₁‖‖q₂‖‖q₃‖)`.
+const COPLANAR_TOLERANCE: f64 = 1e-4;
+
+impl Sphere {
+    /// The sphere through four points (seed 002 Eq. 6), or `None` when they are coplanar,
+    /// collinear, repeated or not finite.
+    pub fn from_four_points(p: [&Point3<f64>; 4]) -> Option<Self> {
+        let q1 = p[1] - p[0];
+        let q2 = p[2] - p[0];
+        let q3 = p[3] - p[0];
+        let scale = q1.norm() * q2.norm() * q3.norm();
+        let det = q1.dot(&q2.cross(&q3));
+        if !(scale > 0.0 && scale.is_finite() && det.abs() > COPLANAR_TOLERANCE * scale) {
+            return None;
+        }
+        // 2 qᵢ · c' = ‖qᵢ‖², centre c = p₀ + c'.
+        let a = Matrix3::from_rows(&[q1.transpose(), q2.transpose(), q3.transpose()]);
+        let b = Vector3::new(q1.norm_squared(), q2.norm_squared(), q3.norm_squared()) * 0.5;
+        let c_rel = a.lu().solve(&b)?;
+        let sphere = Self {
+            center: p[0] + c_rel,
+            radius_m: c_rel.norm(),
+        };
+        sphere.is_finite().then_some(sphere)
+    }
+
+    /// Whether centre and radius are finite.
+    pub fn is_finite(&self) -> bool {
+        self.center.iter().all(|c| c.is_finite()) && self.radius_m.is_finite()
+    }
+
+    /// Signed distance of `p` from the surface, positive outside, metres.
+    pub fn signed_distance(&self, p: &Point3<f64>) -> f64 {
+        (p - self.center).norm() - self.radius_m
+    }
+
+    /// Algebraic least-squares sphere (Kåsa fit of Eq. 6 to all points), then geometric
+    /// refinement. Non-finite points are skipped. `None` with fewer than four usable points or a
+    /// degenerate configuration.
+    pub fn fit_least_squares(points: &[Point3<f64>]) -> Option<Self> {
+        let pts: Vec<Point3<f64>> = points
+            .iter()
+            .filter(|p| p.iter().all(|c| c.is_finite()))
+            .copied()
+            .collect();
+        if pts.len() < 4 {
+            return None;
+        }
+        let mean = pts.iter().fold(Vector3::zeros(), |acc, p| acc + p.coords) / pts.len() as f64;
+        // Unknowns (c'ₓ, c'ᵧ, c'_z, k) with 2 q·c' + k = ‖q‖², k = r² − ‖c'‖².
+        let mut ata = Matrix4::<f64>::zeros();
+        let mut atb = Vector4::<f64>::zeros();
+        for p in &pts {
+            let q = p.coords - mean;
+            let row = Vector4::new(2.0 * q.x, 2.0 * q.y, 2.0 * q.z, 1.0);
+            ata += row * row.transpose();
+            atb += row * q.norm_squared();
+        }
+        let x = ata.cholesky()?.solve(&atb);
+        let c_rel = Vector3::new(x[0], x[1], x[2]);
+        let r2 = x[3] + c_rel.norm_squared();
+        if r2.is_nan() || r2 <= 0.0 {
+            return None;
+        }
+        let init = Self {
+            center: Point3::from(mean + c_rel),
+            radius_m: r2.sqrt(),
+        };
+        if !init.is_finite() {
+            return None;
+        }
+        Some(init.refined_geometric(&pts, 20).unwrap_or(init))
+    }
+
+    /// Damped Gauss–Newton on the geometric distance, starting from `self`. `None` when the
+    /// normal equations are singular from the start or fewer than four points are given.
+    pub fn refined_geometric(&self, points: &[Point3<f64>], max_iterations: usize) -> Option<Self> {
+        if points.len() < 4 {
+            return None;
+        }
+        let sse = |s: &Sphere| -> f64 {
+            points
+                .iter()
+                .map(|p| {
+                    let e = s.signed_distance(p);
+                    e * e
+                })
+                .sum()
+        };
+        let mut current = *self;
+        let mut current_sse = sse(&current);
+        let mut lambda = 1e-6;
+        for _ in 0..max_iterations {
+            let mut jtj = Matrix4::<f64>::zeros();
+            let mut jtr = Vector4::<f64>::zeros();
+            for p in points {
+                let d = p - current.center;
+                let n = d.norm();
+                if n <= f64::EPSILON {
+                    continue;
+                }
+                let u = d / n;
+                let j = Vector4::new(-u.x, -u.y, -u.z, -1.0);
+                let r = n - current.radius_m;
+                jtj += j * j.transpose();
+                jtr += j * r;
+            }
+            let mut stepped = false;
+            for _ in 0..8 {
+                let mut damped = jtj;
+                for k in 0..4 {
+                    damped[(k, k)] *= 1.0 + lambda;
+                }
+                let Some(chol) = damped.cholesky() else {
+                    lambda *= 10.0;
+                    continue;
+                };
+                let delta = chol.solve(&(-jtr));
+                let candidate = Sphere {
+                    center: current.center + Vector3::new(delta[0], delta[1], delta[2]),
+                    radius_m: current.radius_m + delta[3],
+                };
+                let cand_sse = sse(&candidate);
+                if candidate.is_finite() && candidate.radius_m > 0.0 && cand_sse <= current_sse {
+                    // Converged: a sub-0.1 µm step or a negligible relative decrease.
+                    let small =
+                        delta.norm() < 1e-10 || current_sse - cand_sse <= 1e-10 * current_sse;
+                    current = candidate;
+                    current_sse = cand_sse;
+                    lambda = (lambda * 0.1).max(1e-12);
+                    stepped = !small;
+                    break;
+                }
+                lambda *= 10.0;
+            }
+            if !stepped {
+                break;
+            }
+        }
+        Some(current)
+    }
+}
+
+impl<D: Positioned> Model<D> for Sphere {
+    /// `|‖p − c‖ − r|`, metres.
+    fn distance(&self, datum: &D) -> f64 {
+        self.signed_distance(&datum.position()).abs()
+    }
+}
+
+/// Parameters of [`SphereEstimator`]; validate with [`SphereEstimatorParams::check`].
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct SphereEstimatorParams {
+    /// Accepted radii `(min, max)`, metres: the fruit-size prior (default 20–80 mm). `max` may be
+    /// infinite.
+    pub radius_range_m: (f64, f64),
+    /// When set and a datum has a normal, the datum counts as an outlier (infinite residual) if
+    /// its normal deviates from the sphere's radial direction by more than this angle (sign
+    /// ignored), radians. Default `None` (the paper uses distances only).
+    pub max_normal_deviation_rad: Option<f64>,
+}
+
+impl Default for SphereEstimatorParams {
+    fn default() -> Self {
+        Self {
+            radius_range_m: (0.02, 0.08),
+            max_normal_deviation_rad: None,
+        }
+    }
+}
+
+impl SphereEstimatorParams {
+    /// Validates into a [`SphereEstimator`].
+    ///
+    /// # Errors
+    /// [`ConsensusError::InvalidParameter`] when the radius range is not `0 ≤ min < max` or the
+    /// angle is not in `(0, π/2]`.
+    pub fn check(self) -> Result<SphereEstimator, ConsensusError> {
+        let (lo, hi) = self.radius_range_m;
+        if !(lo.is_finite() && lo >= 0.0 && hi > lo) {
+            return Err(ConsensusError::InvalidParameter {
+                name: "radius_range_m",
+                value: lo,
+                reason: "must satisfy 0 <= min < max with min finite",
+            });
+        }
+        let min_normal_cos = match self.max_normal_deviation_rad {
+            Some(a) => {
+                check_positive("max_normal_deviation_rad", a)?;
+                if a > std::f64::consts::FRAC_PI_2 {
+                    return Err(ConsensusError::InvalidParameter {
+                        name: "max_normal_deviation_rad",
+                        value: a,
+                        reason: "must not exceed pi/2",
+                    });
+                }
+                Some(a.cos())
+            }
+            None => None,
+        };
+        Ok(SphereEstimator {
+            params: self,
+            min_normal_cos,
+        })
+    }
+}
+
+/// Sphere hypotheses from four points, with radius priors; build with
+/// [`SphereEstimatorParams::check`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SphereEstimator {
+    params: SphereEstimatorParams,
+    min_normal_cos: Option<f64>,
+}
+
+impl SphereEstimator {
+    /// The validated parameters.
+    pub fn params(&self) -> &SphereEstimatorParams {
+        &self.params
+    }
+}
+
+impl<D: Positioned> Estimator<D> for SphereEstimator {
+    type Model = Sphere;
+
+    fn min_samples(&self) -> usize {
+        4
+    }
+
+    fn estimate(&self, sample: &[&D]) -> Option<Sphere> {
+        let [a, b, c, d] = sample else {
+            return None;
+        };
+        let (pa, pb, pc, pd) = (a.position(), b.position(), c.position(), d.position());
+        let s = Sphere::from_four_points([&pa, &pb, &pc, &pd])?;
+        <Self as Estimator<D>>::is_model_valid(self, &s).then_some(s)
+    }
+
+    fn is_datum_valid(&self, datum: &D) -> bool {
+        datum.has_finite_position()
+    }
+
+    fn is_model_valid(&self, model: &Sphere) -> bool {
+        let (lo, hi) = self.params.radius_range_m;
+        model.is_finite() && model.radius_m >= lo && model.radius_m <= hi
+    }
+
+    fn residual(&self, model: &Sphere, datum: &D) -> f64 {
+        let p = datum.position();
+        let d = p - model.center;
+        let n = d.norm();
+        if let (Some(min_cos), Some(normal)) = (self.min_normal_cos, datum.normal()) {
+            if n > 0.0 && (normal.dot(&d) / n).abs() < min_cos {
+                return f64::INFINITY;
+            }
+        }
+        (n - model.radius_m).abs()
+    }
+
+    fn refine(&self, model: &Sphere, data: &[D], inliers: &[usize]) -> Option<Sphere> {
+        let pts: Vec<Point3<f64>> = inliers.iter().map(|&i| data[i].position()).collect();
+        model.refined_geometric(&pts, 20)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn four_exact_points_recover_the_sphere() {
+        let c = Point3::new(0.1, -0.2, 0.9);
+        let r = 0.037;
+        let dirs = [
+            Vector3::new(1.0, 0.2, -0.3),
+            Vector3::new(-0.4, 1.0, 0.1),
+            Vector3::new(0.3, -0.5, -1.0),
+            Vector3::new(-0.7, -0.7, 0.2),
+        ];
+        let p: Vec<Point3<f64>> = dirs.iter().map(|d| c + d.normalize() * r).collect();
+        let s = Sphere::from_four_points([&p[0], &p[1], &p[2], &p[3]]).unwrap();
+        assert!((s.center - c).norm() < 1e-9, "{s:?}");
+        assert!((s.radius_m - r).abs() < 1e-9);
+    }
+
+    #[test]
+    fn degenerate_samples_are_rejected() {
+        let coplanar = [
+            Point3::new(0.0, 0.0, 1.0),
+            Point3::new(0.05, 0.0, 1.0),
+            Point3::new(0.0, 0.05, 1.0),
+            Point3::new(0.05, 0.05, 1.0),
+        ];
+        assert!(
+            Sphere::from_four_points([&coplanar[0], &coplanar[1], &coplanar[2], &coplanar[3]])
+                .is_none()
+        );
+        let repeated = [coplanar[0], coplanar[0], coplanar[1], coplanar[2]];
+        assert!(
+            Sphere::from_four_points([&repeated[0], &repeated[1], &repeated[2], &repeated[3]])
+                .is_none()
+        );
+        let collinear: Vec<_> = (0..4)
+            .map(|i| Point3::new(i as f64 * 0.01, 0.0, 1.0))
+            .collect();
+        assert!(Sphere::from_four_points([
+            &collinear[0],
+            &collinear[1],
+            &collinear[2],
+            &collinear[3]
+        ])
+        .is_none());
+        let nan = Point3::new(f64::NAN, 0.0, 0.0);
+        assert!(
+            Sphere::from_four_points([&nan, &coplanar[1], &coplanar[2], &coplanar[3]]).is_none()
+        );
+    }
+
+    #[test]
+    fn radius_prior_rejects_models() {
+        let est = SphereEstimatorParams::default().check().unwrap();
+        let big = [
+            Point3::new(0.5, 0.0, 0.0),
+            Point3::new(-0.5, 0.0, 0.0),
+            Point3::new(0.0, 0.5, 0.0),
+            Point3::new(0.0, 0.0, 0.5),
+        ];
+        let refs: Vec<&Point3<f64>> = big.iter().collect();
+        assert!(Estimator::<Point3<f64>>::estimate(&est, &refs).is_none());
+        assert!(SphereEstimatorParams {
+            radius_range_m: (0.1, 0.05),
+            ..Default::default()
+        }
+        .check()
+        .is_err());
+    }
+
+    #[test]
+    fn least_squares_fit_recovers_exact_sphere() {
+        let c = Point3::new(0.0, 0.05, 0.7);
+        let r = 0.04;
+        let pts: Vec<Point3<f64>> = (0..200)
+            .map(|i| {
+                let t = i as f64 * 0.37;
+                let z = -(i as f64 / 200.0);
+                let s = (1.0 - z * z).sqrt();
+                c + Vector3::new(s * t.cos(), s * t.sin(), z) * r
+            })
+            .collect();
+        let s = Sphere::fit_least_squares(&pts).unwrap();
+        assert!((s.center - c).norm() < 1e-9);
+        assert!((s.radius_m - r).abs() < 1e-9);
+    }
+}

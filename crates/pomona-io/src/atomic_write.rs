@@ -28,6 +28,14 @@ pub(crate) fn write_atomically<E>(
         fill(&mut w)?;
         w.flush().map_err(|e| io_error(path, e))?;
     }
+    // Temporary files are created owner-only; what we write is ordinary output (rw-r--r--).
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        tmp.as_file()
+            .set_permissions(std::fs::Permissions::from_mode(0o644))
+            .map_err(|e| io_error(path, e))?;
+    }
     tmp.persist(path).map_err(|e| io_error(path, e.error))?;
     Ok(())
 }

@@ -135,6 +135,11 @@ pub fn render_view(
     view.each_pixel(full, |i, o, d| {
         let t = depth[i];
         let p = o + d * t;
+        // Time-of-flight sensors see in the near infrared, where living plant tissue reflects
+        // strongly whatever its visible colour (a dark purple eggplant is bright at 850 nm), so
+        // plant surfaces get a floor on the amplitude that drives dropouts; the backdrop keeps
+        // its visible luminance.
+        let plant = !matches!(hits[i], Hit::Backdrop | Hit::Nothing);
         let (normal, material) = match hits[i] {
             Hit::Nothing => return,
             Hit::Backdrop => (
@@ -162,7 +167,7 @@ pub fn render_view(
         rgb_linear[i] = scene.light.shade(&material, &normal, &to_viewer);
         surfaces[i] = SurfaceSample {
             z: t,
-            amplitude: material.luminance() * cos_incidence,
+            amplitude: nir_reflectance(&material, plant) * cos_incidence,
             cos_incidence,
         };
     });
@@ -238,6 +243,19 @@ pub fn render_view(
 }
 
 /// Leaf colour with a lighter midrib and slightly darker margins.
+/// Near-infrared reflectance used as the return amplitude of depth noise (see `render`).
+fn nir_reflectance(material: &Material, plant: bool) -> f64 {
+    if plant {
+        material.luminance().max(PLANT_NIR_REFLECTANCE)
+    } else {
+        material.luminance()
+    }
+}
+
+/// Lower bound of plant tissue's near-infrared reflectance (leaves and fruit reflect roughly
+/// 0.4–0.6 at 850 nm; 0.3 leaves room for shading and wet surfaces).
+const PLANT_NIR_REFLECTANCE: f64 = 0.3;
+
 fn leaf_material(base: &Material, across: f64) -> Material {
     let f = if across.abs() < 0.06 {
         1.35

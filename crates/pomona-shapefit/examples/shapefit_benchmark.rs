@@ -1,0 +1,124 @@
+//! Trains shape-fit on synthetic frames and evaluates it on frames rendered with other seeds.
+//!
+//! ```sh
+//! cargo run --release -p pomona-shapefit --example shapefit_benchmark -- pepper 40 20 tof
+//! ```
+//! Arguments: fruit (pepper|eggplant|guava|apple|orange|mixed), training frames, test frames,
+//! noise (none|low|tof). Prints the evaluation summary and per-stage timings.
+
+use std::time::Instant;
+
+use pomona_consensus::ShapeChoice;
+use pomona_eval::{evaluate, EvalConfig, FrameInput};
+use pomona_pipeline::{FrameSource, Pipeline, StageTimings, TrainOptions};
+use pomona_shapefit::{ShapeFitPipeline, SyntheticFrames};
+use pomona_synth::{FruitChoice, FruitKind, NoiseModel, SceneSpec};
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let arg = |i: usize, default: &str| args.get(i).cloned().unwrap_or_else(|| default.to_owned());
+    let fruit = match arg(0, "pepper").as_str() {
+        "mixed" => FruitChoice::Mixed,
+        "eggplant" => FruitChoice::Only(FruitKind::Eggplant),
+        "guava" => FruitChoice::Only(FruitKind::Guava),
+        "apple" => FruitChoice::Only(FruitKind::Apple),
+        "orange" => FruitChoice::Only(FruitKind::Orange),
+        _ => FruitChoice::Only(FruitKind::Pepper),
+    };
+    let noise = match arg(3, "tof").as_str() {
+        "none" => NoiseModel::None,
+        "low" => NoiseModel::Low,
+        _ => NoiseModel::Tof,
+    };
+    let n_train: usize = arg(1, "40").parse()?;
+    let n_test: usize = arg(2, "20").parse()?;
+    let spec = SceneSpec {
+        fruit,
+        noise,
+        ..SceneSpec::default()
+    };
+    let train = SyntheticFrames {
+        spec: spec.clone(),
+        seed: 1,
+        first: 0,
+        count: n_train,
+    };
+    let test = SyntheticFrames {
+        spec: spec.clone(),
+        seed: 2,
+        first: 0,
+        count: n_test,
+    };
+
+    // One shape model per crop, as the paper does; both for mixed crops.
+    let mut pipeline = ShapeFitPipeline::default();
+    pipeline.params.shapes.shapes = match fruit {
+        FruitChoice::Only(FruitKind::Eggplant) => ShapeChoice::Cylinder,
+        FruitChoice::Only(_) => ShapeChoice::Sphere,
+        _ => ShapeChoice::Both,
+    };
+    let t0 = Instant::now();
+    let model = pipeline.train(
+        &train,
+        &TrainOptions {
+            seed: 7,
+            ..TrainOptions::default()
+        },
+        &|_, _| {},
+    )?;
+    println!(
+        "trained on {n_train} frames in {:.1} s ({} support vectors)",
+        t0.elapsed().as_secs_f64(),
+        model.svm.n_support()
+    );
+
+    let detector = pipeline.load(&model)?;
+    let mut timings = StageTimings::default();
+    let mut frames = Vec::new();
+    for i in 0..test.len() {
+        let lf = test.load(i)?;
+        let detections = detector.detect(&lf.frame, &mut timings)?;
+        if std::env::var_os("POMONA_DEBUG").is_some() {
+            for d in detections
+                .iter()
+                .filter(|d| d.score > 0.0 || std::env::var_os("POMONA_DEBUG_ALL").is_some())
+            {
+                if let Some(t) = lf
+                    .truth
+                    .fruits
+                    .iter()
+                    .filter_map(|t| t.center_m.map(|c| (t, c)))
+                    .min_by(|a, b| {
+                        (a.1 - d.center_m)
+                            .norm()
+                            .total_cmp(&(b.1 - d.center_m).norm())
+                    })
+                {
+                    let e = d.center_m - t.1;
+                    println!(
+                        "truth d {:.3} vis {:.2} det d {:.3} err [{:+.3} {:+.3} {:+.3}]",
+                        t.0.diameter_m.unwrap_or(0.0),
+                        t.0.visibility.unwrap_or(0.0),
+                        d.diameter_m.unwrap_or(0.0),
+                        e.x,
+                        e.y,
+                        e.z
+                    );
+                }
+            }
+        }
+        frames.push(FrameInput {
+            frame: lf.name,
+            truth: lf.truth,
+            detections,
+        });
+    }
+    let report = evaluate(&frames, &spec.camera, &EvalConfig::default())?;
+    println!("{}", report.to_markdown());
+    println!("{}", timings.table());
+    println!(
+        "mean per frame: {:.1} ms",
+        1e3 * timings.total().as_secs_f64() / n_test.max(1) as f64
+    );
+    Ok(())
+}

@@ -1,0 +1,31 @@
+//! # pomona-shapefit
+//!
+//! The `shape-fit` detector of seed 002 (Lin et al. 2019): a naive-Bayes colour mask in HSV,
+//! region growing on the masked depth image, repeated MSAC sphere/cylinder fitting per cluster,
+//! the 66-D GPCD descriptor and an RBF SVM that keeps fruit and rejects leaves. It outputs a
+//! fitted shape per fruit, so a robot gets the centre, the diameter and, for cylinders
+//! (eggplants), the axis.
+//!
+//! Each stage is its own type behind [`pomona_pipeline::Stage`] (see [`stages`]); the
+//! [`ShapeFitPipeline`] trains a [`pomona_learn::ModelFile`] and loads a detector from one.
+//! Parameters default to the paper's values; where we depart from it, [`ShapeFitParams`] and the
+//! stage docs say why.
+
+mod candidate;
+mod color_model;
+mod gpcd;
+mod hsv;
+mod params;
+mod pipeline;
+mod region_growing;
+pub mod stages;
+mod synthetic_frames;
+
+pub use candidate::Candidate;
+pub use color_model::{ColorBayes, ColorBayesParams, ColorHistograms, ColorLut};
+pub use gpcd::{gpcd, GpcdParams, GPCD_LEN};
+pub use hsv::rgb_to_hsv;
+pub use params::ShapeFitParams;
+pub use pipeline::{ShapeFitDetector, ShapeFitPipeline, ShapeFitStageParams, PIPELINE_NAME};
+pub use region_growing::{grow_regions, RegionGrowingParams};
+pub use synthetic_frames::SyntheticFrames;

@@ -1,0 +1,85 @@
+//! Every tunable of the shape-fit detector in one serialisable struct, defaulted to seed 002's
+//! values; it is stored in the model file (`stage_params`) so a model always runs with the
+//! parameters it was trained with.
+
+use pomona_consensus::{
+    Acceptance, CylinderEstimatorParams, MsacParams, RepeatLimits, ShapeChoice,
+    ShapeExtractionParams, SphereEstimatorParams, WindowNormalParams,
+};
+use serde::{Deserialize, Serialize};
+
+use crate::{ColorBayesParams, GpcdParams, RegionGrowingParams};
+
+/// Parameters of every stage.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ShapeFitParams {
+    /// Colour segmentation (Eqs. 1–2); ignored for depth-only models.
+    pub color: ColorBayesParams,
+    /// Depth beyond this is dropped before clustering (paper: 1500 mm, out of the arm's reach).
+    pub max_depth_m: f64,
+    /// Region growing on the masked depth image.
+    pub regions: RegionGrowingParams,
+    /// Normals for the cylinder estimator and the angular descriptor (PCA over an image window).
+    pub normals: WindowNormalParams,
+    /// Repeated MSAC shape extraction per cluster (Algorithm 1).
+    pub shapes: ShapeExtractionParams,
+    /// The descriptor.
+    pub gpcd: GpcdParams,
+    /// A training candidate is positive when its centre is within this of a truth centre
+    /// (metres; the evaluation tolerance of seed 000, 50 mm).
+    pub positive_tolerance_m: f64,
+    /// Training keeps at most this many negative candidates per positive (seeded choice).
+    pub max_negatives_per_positive: f64,
+    /// Detections whose centres are closer than this are merged, keeping the higher score.
+    /// Not in the paper, which reports split fruit as false positives (its §Discussion); 0
+    /// switches it off.
+    pub merge_radius_m: f64,
+}
+
+impl Default for ShapeFitParams {
+    fn default() -> Self {
+        Self {
+            color: ColorBayesParams::default(),
+            max_depth_m: 1.5,
+            regions: RegionGrowingParams::default(),
+            normals: WindowNormalParams::default(),
+            shapes: default_shapes(),
+            gpcd: GpcdParams::default(),
+            positive_tolerance_m: 0.05,
+            max_negatives_per_positive: 5.0,
+            merge_radius_m: 0.03,
+        }
+    }
+}
+
+/// MSAC as in the paper (T = 25 mm, L = 500) except for two documented changes:
+/// * acceptance: the paper's rule (mean truncated cost over the *whole* cluster ≤ 2 mm) refuses
+///   any cluster with more than 2/25 = 8 % of its points off the model, i.e. every cluster where a
+///   fruit touches a leaf; we accept a model whose own inliers fit within 8 mm on average and
+///   cover at least 10 % of the cluster;
+/// * inliers are points within 12 mm of the surface (not T = 25 mm), so a fruit's inliers do not
+///   swallow the leaf it rests on; 12 mm is about 2σ of time-of-flight noise.
+fn default_shapes() -> ShapeExtractionParams {
+    ShapeExtractionParams {
+        msac: MsacParams {
+            acceptance: Acceptance::InlierResidual {
+                max_residual_m: 0.008,
+                min_inlier_fraction: 0.1,
+            },
+            inlier_threshold_m: 0.012,
+            ..MsacParams::default()
+        },
+        sphere: SphereEstimatorParams {
+            radius_range_m: (0.015, 0.08),
+            ..SphereEstimatorParams::default()
+        },
+        cylinder: CylinderEstimatorParams::default(),
+        shapes: ShapeChoice::Both,
+        limits: RepeatLimits {
+            min_points: 30,
+            min_inliers: 30,
+            max_shapes: 6,
+        },
+        seed: 0,
+    }
+}

@@ -1,0 +1,488 @@
+//! The `shape-fit` pipeline: training (colour model, candidates labelled against truth, GPCD,
+//! cross-validated SVM) and the detector that chains the stages.
+
+use pomona_consensus::nalgebra::{Point2, Point3};
+use pomona_consensus::Shape;
+use pomona_core::{Detection, FrameTruth, PinholeCamera, PixelBox, RgbdFrame};
+use pomona_learn::{
+    ClassWeights, CvMetric, GridAxis, GridSearchParams, ModelFile, Samples, SvmParams, TrainingSet,
+};
+use pomona_pipeline::{
+    run_stage, Detector, FrameSource, LabelledFrame, Pipeline, PipelineError, StageTimings,
+    TrainOptions,
+};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use crate::stages::{
+    ClassifierStage, ColorMaskStage, DescriptorStage, RegionGrowingStage, ShapeStage,
+};
+use crate::{Candidate, ColorBayes, ColorHistograms, ShapeFitParams};
+
+/// Name of the pipeline on the command line and in model files.
+pub const PIPELINE_NAME: &str = "shape-fit";
+
+/// What the model file's `stage_params` holds for this pipeline.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ShapeFitStageParams {
+    /// Stage parameters used in training.
+    pub params: ShapeFitParams,
+    /// The colour model; `None` for a depth-only model.
+    pub color_model: Option<ColorBayes>,
+}
+
+/// The shape-fit method (seed 002). `params` are used for training; a loaded model carries its
+/// own.
+#[derive(Debug, Clone, Default)]
+pub struct ShapeFitPipeline {
+    /// Stage parameters for training.
+    pub params: ShapeFitParams,
+}
+
+/// Counts training pixels: fruit pixels from the instance mask when present, otherwise from the
+/// truth boxes; all other pixels with depth are background.
+fn color_histograms(lf: &LabelledFrame, bins: usize) -> ColorHistograms {
+    let mut h = ColorHistograms::new(bins);
+    let Some(color) = lf.frame.color() else {
+        return h;
+    };
+    let w = color.width();
+    let boxes: Vec<PixelBox> = lf.truth.fruits.iter().filter_map(|f| f.bbox_px).collect();
+    for (i, rgb) in color.pixels().enumerate() {
+        let (u, v) = ((i as u32) % w, (i as u32) / w);
+        let fruit = match &lf.mask {
+            Some(m) => m.get(u, v).is_some_and(|id| id > 0),
+            None => boxes
+                .iter()
+                .any(|b| b.contains(&Point2::new(u as f64, v as f64))),
+        };
+        h.add(rgb, fruit);
+    }
+    h
+}
+
+/// Training label of a candidate. With an instance mask: most of its inlier pixels lie on one
+/// fruit (exact, and right for pieces of long fruit whose centre is far from the fruit's).
+/// Otherwise: its centre is within the tolerance of a truth centre, or (truth without centre)
+/// projects into the fruit's box.
+fn label(c: &Candidate, lf: &LabelledFrame, tolerance_m: f64) -> bool {
+    match &lf.mask {
+        Some(mask) => {
+            let ids = mask.as_slice();
+            let mut counts = std::collections::HashMap::<u16, usize>::new();
+            for &p in &c.pixels {
+                if let Some(&id) = ids.get(p).filter(|&&id| id > 0) {
+                    *counts.entry(id).or_default() += 1;
+                }
+            }
+            counts.values().any(|&n| 2 * n > c.pixels.len())
+        }
+        None => is_positive(&c.shape.center(), &lf.truth, lf.frame.camera(), tolerance_m),
+    }
+}
+
+/// Whether a candidate centre is a fruit of the truth: within the tolerance of a truth centre,
+/// or (truth without centre) projecting into its box.
+fn is_positive(
+    center: &Point3<f64>,
+    truth: &FrameTruth,
+    camera: &PinholeCamera,
+    tolerance_m: f64,
+) -> bool {
+    truth.fruits.iter().any(|f| match (f.center_m, f.bbox_px) {
+        (Some(c), _) => (c - center).norm() <= tolerance_m,
+        (None, Some(b)) => camera.project(center).is_some_and(|p| b.contains(&p)),
+        (None, None) => false,
+    })
+}
+
+impl ShapeFitPipeline {
+    fn stages(
+        &self,
+        stage: &ShapeFitStageParams,
+        use_color: bool,
+    ) -> Result<Stages, PipelineError> {
+        let p = &stage.params;
+        let normals = p
+            .normals
+            .check()
+            .map_err(|e| PipelineError::InvalidParameter {
+                name: "normals".into(),
+                reason: e.to_string(),
+            })?;
+        Ok(Stages {
+            mask: ColorMaskStage {
+                lut: stage
+                    .color_model
+                    .as_ref()
+                    .filter(|_| use_color)
+                    .map(|m| m.compile(p.color.lut_bits)),
+                threshold: p.color.threshold as f32,
+                max_depth_m: p.max_depth_m as f32,
+            },
+            regions: RegionGrowingStage { params: p.regions },
+            shapes: ShapeStage {
+                normals,
+                shapes: p.shapes,
+            },
+            descriptor: DescriptorStage {
+                params: p.gpcd,
+                use_color,
+            },
+        })
+    }
+}
+
+/// The stages before the classifier (shared by training and detection).
+struct Stages {
+    mask: ColorMaskStage,
+    regions: RegionGrowingStage,
+    shapes: ShapeStage,
+    descriptor: DescriptorStage,
+}
+
+impl Stages {
+    fn candidates(
+        &self,
+        frame: &RgbdFrame,
+        t: &mut StageTimings,
+    ) -> Result<(Vec<Candidate>, Vec<Vec<f64>>), PipelineError> {
+        self.candidates_with(&self.mask, frame, t)
+    }
+
+    fn candidates_with(
+        &self,
+        mask: &ColorMaskStage,
+        frame: &RgbdFrame,
+        t: &mut StageTimings,
+    ) -> Result<(Vec<Candidate>, Vec<Vec<f64>>), PipelineError> {
+        let keep = run_stage(mask, frame, t)?;
+        let clusters = run_stage(&self.regions, (frame, keep.as_slice()), t)?;
+        let candidates = run_stage(&self.shapes, (frame, clusters.as_slice()), t)?;
+        let features = run_stage(&self.descriptor, (frame, candidates.as_slice()), t)?;
+        Ok((candidates, features))
+    }
+}
+
+impl Pipeline for ShapeFitPipeline {
+    fn name(&self) -> &'static str {
+        PIPELINE_NAME
+    }
+
+    fn needs_color(&self) -> bool {
+        false
+    }
+
+    fn default_model(&self) -> Option<&'static str> {
+        Some(include_str!("../models/default.json")).filter(|s| !s.trim().is_empty())
+    }
+
+    fn train(
+        &self,
+        frames: &dyn FrameSource,
+        options: &TrainOptions,
+        progress: &(dyn Fn(usize, usize) + Sync),
+    ) -> Result<ModelFile, PipelineError> {
+        let n = frames.len();
+        let not_enough = |reason: String| PipelineError::NotEnoughTrainingData {
+            pipeline: PIPELINE_NAME,
+            reason,
+        };
+        if n == 0 {
+            return Err(not_enough("no frames with truth".into()));
+        }
+        // Pass 1: colour statistics (only if every frame has colour).
+        let first = frames.load(0)?;
+        let use_color = first.frame.color().is_some();
+        let mut color_model = None;
+        if use_color {
+            let hists: Result<Vec<ColorHistograms>, PipelineError> = (0..n)
+                .into_par_iter()
+                .map(|i| {
+                    frames
+                        .load(i)
+                        .map(|lf| color_histograms(&lf, self.params.color.bins))
+                })
+                .collect();
+            let mut total = ColorHistograms::new(self.params.color.bins);
+            for h in hists? {
+                total.merge(&h);
+            }
+            color_model = Some(ColorBayes::fit(&total, &self.params.color).ok_or_else(|| {
+                not_enough("colour training needs fruit and background pixels".into())
+            })?);
+        }
+        let mut params = self.params.clone();
+        params.shapes.seed = options.seed;
+        let stage_params = ShapeFitStageParams {
+            params,
+            color_model,
+        };
+        let stages = self.stages(&stage_params, use_color)?;
+
+        // Pass 2: candidates, descriptors and labels. With a colour model, candidates found
+        // without the colour mask are added too: the mask removes most leaves, so without them
+        // the classifier would see almost no negatives (none at all for clean, red fruit) and
+        // could not learn to reject the leaves that do pass the mask (green fruit among leaves).
+        let depth_only = ColorMaskStage {
+            lut: None,
+            ..stages.mask.clone()
+        };
+        let done = std::sync::atomic::AtomicUsize::new(0);
+        let per_frame: Result<Vec<LabelledFeatures>, PipelineError> = (0..n)
+            .into_par_iter()
+            .map(|i| {
+                let lf = frames.load(i)?;
+                if use_color && lf.frame.color().is_none() {
+                    return Err(PipelineError::MissingColor {
+                        pipeline: PIPELINE_NAME,
+                    });
+                }
+                let mut t = StageTimings::default();
+                let (mut candidates, mut features) = stages.candidates(&lf.frame, &mut t)?;
+                if use_color {
+                    let (c, f) = stages.candidates_with(&depth_only, &lf.frame, &mut t)?;
+                    candidates.extend(c);
+                    features.extend(f);
+                }
+                let labels = candidates
+                    .iter()
+                    .map(|c| label(c, &lf, stage_params.params.positive_tolerance_m))
+                    .collect();
+                progress(
+                    done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1,
+                    n,
+                );
+                Ok((features, labels))
+            })
+            .collect();
+        let (mut values, mut labels) = (Vec::new(), Vec::new());
+        for (f, l) in per_frame? {
+            values.extend(f.into_iter().flatten());
+            labels.extend(l);
+        }
+        let (values, labels) = cap_negatives(
+            values,
+            labels,
+            stage_params.params.max_negatives_per_positive,
+            options.seed,
+        );
+        let positives = labels.iter().filter(|&&l| l).count();
+        if positives < 2 || labels.len() - positives < 2 {
+            return Err(not_enough(format!(
+                "{positives} positive and {} negative candidates",
+                labels.len() - positives
+            )));
+        }
+        let data = TrainingSet::new(Samples::new(crate::GPCD_LEN, values)?, labels)?;
+        let (log2_c, log2_gamma) = if options.full_grid {
+            let d = GridSearchParams::default();
+            (d.log2_c, d.log2_gamma)
+        } else {
+            (
+                GridAxis {
+                    start: -1.0,
+                    stop: 11.0,
+                    step: 2.0,
+                },
+                GridAxis {
+                    start: 1.0,
+                    stop: -9.0,
+                    step: 2.0,
+                },
+            )
+        };
+        let search = GridSearchParams {
+            log2_c,
+            log2_gamma,
+            folds: options.folds,
+            fine: options.full_grid,
+            seed: options.seed,
+            metric: CvMetric::BalancedAccuracy,
+            base: SvmParams::default()
+                .class_weights(ClassWeights::Balanced)
+                .seed(options.seed),
+        }
+        .check()?
+        .fit(&data)?;
+        let stage_json = serde_json::to_value(&stage_params)
+            .map_err(|e| PipelineError::StageParams(e.to_string()))?;
+        Ok(ModelFile::new(PIPELINE_NAME, stage_json, &search.model))
+    }
+
+    fn load(&self, model: &ModelFile) -> Result<Box<dyn Detector>, PipelineError> {
+        let stage_params: ShapeFitStageParams = serde_json::from_value(model.stage_params.clone())
+            .map_err(|e| PipelineError::StageParams(e.to_string()))?;
+        let use_color = stage_params.color_model.is_some();
+        let stages = self.stages(&stage_params, use_color)?;
+        Ok(Box::new(ShapeFitDetector {
+            stages,
+            classifier: ClassifierStage {
+                svm: model.classifier(),
+            },
+            merge_radius_m: stage_params.params.merge_radius_m,
+        }))
+    }
+}
+
+/// Keeps every positive and at most `ratio` negatives per positive, chosen by a seeded shuffle
+/// (seed 002 trains with negatives outnumbering positives about 5:1; more only slows the grid
+/// search).
+fn cap_negatives(
+    values: Vec<f64>,
+    labels: Vec<bool>,
+    ratio: f64,
+    seed: u64,
+) -> (Vec<f64>, Vec<bool>) {
+    use rand::seq::SliceRandom;
+    use rand::SeedableRng;
+    let positives = labels.iter().filter(|&&l| l).count();
+    let mut negatives: Vec<usize> = (0..labels.len()).filter(|&i| !labels[i]).collect();
+    let cap = (ratio * positives.max(1) as f64).ceil() as usize;
+    if negatives.len() <= cap {
+        return (values, labels);
+    }
+    negatives.shuffle(&mut rand_chacha::ChaCha8Rng::seed_from_u64(seed));
+    let mut keep = vec![false; labels.len()];
+    for &i in negatives.iter().take(cap) {
+        keep[i] = true;
+    }
+    for (i, &l) in labels.iter().enumerate() {
+        keep[i] |= l;
+    }
+    let n = crate::GPCD_LEN;
+    let kept_values = values
+        .chunks_exact(n)
+        .zip(&keep)
+        .filter(|(_, &k)| k)
+        .flat_map(|(v, _)| v.iter().copied())
+        .collect();
+    let kept_labels = labels
+        .iter()
+        .zip(&keep)
+        .filter(|(_, &k)| k)
+        .map(|(&l, _)| l)
+        .collect();
+    (kept_values, kept_labels)
+}
+
+/// Descriptors of one frame's candidates and their training labels.
+type LabelledFeatures = (Vec<Vec<f64>>, Vec<bool>);
+
+/// A trained shape-fit detector.
+pub struct ShapeFitDetector {
+    stages: Stages,
+    classifier: ClassifierStage,
+    merge_radius_m: f64,
+}
+
+fn detection(c: &Candidate, score: f64, camera: &PinholeCamera) -> Detection {
+    let (center_m, axis) = match &c.shape {
+        Shape::Sphere(s) => (s.center, None),
+        Shape::Cylinder(cy) => (cy.midpoint(), Some(cy.axis)),
+    };
+    let w = camera.width as usize;
+    let (mut lo, mut hi) = ((f64::MAX, f64::MAX), (f64::MIN, f64::MIN));
+    for &i in &c.pixels {
+        let (u, v) = ((i % w) as f64, (i / w) as f64);
+        lo = (lo.0.min(u), lo.1.min(v));
+        hi = (hi.0.max(u), hi.1.max(v));
+    }
+    Detection {
+        center_m,
+        score,
+        diameter_m: Some(2.0 * c.shape.radius_m()),
+        axis,
+        bbox_px: PixelBox::new(lo.0, lo.1, hi.0, hi.1).ok(),
+        kind: None,
+    }
+}
+
+/// Keeps, among detections closer than `radius_m`, the highest-scoring one.
+fn merge_close(mut detections: Vec<Detection>, radius_m: f64) -> Vec<Detection> {
+    if radius_m <= 0.0 {
+        return detections;
+    }
+    detections.sort_by(|a, b| b.score.total_cmp(&a.score));
+    let mut kept: Vec<Detection> = Vec::with_capacity(detections.len());
+    for d in detections {
+        if kept
+            .iter()
+            .all(|k| (k.center_m - d.center_m).norm() >= radius_m)
+        {
+            kept.push(d);
+        }
+    }
+    kept
+}
+
+impl Detector for ShapeFitDetector {
+    fn pipeline(&self) -> &'static str {
+        PIPELINE_NAME
+    }
+
+    fn detect(
+        &self,
+        frame: &RgbdFrame,
+        timings: &mut StageTimings,
+    ) -> Result<Vec<Detection>, PipelineError> {
+        let (candidates, features) = self.stages.candidates(frame, timings)?;
+        let scores = run_stage(&self.classifier, features.as_slice(), timings)?;
+        let detections = candidates
+            .iter()
+            .zip(scores)
+            .map(|(c, s)| detection(c, s, frame.camera()))
+            .collect();
+        Ok(merge_close(detections, self.merge_radius_m))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn det(x: f64, score: f64) -> Detection {
+        Detection {
+            center_m: Point3::new(x, 0.0, 1.0),
+            score,
+            diameter_m: None,
+            axis: None,
+            bbox_px: None,
+            kind: None,
+        }
+    }
+
+    #[test]
+    fn merging_keeps_best_of_close_detections() {
+        let kept = merge_close(vec![det(0.0, 1.0), det(0.01, 2.0), det(0.1, 0.5)], 0.03);
+        assert_eq!(kept.len(), 2);
+        assert_eq!(kept[0].score, 2.0);
+        assert_eq!(
+            merge_close(vec![det(0.0, 1.0), det(0.01, 2.0)], 0.0).len(),
+            2
+        );
+    }
+
+    #[test]
+    fn positives_by_centre_or_box() {
+        let cam = PinholeCamera::new(100, 100, 100.0, 100.0, 50.0, 50.0).unwrap();
+        let truth: FrameTruth = serde_json::from_str(
+            r#"{"complete": true, "fruits": [{"id": "a", "kind": "x", "center_m": [0, 0, 1]},
+                {"id": "b", "kind": "x", "bbox_px": [70, 70, 90, 90]}]}"#,
+        )
+        .unwrap();
+        assert!(is_positive(
+            &Point3::new(0.03, 0.0, 1.0),
+            &truth,
+            &cam,
+            0.05
+        ));
+        assert!(!is_positive(
+            &Point3::new(0.06, 0.0, 1.0),
+            &truth,
+            &cam,
+            0.05
+        ));
+        assert!(is_positive(&Point3::new(0.3, 0.3, 1.0), &truth, &cam, 0.05));
+    }
+}

@@ -1,0 +1,160 @@
+//! Seed 002's clustering of the masked depth image by region growing: a pixel joins its
+//! 8-neighbour's cluster when their depths differ by at most a threshold (5 mm); clusters
+//! smaller than a minimum size (150 px at the paper's 512×424) are dropped as background.
+//!
+//! Region growing is linear in the number of pixels, which is why the paper prefers it to
+//! Euclidean clustering on the point cloud.
+
+use serde::{Deserialize, Serialize};
+
+/// Parameters of region growing.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct RegionGrowingParams {
+    /// Largest depth step between neighbours of one cluster, metres (paper: 5 mm).
+    pub max_step_m: f64,
+    /// Smallest cluster kept, in pixels at the reference resolution (paper: 150).
+    pub min_pixels: usize,
+    /// Pixel count of the resolution `min_pixels` refers to (paper: Kinect v2, 512 × 424).
+    /// At other resolutions the minimum scales with the pixel count, so a cluster keeps the
+    /// same angular size whatever the camera.
+    pub reference_pixels: usize,
+}
+
+impl Default for RegionGrowingParams {
+    fn default() -> Self {
+        Self {
+            max_step_m: 0.005,
+            min_pixels: 150,
+            reference_pixels: 512 * 424,
+        }
+    }
+}
+
+impl RegionGrowingParams {
+    /// The minimum cluster size for an image of `pixels` pixels (at least 10, or `min_pixels`
+    /// if that is smaller).
+    pub fn min_pixels_for(&self, pixels: usize) -> usize {
+        let scaled = self.min_pixels as f64 * pixels as f64 / self.reference_pixels.max(1) as f64;
+        (scaled.round() as usize).max(self.min_pixels.min(10))
+    }
+}
+
+/// Groups valid pixels (finite `depth_m` where `keep` is true) into clusters of pixel indices,
+/// in raster order of their first pixel; clusters below the size limit are dropped.
+pub fn grow_regions(
+    width: usize,
+    height: usize,
+    depth_m: &[f32],
+    keep: &[bool],
+    params: &RegionGrowingParams,
+) -> Vec<Vec<usize>> {
+    let n = width * height;
+    if depth_m.len() != n || keep.len() != n {
+        return Vec::new();
+    }
+    let min_pixels = params.min_pixels_for(n);
+    let step = params.max_step_m as f32;
+    let mut visited = vec![false; n];
+    let mut clusters = Vec::new();
+    let mut stack = Vec::new();
+    for seed in 0..n {
+        if visited[seed] || !keep[seed] || !depth_m[seed].is_finite() {
+            continue;
+        }
+        visited[seed] = true;
+        let mut cluster = vec![seed];
+        stack.push(seed);
+        while let Some(i) = stack.pop() {
+            let (u, v) = ((i % width) as isize, (i / width) as isize);
+            let d = depth_m[i];
+            for dv in -1..=1isize {
+                for du in -1..=1isize {
+                    let (nu, nv) = (u + du, v + dv);
+                    if (du, dv) == (0, 0)
+                        || nu < 0
+                        || nv < 0
+                        || nu >= width as isize
+                        || nv >= height as isize
+                    {
+                        continue;
+                    }
+                    let j = nv as usize * width + nu as usize;
+                    if !visited[j] && keep[j] && (depth_m[j] - d).abs() <= step {
+                        visited[j] = true;
+                        cluster.push(j);
+                        stack.push(j);
+                    }
+                }
+            }
+        }
+        if cluster.len() >= min_pixels {
+            cluster.sort_unstable();
+            clusters.push(cluster);
+        }
+    }
+    clusters
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn splits_at_depth_steps_and_drops_small_clusters() {
+        // 40×10 image: left half at 0.5 m, right half at 0.52 m (20 mm step), a 3-pixel speck.
+        let (w, h) = (40, 10);
+        let mut depth = vec![0.5f32; w * h];
+        for v in 0..h {
+            for u in 20..w {
+                depth[v * w + u] = 0.52;
+            }
+        }
+        let keep = vec![true; w * h];
+        let params = RegionGrowingParams {
+            min_pixels: 50,
+            reference_pixels: w * h,
+            ..Default::default()
+        };
+        let clusters = grow_regions(w, h, &depth, &keep, &params);
+        assert_eq!(clusters.len(), 2);
+        assert_eq!(clusters[0].len(), 200);
+        let mut masked = keep.clone();
+        masked[5] = false;
+        assert_eq!(grow_regions(w, h, &depth, &masked, &params)[0].len(), 199);
+    }
+
+    #[test]
+    fn slopes_grow_but_jumps_do_not() {
+        // A ramp rising 4 mm per pixel stays one cluster; diagonal neighbours connect.
+        let (w, h) = (30, 3);
+        let depth: Vec<f32> = (0..w * h).map(|i| 0.5 + 0.004 * (i % w) as f32).collect();
+        let params = RegionGrowingParams {
+            min_pixels: 10,
+            reference_pixels: w * h,
+            ..Default::default()
+        };
+        assert_eq!(
+            grow_regions(w, h, &depth, &vec![true; w * h], &params).len(),
+            1
+        );
+        let mut diag = vec![f32::NAN; 9];
+        for i in [0, 4, 8] {
+            diag[i] = 1.0;
+        }
+        let p = RegionGrowingParams {
+            min_pixels: 3,
+            reference_pixels: 9,
+            ..Default::default()
+        };
+        let c = grow_regions(3, 3, &diag, &[true; 9], &p);
+        assert_eq!(c, vec![vec![0, 4, 8]]);
+    }
+
+    #[test]
+    fn minimum_scales_with_resolution() {
+        let p = RegionGrowingParams::default();
+        assert_eq!(p.min_pixels_for(512 * 424), 150);
+        assert_eq!(p.min_pixels_for(1920 * 1080), 1433);
+        assert_eq!(p.min_pixels_for(176 * 144), 18);
+    }
+}

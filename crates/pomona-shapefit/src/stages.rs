@@ -1,0 +1,197 @@
+//! The five stages of the detector, each behind [`pomona_pipeline::Stage`] so it can be timed,
+//! benchmarked or replaced alone: colour mask → region growing → MSAC shapes → GPCD → SVM.
+
+use pomona_consensus::nalgebra::Point3;
+use pomona_consensus::{OrientedPoint, ShapeExtractionParams, WindowNormals};
+use pomona_core::{PointCloud, RgbdFrame};
+use pomona_learn::SvmClassifier;
+use pomona_pipeline::{PipelineError, Stage};
+use rayon::prelude::*;
+
+use crate::{gpcd, grow_regions, Candidate, ColorLut, GpcdParams, RegionGrowingParams};
+
+/// Colour posterior ≥ threshold and depth within range (Eq. 2, then the masked depth image).
+/// Without a colour model (depth-only data) only the depth range is applied.
+#[derive(Debug, Clone)]
+pub struct ColorMaskStage {
+    /// The compiled posterior, `None` for depth-only models.
+    pub lut: Option<ColorLut>,
+    /// Posterior threshold (paper: 0.1).
+    pub threshold: f32,
+    /// Far limit, metres.
+    pub max_depth_m: f32,
+}
+
+impl Stage<&RgbdFrame, Vec<bool>> for ColorMaskStage {
+    fn name(&self) -> &'static str {
+        "colour-mask"
+    }
+
+    fn run(&self, frame: &RgbdFrame) -> Result<Vec<bool>, PipelineError> {
+        let depth = frame.depth().as_slice();
+        let in_range = |d: f32| d.is_finite() && d <= self.max_depth_m;
+        match (&self.lut, frame.color()) {
+            (Some(lut), Some(color)) => Ok(depth
+                .iter()
+                .zip(color.pixels())
+                .map(|(&d, rgb)| in_range(d) && lut.posterior(rgb) >= self.threshold)
+                .collect()),
+            (Some(_), None) => Err(PipelineError::MissingColor {
+                pipeline: crate::PIPELINE_NAME,
+            }),
+            (None, _) => Ok(depth.iter().map(|&d| in_range(d)).collect()),
+        }
+    }
+}
+
+/// Region growing on the masked depth image.
+pub struct RegionGrowingStage {
+    /// Step and size limits.
+    pub params: RegionGrowingParams,
+}
+
+impl<'a> Stage<(&'a RgbdFrame, &'a [bool]), Vec<Vec<usize>>> for RegionGrowingStage {
+    fn name(&self) -> &'static str {
+        "region-growing"
+    }
+
+    fn run(
+        &self,
+        (frame, keep): (&'a RgbdFrame, &'a [bool]),
+    ) -> Result<Vec<Vec<usize>>, PipelineError> {
+        let cam = frame.camera();
+        Ok(grow_regions(
+            cam.width as usize,
+            cam.height as usize,
+            frame.depth().as_slice(),
+            keep,
+            &self.params,
+        ))
+    }
+}
+
+/// Back-projection (Eq. 3), PCA normals, and repeated MSAC per cluster (Algorithm 1). Clusters
+/// run in parallel; each uses its own seed derived from the base seed and its index, so the
+/// result does not depend on the number of threads.
+pub struct ShapeStage {
+    /// Normal estimation.
+    pub normals: WindowNormals,
+    /// MSAC, estimators, limits and base seed.
+    pub shapes: ShapeExtractionParams,
+}
+
+fn err(e: pomona_consensus::ConsensusError) -> PipelineError {
+    PipelineError::InvalidParameter {
+        name: "shapes".into(),
+        reason: e.to_string(),
+    }
+}
+
+impl ShapeStage {
+    fn cluster_candidates(
+        &self,
+        cloud: &PointCloud,
+        k: usize,
+        cluster: &[usize],
+    ) -> Result<Vec<Candidate>, PipelineError> {
+        let normals = self.normals.estimate_at(cloud, cluster).map_err(err)?;
+        let positions: Vec<Point3<f64>> = cluster
+            .iter()
+            .map(|&i| cloud.points()[i].cast::<f64>())
+            .collect();
+        let oriented = OrientedPoint::zip(&positions, &normals);
+        let params = ShapeExtractionParams {
+            seed: self.shapes.seed ^ (k as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15),
+            ..self.shapes
+        };
+        let extracted = params
+            .check()
+            .map_err(err)?
+            .extract(&oriented)
+            .map_err(err)?;
+        Ok(extracted
+            .into_iter()
+            .map(|e| Candidate {
+                shape: e.model,
+                pixels: e.inliers.iter().map(|&i| cluster[i]).collect(),
+                points: e.inliers.iter().map(|&i| positions[i]).collect(),
+                normals: e.inliers.iter().map(|&i| normals[i]).collect(),
+            })
+            .collect())
+    }
+}
+
+impl<'a> Stage<(&'a RgbdFrame, &'a [Vec<usize>]), Vec<Candidate>> for ShapeStage {
+    fn name(&self) -> &'static str {
+        "msac-shapes"
+    }
+
+    fn run(
+        &self,
+        (frame, clusters): (&'a RgbdFrame, &'a [Vec<usize>]),
+    ) -> Result<Vec<Candidate>, PipelineError> {
+        let cloud = frame.to_cloud();
+        let per_cluster: Result<Vec<Vec<Candidate>>, PipelineError> = clusters
+            .par_iter()
+            .enumerate()
+            .map(|(k, c)| self.cluster_candidates(&cloud, k, c))
+            .collect();
+        Ok(per_cluster?.into_iter().flatten().collect())
+    }
+}
+
+/// The GPCD of every candidate (colour terms zero when `use_color` is off).
+pub struct DescriptorStage {
+    /// Descriptor parameters.
+    pub params: GpcdParams,
+    /// Whether the model uses colour.
+    pub use_color: bool,
+}
+
+impl<'a> Stage<(&'a RgbdFrame, &'a [Candidate]), Vec<Vec<f64>>> for DescriptorStage {
+    fn name(&self) -> &'static str {
+        "gpcd"
+    }
+
+    fn run(
+        &self,
+        (frame, candidates): (&'a RgbdFrame, &'a [Candidate]),
+    ) -> Result<Vec<Vec<f64>>, PipelineError> {
+        let color = if self.use_color { frame.color() } else { None };
+        Ok(candidates
+            .par_iter()
+            .map(|c| {
+                let colors: Vec<[u8; 3]> = match color {
+                    Some(img) => {
+                        let w = img.width() as usize;
+                        c.pixels
+                            .iter()
+                            .filter_map(|&i| img.get((i % w) as u32, (i / w) as u32))
+                            .collect()
+                    }
+                    None => Vec::new(),
+                };
+                gpcd(&c.points, &c.normals, &colors, &self.params).to_vec()
+            })
+            .collect())
+    }
+}
+
+/// SVM decision values of the descriptors.
+pub struct ClassifierStage {
+    /// The trained classifier (scaler included).
+    pub svm: SvmClassifier,
+}
+
+impl<'a> Stage<&'a [Vec<f64>], Vec<f64>> for ClassifierStage {
+    fn name(&self) -> &'static str {
+        "svm"
+    }
+
+    fn run(&self, features: &'a [Vec<f64>]) -> Result<Vec<f64>, PipelineError> {
+        Ok(features
+            .iter()
+            .map(|f| self.svm.decision_value(f))
+            .collect::<Result<Vec<_>, _>>()?)
+    }
+}

@@ -1,0 +1,138 @@
+//! End to end: train shape-fit on synthetic frames, detect on frames rendered with another seed,
+//! and check quality, determinism, the model round trip and depth-only operation.
+
+#![allow(clippy::unwrap_used, clippy::expect_used)] // test helpers outside #[test] functions
+
+use pomona_core::RgbdFrame;
+use pomona_eval::{evaluate, EvalConfig, FrameInput};
+use pomona_learn::ModelFile;
+use pomona_pipeline::{
+    Detector, FrameSource, LabelledFrame, Pipeline, PipelineError, StageTimings, TrainOptions,
+};
+use pomona_shapefit::{ShapeFitPipeline, SyntheticFrames};
+use pomona_synth::{CameraPreset, FruitChoice, FruitKind, NoiseModel, SceneSpec};
+
+fn spec() -> SceneSpec {
+    SceneSpec {
+        fruit: FruitChoice::Only(FruitKind::Orange),
+        camera: CameraPreset::D435.camera().scaled(0.5),
+        noise: NoiseModel::Tof,
+        ..SceneSpec::default()
+    }
+}
+
+fn frames(seed: u64, count: usize) -> SyntheticFrames {
+    SyntheticFrames {
+        spec: spec(),
+        seed,
+        first: 0,
+        count,
+    }
+}
+
+fn ap(detector: &dyn Detector, test: &dyn FrameSource) -> f64 {
+    let mut inputs = Vec::new();
+    for i in 0..test.len() {
+        let lf = test.load(i).unwrap();
+        let detections = detector
+            .detect(&lf.frame, &mut StageTimings::default())
+            .unwrap();
+        inputs.push(FrameInput {
+            frame: lf.name,
+            truth: lf.truth,
+            detections,
+        });
+    }
+    evaluate(&inputs, &spec().camera, &EvalConfig::default())
+        .unwrap()
+        .ap_voc11
+        .unwrap()
+}
+
+#[test]
+fn trains_and_detects_oranges_with_high_ap() {
+    let pipeline = ShapeFitPipeline::default();
+    let options = TrainOptions {
+        seed: 3,
+        folds: 3,
+        full_grid: false,
+    };
+    let model = pipeline
+        .train(&frames(11, 12), &options, &|_, _| {})
+        .unwrap();
+    let detector = pipeline.load(&model).unwrap();
+    let score = ap(detector.as_ref(), &frames(12, 6));
+    assert!(score > 0.7, "AP {score}");
+
+    // Same seed → identical model; the JSON round trip gives the same detections.
+    let again = pipeline
+        .train(&frames(11, 12), &options, &|_, _| {})
+        .unwrap();
+    assert_eq!(again, model);
+    let json = serde_json::to_string(&model).unwrap();
+    let reloaded =
+        ModelFile::from_json(&json, std::path::Path::new("mem.json"), "shape-fit").unwrap();
+    let test = frames(12, 1).load(0).unwrap();
+    let a = detector
+        .detect(&test.frame, &mut StageTimings::default())
+        .unwrap();
+    let b = pipeline
+        .load(&reloaded)
+        .unwrap()
+        .detect(&test.frame, &mut StageTimings::default())
+        .unwrap();
+    assert_eq!(a, b);
+    for d in &a {
+        assert!(d.diameter_m.unwrap() > 0.02 && d.diameter_m.unwrap() < 0.2);
+    }
+}
+
+/// The same frames without colour.
+struct DepthOnly(SyntheticFrames);
+
+impl FrameSource for DepthOnly {
+    fn len(&self) -> usize {
+        self.0.len()
+    }
+
+    fn load(&self, i: usize) -> Result<LabelledFrame, PipelineError> {
+        let mut lf = self.0.load(i)?;
+        lf.frame = RgbdFrame::new(*lf.frame.camera(), lf.frame.depth().clone(), None).unwrap();
+        Ok(lf)
+    }
+}
+
+#[test]
+fn depth_only_model_works_without_colour_and_colour_model_refuses_it() {
+    let pipeline = ShapeFitPipeline::default();
+    let options = TrainOptions {
+        seed: 5,
+        folds: 3,
+        full_grid: false,
+    };
+    let model = pipeline
+        .train(&DepthOnly(frames(21, 8)), &options, &|_, _| {})
+        .unwrap();
+    let detector = pipeline.load(&model).unwrap();
+    let score = ap(detector.as_ref(), &DepthOnly(frames(22, 4)));
+    assert!(score > 0.3, "depth-only AP {score}");
+
+    let colour_model = pipeline
+        .train(&frames(21, 6), &options, &|_, _| {})
+        .unwrap();
+    let lf = DepthOnly(frames(22, 1)).load(0).unwrap();
+    let err = pipeline
+        .load(&colour_model)
+        .unwrap()
+        .detect(&lf.frame, &mut StageTimings::default())
+        .unwrap_err();
+    assert!(matches!(err, PipelineError::MissingColor { .. }), "{err}");
+}
+
+#[test]
+fn empty_training_set_is_a_clear_error() {
+    let err = ShapeFitPipeline::default()
+        .train(&frames(1, 0), &TrainOptions::default(), &|_, _| {})
+        .unwrap_err();
+    assert!(err.to_string().contains("no frames"), "{err}");
+}

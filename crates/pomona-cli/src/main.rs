@@ -1,14 +1,13 @@
 //! `pomona`: find fruit in 3D from RGB-D data — the command-line front end.
 //!
-//! Each subcommand lives in `commands/<name>.rs` with its clap arguments and a `run` function;
-//! this file only dispatches and turns errors into one line on stderr and a non-zero exit code.
-
-mod commands;
-mod progress;
+//! Each subcommand lives in `commands/<name>.rs` (in the `pomona_cli` library) with its clap
+//! arguments and a `run` function; this file only dispatches and turns errors into one line on
+//! stderr and a non-zero exit code.
 
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
+use pomona_cli::commands;
 
 /// Find fruit in 3D from RGB-D cameras and point clouds.
 #[derive(Debug, Parser)]
@@ -31,6 +30,15 @@ enum Command {
     Eval(commands::eval::EvalArgs),
     /// Generate a synthetic RGB-D dataset of crop rows with exact fruit truth.
     Synth(commands::synth::SynthArgs),
+    /// Train a detector (a pipeline) on labelled datasets and write its model file.
+    Train(commands::train::TrainArgs),
+    /// Find fruit in every frame of a dataset; writes one detection file per frame.
+    Detect(commands::detect::DetectArgs),
+    /// Repeated random train/test splits of one dataset: train, detect, evaluate; mean ± sd.
+    Experiment(commands::experiment::ExperimentArgs),
+    /// Render a small synthetic scene set, run every detector with a built-in model on it,
+    /// evaluate, and draw overlays.
+    Demo(commands::demo::DemoArgs),
 }
 
 fn main() -> ExitCode {
@@ -41,6 +49,10 @@ fn main() -> ExitCode {
         Command::Convert(args) => commands::convert::run(args),
         Command::Eval(args) => commands::eval::run(args),
         Command::Synth(args) => commands::synth::run(args),
+        Command::Train(args) => commands::train::run(args),
+        Command::Detect(args) => commands::detect::run(args),
+        Command::Experiment(args) => commands::experiment::run(args),
+        Command::Demo(args) => commands::demo::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -209,3 +209,408 @@ fn eval_scores_hand_made_detections() {
     assert!((r["diameter_error_m"]["mean_abs"].as_f64().unwrap() - 0.002).abs() < 1e-9);
     assert!(stdout(&out).contains("AP (VOC 11-point)"));
 }
+
+// ---------------------------------------------------------------------------------------------
+// Pipeline-generic commands (`train`, `detect`, `experiment`, `demo`), driven through the library
+// with a real test-only detector (`tests/support/blob.rs`) injected as the pipeline list.
+
+#[path = "support/blob.rs"]
+mod blob;
+
+use blob::BlobPipeline;
+use pomona_cli::commands::{demo, detect, experiment, train};
+use pomona_core::FrameDetections;
+use pomona_pipeline::{ModelFile, Pipeline};
+use pomona_synth::{
+    generate_dataset, CameraPreset, DatasetSpec, FruitChoice, FruitKind, SceneSpec,
+};
+
+/// A small synthetic dataset: SR4000 camera (176×144), oranges, exact depth.
+fn synth_dataset(root: &Path, frames: u32, seed: u64) {
+    let scene = SceneSpec {
+        fruit: FruitChoice::Only(FruitKind::Orange),
+        camera: CameraPreset::Sr4000.camera(),
+        ..SceneSpec::default()
+    };
+    generate_dataset(&DatasetSpec::new(scene, frames, seed), root, &|_| {}).unwrap();
+}
+
+fn only(p: BlobPipeline) -> Vec<Box<dyn Pipeline>> {
+    vec![Box::new(p)]
+}
+
+fn train_args(pipeline: &str, data: &[&Path], out: &Path) -> train::TrainArgs {
+    train::TrainArgs {
+        pipeline: pipeline.into(),
+        data: data.iter().map(|d| d.to_path_buf()).collect(),
+        out: out.to_path_buf(),
+        seed: 1,
+        folds: 3,
+        full_grid: false,
+        threads: None,
+        set: Vec::new(),
+    }
+}
+
+fn detect_args(
+    pipeline: &str,
+    model: Option<&Path>,
+    data: &Path,
+    out: &Path,
+) -> detect::DetectArgs {
+    detect::DetectArgs {
+        pipeline: pipeline.into(),
+        model: model.map(Path::to_path_buf),
+        data: data.to_path_buf(),
+        out: out.to_path_buf(),
+        timings: true,
+        threads: None,
+        set: Vec::new(),
+    }
+}
+
+fn experiment_args(data: &Path, seed: u64, json: &Path) -> experiment::ExperimentArgs {
+    experiment::ExperimentArgs {
+        pipeline: blob::NAME.into(),
+        data: data.to_path_buf(),
+        splits: 2,
+        train_fraction: 0.5,
+        seed,
+        tolerance_mm: 50.0,
+        min_visibility: 0.5,
+        threshold: 0.0,
+        folds: 3,
+        full_grid: false,
+        json: Some(json.to_path_buf()),
+        threads: None,
+        set: Vec::new(),
+        train_set: Vec::new(),
+    }
+}
+
+fn read_detections(dir: &Path) -> Vec<FrameDetections> {
+    let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    files.sort();
+    files
+        .iter()
+        .map(|f| serde_json::from_str(&std::fs::read_to_string(f).unwrap()).unwrap())
+        .collect()
+}
+
+#[test]
+fn train_detect_eval_through_an_injected_pipeline() {
+    let dir = tempfile::tempdir().unwrap();
+    let (train_ds, test_ds) = (dir.path().join("train"), dir.path().join("test"));
+    synth_dataset(&train_ds, 6, 11);
+    synth_dataset(&test_ds, 4, 12);
+    let pipelines = only(BlobPipeline::colour());
+    let model = dir.path().join("blob.model.json");
+    let t = train::run_with(&pipelines, &train_args("blob", &[&train_ds], &model)).unwrap();
+    assert_eq!(t.frames, 6);
+    assert!(t.support_vectors > 0);
+    let m = ModelFile::load(&model, "blob").unwrap();
+    assert_eq!(m.pipeline, "blob");
+
+    // Two datasets at once.
+    let model2 = dir.path().join("both.json");
+    let t2 = train::run_with(
+        &pipelines,
+        &train_args("blob", &[&train_ds, &test_ds], &model2),
+    )
+    .unwrap();
+    assert_eq!(t2.frames, 10);
+
+    let det = dir.path().join("det");
+    let d = detect::run_with(
+        &pipelines,
+        &detect_args("blob", Some(&model), &test_ds, &det),
+    )
+    .unwrap();
+    assert_eq!(d.frames, 4);
+    assert!(d.ms_per_frame.is_some());
+    let stages: Vec<&str> = d.timings.entries().iter().map(|e| e.0).collect();
+    assert_eq!(stages, ["blob-candidates", "svm", "nms"]);
+    let files = read_detections(&det);
+    assert_eq!(files.len(), 4);
+    for (i, f) in files.iter().enumerate() {
+        assert_eq!(f.frame, format!("{i:06}"));
+        assert_eq!(f.pipeline, "blob");
+    }
+    assert_eq!(
+        files.iter().map(|f| f.detections.len()).sum::<usize>(),
+        d.detections
+    );
+
+    // Same files with one thread.
+    let det1 = dir.path().join("det1");
+    let mut one = detect_args("blob", Some(&model), &test_ds, &det1);
+    one.threads = Some(1);
+    detect::run_with(&pipelines, &one).unwrap();
+    assert_eq!(read_detections(&det1), files);
+
+    // The binary evaluates what the library wrote.
+    let report = dir.path().join("report.json");
+    let out = pomona(&[
+        "eval",
+        "--data",
+        test_ds.to_str().unwrap(),
+        "--detections",
+        det.to_str().unwrap(),
+        "--json",
+        report.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let r: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+    assert!(r["fruits"].as_u64().unwrap() > 0, "{r}");
+    let ap = r["ap"].as_f64().unwrap();
+    eprintln!("blob on 4 test frames: AP {ap:.3}, recall {}", r["recall"]);
+    assert!(ap > 0.2, "a real detector finds some oranges: AP {ap}");
+
+    // --set changes a stored stage parameter; a wrong key lists the real ones.
+    let det2 = dir.path().join("det2");
+    let mut set = detect_args("blob", Some(&model), &test_ds, &det2);
+    set.set = vec![pomona_cli::params::parse_override("nms_m=0.5").unwrap()];
+    let wide = detect::run_with(&pipelines, &set).unwrap();
+    assert!(
+        wide.detections < d.detections,
+        "a wider NMS keeps fewer detections"
+    );
+    set.set = vec![pomona_cli::params::parse_override("nms=0.5").unwrap()];
+    let err = format!("{:#}", detect::run_with(&pipelines, &set).unwrap_err());
+    assert!(err.contains("nms_m") && err.contains("window_m"), "{err}");
+}
+
+#[test]
+fn unknown_pipeline_errors_list_the_known_ones() {
+    let dir = tempfile::tempdir().unwrap();
+    let pipelines = only(BlobPipeline::colour());
+    let args = train_args("nope", &[dir.path()], &dir.path().join("m.json"));
+    let err = format!("{:#}", train::run_with(&pipelines, &args).unwrap_err());
+    assert!(err.contains("unknown pipeline `nope`"), "{err}");
+    assert!(err.contains("blob"), "{err}");
+    let err = format!(
+        "{:#}",
+        detect::run_with(
+            &pipelines,
+            &detect_args("nope", None, dir.path(), dir.path())
+        )
+        .unwrap_err()
+    );
+    assert!(err.contains("blob"), "{err}");
+
+    // The binary: one line, non-zero exit.
+    for cmd in [
+        &["detect", "--pipeline", "nope", "--data", "d", "--out", "o"][..],
+        &[
+            "train",
+            "--pipeline",
+            "nope",
+            "--data",
+            "d",
+            "--out",
+            "m.json",
+        ],
+        &["experiment", "--pipeline", "nope", "--data", "d"],
+    ] {
+        let out = pomona(cmd);
+        assert!(!out.status.success());
+        let err = stderr(&out);
+        assert!(
+            err.contains("unknown pipeline `nope`; known pipelines"),
+            "{err}"
+        );
+        assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    }
+}
+
+#[test]
+fn detect_without_any_model_and_with_a_foreign_model_are_clear_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let ds = dir.path().join("ds");
+    synth_dataset(&ds, 2, 5);
+    let pipelines = only(BlobPipeline::colour());
+    let out = dir.path().join("det");
+    let err = format!(
+        "{:#}",
+        detect::run_with(&pipelines, &detect_args("blob", None, &ds, &out)).unwrap_err()
+    );
+    assert!(err.contains("no built-in model"), "{err}");
+    assert!(err.contains("--model"), "{err}");
+
+    let model = dir.path().join("m.json");
+    train::run_with(&pipelines, &train_args("blob", &[&ds], &model)).unwrap();
+    let text = std::fs::read_to_string(&model).unwrap();
+    let foreign = dir.path().join("foreign.json");
+    std::fs::write(&foreign, text.replace("\"blob\"", "\"shape-fit\"")).unwrap();
+    let err = format!(
+        "{:#}",
+        detect::run_with(&pipelines, &detect_args("blob", Some(&foreign), &ds, &out)).unwrap_err()
+    );
+    assert!(
+        err.contains("foreign.json") && err.contains("shape-fit"),
+        "{err}"
+    );
+}
+
+#[test]
+fn colour_pipelines_refuse_depth_only_datasets() {
+    let dir = tempfile::tempdir().unwrap();
+    let ds = dir.path().join("ds");
+    synth_dataset(&ds, 2, 6);
+    std::fs::remove_dir_all(ds.join("color")).unwrap();
+    let depth_only = only(BlobPipeline::default());
+    let model = dir.path().join("m.json");
+    train::run_with(&depth_only, &train_args("blob", &[&ds], &model)).unwrap();
+    let det = dir.path().join("det");
+    detect::run_with(&depth_only, &detect_args("blob", Some(&model), &ds, &det))
+        .expect("depth-only pipelines run without colour");
+
+    let colour = only(BlobPipeline {
+        needs_color: true,
+        default_model: None,
+    });
+    for err in [
+        detect::run_with(&colour, &detect_args("blob", Some(&model), &ds, &det)).unwrap_err(),
+        train::run_with(&colour, &train_args("blob", &[&ds], &model)).unwrap_err(),
+    ] {
+        let err = format!("{err:#}");
+        assert!(
+            err.contains("no colour images") && err.contains("needs colour"),
+            "{err}"
+        );
+        assert!(err.contains(ds.to_str().unwrap()), "{err}");
+    }
+}
+
+#[test]
+fn experiment_splits_are_seeded_and_reported() {
+    let dir = tempfile::tempdir().unwrap();
+    let ds = dir.path().join("ds");
+    synth_dataset(&ds, 8, 21);
+    let pipelines = only(BlobPipeline::colour());
+    let json = dir.path().join("exp.json");
+    let a = experiment::run_with(&pipelines, &experiment_args(&ds, 3, &json)).unwrap();
+    assert_eq!(a.per_split.len(), 2);
+    assert_eq!(a.summary.splits, 2);
+    for s in &a.per_split {
+        assert_eq!((s.train_frames.len(), s.test_frames.len()), (4, 4));
+        assert!(s.train_frames.iter().all(|f| !s.test_frames.contains(f)));
+        assert_eq!(s.report.frames, 4);
+        assert!(s.detect_ms_per_frame.is_some());
+    }
+    assert_ne!(a.per_split[0].test_frames, a.per_split[1].test_frames);
+    assert!(a.summary.ap.is_some() && a.detect_ms_per_frame.is_some());
+    let saved: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(saved["per_split"].as_array().unwrap().len(), 2);
+    assert!(saved["summary"]["ap"]["mean"].is_number(), "{saved}");
+    assert!(saved["per_split"][0]["report"]["ap_voc11"].is_number());
+
+    let again = experiment::run_with(&pipelines, &experiment_args(&ds, 3, &json)).unwrap();
+    let b = experiment::run_with(&pipelines, &experiment_args(&ds, 4, &json)).unwrap();
+    let frames = |r: &experiment::ExperimentReport| -> Vec<Vec<String>> {
+        r.per_split.iter().map(|s| s.test_frames.clone()).collect()
+    };
+    assert_eq!(frames(&a), frames(&again), "same seed, same splits");
+    assert_eq!(
+        a.summary.ap.map(|m| m.mean),
+        again.summary.ap.map(|m| m.mean),
+        "same seed, same result"
+    );
+    assert_ne!(frames(&a), frames(&b), "another seed, other splits");
+}
+
+#[test]
+fn demo_renders_data_detects_and_draws_overlays() {
+    let dir = tempfile::tempdir().unwrap();
+    let out_dir = dir.path().join("demo");
+    let args = [
+        "demo",
+        "--out",
+        out_dir.to_str().unwrap(),
+        "--frames",
+        "2",
+        "--seed",
+        "3",
+    ];
+    let out = pomona(&args);
+    assert!(out.status.success(), "{}", stderr(&out));
+    // Every registered pipeline with a built-in model runs and is evaluated.
+    for p in pomona_cli::pipelines::all()
+        .iter()
+        .filter(|p| p.default_model().is_some())
+    {
+        assert!(stdout(&out).contains(p.name()), "{}", stdout(&out));
+        assert!(out_dir.join(p.name()).join("pr.png").exists());
+        assert!(out_dir.join(p.name()).join("overlay/000001.png").exists());
+        assert!(out_dir
+            .join(p.name())
+            .join("detections/000000.json")
+            .exists());
+    }
+    for f in ["000000", "000001"] {
+        let png = out_dir.join(format!("overlay/{f}.png"));
+        let img = pomona_io::read_color_image(&png, (512, 424)).unwrap();
+        assert_eq!(img.width(), 512);
+        assert!(out_dir.join(format!("data/depth/{f}.png")).exists());
+    }
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out_dir.join("report.json")).unwrap())
+            .unwrap();
+    assert_eq!(report["frames"], 2);
+    // Re-running over an earlier demo replaces it; a foreign non-empty folder is refused.
+    let out = pomona(&args);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let foreign = dir.path().join("mine");
+    std::fs::create_dir_all(&foreign).unwrap();
+    std::fs::write(foreign.join("notes.txt"), "keep").unwrap();
+    let out = pomona(&["demo", "--out", foreign.to_str().unwrap(), "--frames", "1"]);
+    assert!(!out.status.success());
+    assert!(stderr(&out).contains("not empty"), "{}", stderr(&out));
+    assert!(foreign.join("notes.txt").exists());
+}
+
+#[test]
+fn demo_runs_pipelines_with_a_builtin_model() {
+    let dir = tempfile::tempdir().unwrap();
+    let ds = dir.path().join("train");
+    synth_dataset(&ds, 4, 31);
+    let model = dir.path().join("m.json");
+    train::run_with(
+        &only(BlobPipeline::colour()),
+        &train_args("blob", &[&ds], &model),
+    )
+    .unwrap();
+    let text: &'static str = Box::leak(std::fs::read_to_string(&model).unwrap().into_boxed_str());
+    let pipelines: Vec<Box<dyn Pipeline>> = vec![Box::new(BlobPipeline {
+        needs_color: false,
+        default_model: Some(text),
+    })];
+    let out = dir.path().join("demo");
+    let report = demo::run_with(
+        &pipelines,
+        &demo::DemoArgs {
+            out: out.clone(),
+            frames: 2,
+            seed: 2,
+            threads: None,
+        },
+    )
+    .unwrap();
+    assert_eq!(report.pipelines.len(), 1);
+    assert!(report.without_builtin_model.is_empty());
+    assert_eq!(report.pipelines[0].report.frames, 2);
+    for f in ["000000", "000001"] {
+        assert!(out.join(format!("blob/overlay/{f}.png")).exists());
+        assert!(out.join(format!("overlay/{f}.png")).exists());
+    }
+    assert_eq!(read_detections(&out.join("blob/detections")).len(), 2);
+    assert!(out.join("report.json").exists());
+    if report.pipelines[0].report.pr_curve.is_some() {
+        assert!(out.join("blob/pr.png").exists());
+    }
+}

@@ -65,6 +65,29 @@ pub trait Pipeline: Send + Sync {
         progress: &(dyn Fn(usize, usize) + Sync),
     ) -> Result<ModelFile, PipelineError>;
 
+    /// The parameters training would use, as JSON (for `--set key=value` overrides); `Null` when
+    /// the pipeline has none.
+    fn train_params(&self) -> serde_json::Value {
+        serde_json::Value::Null
+    }
+
+    /// The same pipeline with other training parameters (the JSON of
+    /// [`Pipeline::train_params`], edited).
+    ///
+    /// # Errors
+    /// [`PipelineError::InvalidParameter`] when the JSON does not describe valid parameters or
+    /// the pipeline has none.
+    fn with_train_params(
+        &self,
+        params: serde_json::Value,
+    ) -> Result<Box<dyn Pipeline>, PipelineError> {
+        let _ = params;
+        Err(PipelineError::InvalidParameter {
+            name: "--set".into(),
+            reason: format!("`{}` has no settable training parameters", self.name()),
+        })
+    }
+
     /// The model compiled into the binary (JSON text of a [`ModelFile`]), if the project ships
     /// one for this pipeline; `pomona detect` without `--model` uses it.
     fn default_model(&self) -> Option<&'static str> {

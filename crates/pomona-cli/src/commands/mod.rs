@@ -2,6 +2,10 @@
 
 pub mod cloud;
 pub mod convert;
+pub mod demo;
+pub mod detect;
 pub mod eval;
+pub mod experiment;
 pub mod info;
 pub mod synth;
+pub mod train;

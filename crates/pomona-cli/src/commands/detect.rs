@@ -1,0 +1,171 @@
+//! `pomona detect`: run a trained detector (any registered pipeline) over every frame of a
+//! dataset and write one detection file per frame (`<out>/<frame>.json`, docs/formats.md).
+//!
+//! The model comes from `--model` or, without it, the pipeline's built-in model. Frames are
+//! loaded lazily and processed in parallel; `--timings` prints the per-stage cost table.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{Context, Result};
+use pomona_core::FrameDetections;
+use pomona_io::Dataset;
+use pomona_pipeline::{Pipeline, StageTimings};
+
+use crate::detection_run::{
+    build_detector, check_color, detect_frames, read_model, thread_pool, ModelSource,
+};
+use crate::params::{parse_override, ParamOverride};
+use crate::pipelines;
+use crate::progress::progress_bar;
+
+/// Arguments of `pomona detect`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct DetectArgs {
+    /// Pipeline (detection method), e.g. `shape-fit`.
+    #[arg(long, value_name = "NAME")]
+    pub pipeline: String,
+    /// Model file from `pomona train` (default: the pipeline's built-in model).
+    #[arg(long, value_name = "MODEL")]
+    pub model: Option<PathBuf>,
+    /// Dataset folder; every frame is processed, with or without truth.
+    #[arg(long, value_name = "DIR")]
+    pub data: PathBuf,
+    /// Output folder for `<frame>.json` detection files (created if missing).
+    #[arg(long, value_name = "DETDIR")]
+    pub out: PathBuf,
+    /// Print mean time per stage and per frame.
+    #[arg(long)]
+    pub timings: bool,
+    /// Worker threads (default: all cores); never changes the detections.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=1024))]
+    pub threads: Option<u64>,
+    /// Override a stage parameter of the model, KEY=VALUE (dotted keys, JSON values); repeat.
+    #[arg(long = "set", value_name = "KEY=VALUE", value_parser = parse_override)]
+    pub set: Vec<ParamOverride>,
+}
+
+/// What a detection run did.
+#[derive(Debug, Clone)]
+pub struct DetectSummary {
+    /// Frames processed (= files written).
+    pub frames: usize,
+    /// Detections over all frames.
+    pub detections: usize,
+    /// Stage times merged over frames.
+    pub timings: StageTimings,
+    /// Mean detection time per frame, milliseconds (single-frame cost).
+    pub ms_per_frame: Option<f64>,
+    /// Which model was used.
+    pub model: ModelSource,
+}
+
+/// Warns about `.json` files in `out` that belong to no frame of the dataset (left from another
+/// run): `pomona eval` would refuse the folder.
+fn warn_foreign_files(out: &Path, frames: &[String]) {
+    let Ok(entries) = std::fs::read_dir(out) else {
+        return;
+    };
+    let known: std::collections::HashSet<&str> = frames.iter().map(String::as_str).collect();
+    let foreign = entries
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|e| e == "json"))
+        .filter(|p| {
+            p.file_stem()
+                .and_then(|s| s.to_str())
+                .is_some_and(|s| !s.starts_with('.') && !known.contains(s))
+        })
+        .count();
+    if foreign > 0 {
+        eprintln!(
+            "warning: {} holds {foreign} detection file(s) for frames this dataset does not have \
+             (from another run?); `pomona eval` will refuse the folder until they are removed",
+            out.display()
+        );
+    }
+}
+
+/// Runs `pomona detect` with the registered pipelines.
+///
+/// # Errors
+/// See [`run_with`].
+pub fn run(args: &DetectArgs) -> Result<()> {
+    run_with(&pipelines::all(), args).map(|_| ())
+}
+
+/// Runs `pomona detect` choosing the pipeline from `pipelines` (tests pass their own).
+///
+/// # Errors
+/// Unknown pipeline, no model (no `--model` and no built-in one), a model for another pipeline
+/// or version, a colour-less dataset for a colour pipeline, unreadable frames, detection
+/// failures and unwritable output, each naming the file or frame.
+pub fn run_with(pipelines: &[Box<dyn Pipeline>], args: &DetectArgs) -> Result<DetectSummary> {
+    let pipeline = pipelines::find(pipelines, &args.pipeline)?;
+    let dataset = Dataset::open(&args.data)
+        .with_context(|| format!("cannot open dataset {}", args.data.display()))?;
+    check_color(pipeline, dataset.has_color(), &args.data)?;
+    let (model, source) = read_model(pipeline, args.model.as_deref())?;
+    let detector = build_detector(pipeline, model, &source, &args.set)?;
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("cannot create output folder {}", args.out.display()))?;
+
+    let frames = dataset.frames();
+    let pool = thread_pool(args.threads.map(|n| n as usize))?;
+    let bar = progress_bar(frames.len(), "detecting");
+    let started = Instant::now();
+    let name = pipeline.name();
+    let (results, totals) = pool.install(|| {
+        detect_frames(
+            detector.as_ref(),
+            frames.len(),
+            |i| {
+                let stem = &frames[i];
+                let frame = dataset.load_frame(stem)?;
+                Ok((format!("{}/{stem}", args.data.display()), frame, ()))
+            },
+            |i, result| {
+                let record = FrameDetections {
+                    frame: frames[i].clone(),
+                    pipeline: name.to_owned(),
+                    detections: result.detections.clone(),
+                };
+                pomona_io::write_json(&args.out.join(format!("{}.json", frames[i])), &record)?;
+                Ok(())
+            },
+            &|| bar.inc(1),
+        )
+    })?;
+    bar.finish_and_clear();
+    let wall = started.elapsed().as_secs_f64();
+    let summary = DetectSummary {
+        frames: totals.frames,
+        detections: totals.detections,
+        ms_per_frame: totals.ms_per_frame(),
+        timings: totals.timings,
+        model: source,
+    };
+    let above: usize = results
+        .iter()
+        .map(|(r, ())| r.detections.iter().filter(|d| d.score >= 0.0).count())
+        .sum();
+    warn_foreign_files(&args.out, frames);
+    println!(
+        "`{name}` ({}) made {} detections ({above} scoring ≥ 0) in {} frame(s) of {} in {:.1} s; \
+         detection files in {}",
+        summary.model,
+        summary.detections,
+        summary.frames,
+        args.data.display(),
+        wall,
+        args.out.display()
+    );
+    if args.timings {
+        print!("{}", summary.timings.table());
+        if let Some(ms) = summary.ms_per_frame {
+            println!(
+                "{ms:.2} ms/frame (single-frame detection time, loading and writing excluded)"
+            );
+        }
+    }
+    Ok(summary)
+}

@@ -1,0 +1,151 @@
+//! `pomona train`: train a detector (any registered pipeline) on the labelled frames of one or
+//! more datasets and write its versioned model file.
+//!
+//! The command knows nothing about the method: it gathers every frame that has truth
+//! (`DatasetFrames`, loaded lazily), hands them to `Pipeline::train` with the seed and
+//! cross-validation options, and saves the result atomically with `ModelFile::save`.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::{bail, Context, Result};
+use pomona_io::Dataset;
+use pomona_pipeline::{DatasetFrames, FrameSource, Pipeline, TrainOptions};
+
+use crate::detection_run::{check_color, thread_pool};
+use crate::pipelines;
+use crate::progress::progress_bar;
+
+/// Arguments of `pomona train`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct TrainArgs {
+    /// Pipeline (detection method) to train, e.g. `shape-fit`.
+    #[arg(long, value_name = "NAME")]
+    pub pipeline: String,
+    /// Labelled dataset folder (frames with truth/<frame>.json are used); repeat for several.
+    #[arg(long = "data", value_name = "DIR", required = true)]
+    pub data: Vec<PathBuf>,
+    /// Where to write the model file (JSON).
+    #[arg(long, value_name = "MODEL")]
+    pub out: PathBuf,
+    /// Seed of every random choice in training (sampling, folds, consensus).
+    #[arg(long, value_name = "S", default_value_t = 0)]
+    pub seed: u64,
+    /// Cross-validation folds of the classifier's grid search.
+    #[arg(long, value_name = "K", default_value_t = 5,
+          value_parser = clap::value_parser!(u64).range(2..=100))]
+    pub folds: u64,
+    /// Search LIBSVM's full (C, γ) grid instead of the pipeline's narrower default (slow).
+    #[arg(long)]
+    pub full_grid: bool,
+    /// Worker threads (default: all cores).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=1024))]
+    pub threads: Option<u64>,
+    /// Override a training parameter of the pipeline, KEY=VALUE (dotted path); repeat.
+    #[arg(long = "set", value_name = "KEY=VALUE", value_parser = crate::params::parse_override)]
+    pub set: Vec<crate::params::ParamOverride>,
+}
+
+impl TrainArgs {
+    /// The pipeline-independent training options.
+    pub fn options(&self) -> TrainOptions {
+        TrainOptions {
+            seed: self.seed,
+            folds: self.folds as usize,
+            full_grid: self.full_grid,
+        }
+    }
+}
+
+/// What a training run did.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TrainSummary {
+    /// Pipeline name.
+    pub pipeline: String,
+    /// Labelled frames trained on.
+    pub frames: usize,
+    /// Wall time of training, seconds.
+    pub seconds: f64,
+    /// Support vectors of the trained classifier.
+    pub support_vectors: usize,
+}
+
+/// Opens `data` folders as one lazily loaded frame source, checking colour for `pipeline`.
+///
+/// # Errors
+/// A dataset that cannot be opened (naming it), colour missing for a colour pipeline, or no
+/// frame with truth.
+pub fn open_frames(pipeline: &dyn Pipeline, data: &[PathBuf]) -> Result<DatasetFrames> {
+    let mut datasets = Vec::with_capacity(data.len());
+    for dir in data {
+        let ds =
+            Dataset::open(dir).with_context(|| format!("cannot open dataset {}", dir.display()))?;
+        check_color(pipeline, ds.has_color(), dir)?;
+        datasets.push(ds);
+    }
+    let frames = DatasetFrames::new(datasets);
+    if frames.is_empty() {
+        let dirs: Vec<String> = data.iter().map(|d| d.display().to_string()).collect();
+        bail!(
+            "no frame has a truth file (truth/<frame>.json) in {}; training needs labelled frames",
+            dirs.join(", ")
+        );
+    }
+    Ok(frames)
+}
+
+/// Runs `pomona train` with the registered pipelines.
+///
+/// # Errors
+/// See [`run_with`].
+pub fn run(args: &TrainArgs) -> Result<()> {
+    run_with(&pipelines::all(), args).map(|_| ())
+}
+
+/// Runs `pomona train` choosing the pipeline from `pipelines` (tests pass their own).
+///
+/// # Errors
+/// Unknown pipeline (listing the known ones), unreadable data, training failures, an unwritable
+/// model file (naming it).
+pub fn run_with(pipelines: &[Box<dyn Pipeline>], args: &TrainArgs) -> Result<TrainSummary> {
+    let found = pipelines::find(pipelines, &args.pipeline)?;
+    let configured = crate::params::configured(found, &args.set)?;
+    let pipeline = configured.as_deref().unwrap_or(found);
+    let frames = open_frames(pipeline, &args.data)?;
+    let pool = thread_pool(args.threads.map(|n| n as usize))?;
+    let bar = progress_bar(frames.len(), "training");
+    let started = Instant::now();
+    let progress = |done: usize, total: usize| {
+        bar.set_length(total as u64);
+        bar.set_position(done as u64);
+    };
+    let model = pool
+        .install(|| pipeline.train(&frames, &args.options(), &progress))
+        .with_context(|| format!("training `{}`", pipeline.name()))?;
+    let seconds = started.elapsed().as_secs_f64();
+    bar.finish_and_clear();
+    model.save(&args.out)?;
+    let summary = TrainSummary {
+        pipeline: pipeline.name().to_owned(),
+        frames: frames.len(),
+        seconds,
+        support_vectors: model.svm.n_support(),
+    };
+    println!(
+        "Trained `{}` on {} labelled frame(s) from {} dataset(s) in {:.1} s ({:.0} ms/frame; \
+         seed {}, {}-fold cross-validation{}). The classifier keeps {} support vectors \
+         (γ = {:.4}). Model written to {}.",
+        summary.pipeline,
+        summary.frames,
+        args.data.len(),
+        seconds,
+        1e3 * seconds / summary.frames.max(1) as f64,
+        args.seed,
+        args.folds,
+        if args.full_grid { ", full grid" } else { "" },
+        summary.support_vectors,
+        model.svm.gamma,
+        args.out.display()
+    );
+    Ok(summary)
+}

@@ -1,0 +1,210 @@
+//! Overlay images: truth and detections drawn on a frame's colour image, for looking at what a
+//! detector did (`pomona demo`).
+//!
+//! Truth fruit: green — a cross at the projected centre and a circle of the projected diameter
+//! (`r = fx · d/2 / z`); truth that evaluation ignores (visibility below the threshold) is drawn
+//! thinner in a pale green; truth with only a 2D box gets its box. Detections: red — a circle of
+//! the projected diameter (a small fixed circle when the method gives no size), a dot at the
+//! centre and a label `score | ⌀ mm`. Frames without colour are drawn on their depth as grey.
+//! Drawing uses `plotters`' bitmap backend on the image buffer and DejaVu Sans compiled into the
+//! binary (via `ab_glyph`), as `pomona-eval`'s PR plots do, so no system font is needed.
+
+use std::path::Path;
+use std::sync::OnceLock;
+
+use anyhow::{anyhow, bail, Result};
+use plotters::prelude::*;
+use plotters::style::{register_font, FontStyle};
+use pomona_core::{ColorImage, DepthImage, Detection, FrameTruth, PinholeCamera};
+
+/// Radius, pixels, of a detection without a diameter.
+const NO_SIZE_RADIUS_PX: i32 = 6;
+const TRUTH: RGBColor = RGBColor(40, 230, 60);
+const TRUTH_IGNORED: RGBColor = RGBColor(160, 230, 170);
+const DETECTION: RGBColor = RGBColor(240, 30, 30);
+
+/// Registers the embedded font once per process; `false` if it could not be parsed.
+fn font_ready() -> bool {
+    static READY: OnceLock<bool> = OnceLock::new();
+    *READY.get_or_init(|| {
+        register_font("sans-serif", FontStyle::Normal, dejavu::sans::regular()).is_ok()
+    })
+}
+
+/// Depth as a grey image (near = bright, no reading = black), for frames without colour.
+pub fn depth_as_gray(depth: &DepthImage) -> ColorImage {
+    let (lo, hi) = depth.range_m().unwrap_or((0.0, 1.0));
+    let span = (hi - lo).max(1e-6);
+    let mut img = ColorImage::filled(depth.width(), depth.height(), [0, 0, 0]);
+    for v in 0..depth.height() {
+        for u in 0..depth.width() {
+            if let Some(z) = depth.get(u, v).filter(|z| z.is_finite()) {
+                let g = (235.0 - 200.0 * (z - lo) / span).clamp(0.0, 255.0) as u8;
+                img.set(u, v, [g, g, g]);
+            }
+        }
+    }
+    img
+}
+
+fn to_px(x: f64) -> i32 {
+    x.round().clamp(-1e6, 1e6) as i32
+}
+
+/// Projected radius in pixels of a sphere of `diameter_m` at depth `z`.
+fn radius_px(camera: &PinholeCamera, diameter_m: f64, z: f64) -> Option<i32> {
+    (z > 0.0 && diameter_m.is_finite() && diameter_m > 0.0)
+        .then(|| to_px(camera.fx * 0.5 * diameter_m / z).max(2))
+}
+
+fn draw_err<E: std::fmt::Debug>(e: E) -> anyhow::Error {
+    anyhow!("drawing the overlay: {e:?}")
+}
+
+/// Draws `truth` (green) and `detections` (red) onto a copy of `image` and puts `title` in the top
+/// left corner. Truth with visibility below `min_visibility` is drawn pale.
+///
+/// # Errors
+/// If the embedded font cannot be loaded or drawing fails.
+pub fn draw_overlay(
+    image: &ColorImage,
+    camera: &PinholeCamera,
+    truth: Option<&FrameTruth>,
+    detections: &[Detection],
+    min_visibility: f64,
+    title: &str,
+) -> Result<ColorImage> {
+    if !font_ready() {
+        bail!("drawing the overlay: the embedded font could not be loaded");
+    }
+    let (w, h) = (image.width(), image.height());
+    let mut buf = image.as_rgb().to_vec();
+    {
+        let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
+        for fruit in truth.map(|t| t.fruits.as_slice()).unwrap_or_default() {
+            let ignored = fruit.visibility.is_some_and(|v| v < min_visibility);
+            let color = if ignored { TRUTH_IGNORED } else { TRUTH };
+            let width = if ignored { 1 } else { 2 };
+            if let Some(c) = fruit.center_m {
+                let Some(p) = camera.project(&c) else {
+                    continue;
+                };
+                let (x, y) = (to_px(p.x), to_px(p.y));
+                let arm = 5;
+                for seg in [[(x - arm, y), (x + arm, y)], [(x, y - arm), (x, y + arm)]] {
+                    root.draw(&PathElement::new(seg.to_vec(), color.stroke_width(width)))
+                        .map_err(draw_err)?;
+                }
+                if let Some(r) = fruit.diameter_m.and_then(|d| radius_px(camera, d, c.z)) {
+                    root.draw(&Circle::new((x, y), r, color.stroke_width(width)))
+                        .map_err(draw_err)?;
+                }
+            } else if let Some(b) = &fruit.bbox_px {
+                let rect = [
+                    (to_px(b.xmin), to_px(b.ymin)),
+                    (to_px(b.xmax), to_px(b.ymax)),
+                ];
+                root.draw(&Rectangle::new(rect, color.stroke_width(width)))
+                    .map_err(draw_err)?;
+            }
+        }
+        let det_style = ("sans-serif", 13).into_font().color(&DETECTION);
+        for d in detections {
+            let Some(p) = camera.project(&d.center_m) else {
+                continue;
+            };
+            let (x, y) = (to_px(p.x), to_px(p.y));
+            let r = d
+                .diameter_m
+                .and_then(|dm| radius_px(camera, dm, d.center_m.z))
+                .unwrap_or(NO_SIZE_RADIUS_PX);
+            root.draw(&Circle::new((x, y), r, DETECTION.stroke_width(2)))
+                .map_err(draw_err)?;
+            root.draw(&Circle::new((x, y), 2, DETECTION.filled()))
+                .map_err(draw_err)?;
+            let label = match d.diameter_m {
+                Some(dm) => format!("{:.2} | ⌀{:.0} mm", d.score, dm * 1e3),
+                None => format!("{:.2}", d.score),
+            };
+            let (tw, th) = root
+                .estimate_text_size(&label, &det_style)
+                .map_err(draw_err)?;
+            let (tw, th) = (tw as i32, th as i32);
+            let tx = (x - tw / 2).clamp(0, (w as i32 - tw).max(0));
+            let ty = (y - r - th - 3).clamp(0, (h as i32 - th).max(0));
+            root.draw(&Rectangle::new(
+                [(tx - 2, ty - 1), (tx + tw + 2, ty + th + 1)],
+                WHITE.mix(0.7).filled(),
+            ))
+            .map_err(draw_err)?;
+            root.draw(&Text::new(label, (tx, ty), det_style.clone()))
+                .map_err(draw_err)?;
+        }
+        if !title.is_empty() {
+            let style = ("sans-serif", 14).into_font().color(&WHITE);
+            let (tw, th) = root.estimate_text_size(title, &style).map_err(draw_err)?;
+            root.draw(&Rectangle::new(
+                [(0, 0), (tw as i32 + 8, th as i32 + 6)],
+                BLACK.mix(0.6).filled(),
+            ))
+            .map_err(draw_err)?;
+            root.draw(&Text::new(title.to_owned(), (4, 3), style))
+                .map_err(draw_err)?;
+        }
+        root.present().map_err(draw_err)?;
+    }
+    ColorImage::from_rgb(w, h, buf).map_err(|e| anyhow!("drawing the overlay: {e}"))
+}
+
+/// Draws the overlay (see [`draw_overlay`]) and writes it as a PNG (atomically).
+///
+/// # Errors
+/// Drawing errors and the PNG writer's errors naming `path`.
+pub fn write_overlay(
+    path: &Path,
+    image: &ColorImage,
+    camera: &PinholeCamera,
+    truth: Option<&FrameTruth>,
+    detections: &[Detection],
+    min_visibility: f64,
+    title: &str,
+) -> Result<()> {
+    let img = draw_overlay(image, camera, truth, detections, min_visibility, title)?;
+    pomona_io::write_color_png(path, &img)?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use pomona_core::nalgebra::Point3;
+
+    #[test]
+    fn draws_truth_green_and_detections_red_where_they_project() {
+        let cam = PinholeCamera::new(200, 150, 200.0, 200.0, 100.0, 75.0).unwrap();
+        let img = ColorImage::filled(200, 150, [0, 0, 0]);
+        let truth: FrameTruth = serde_json::from_value(serde_json::json!({
+            "complete": true,
+            "fruits": [{"id": "1", "kind": "apple", "center_m": [0.0, 0.0, 1.0],
+                        "diameter_m": 0.2, "visibility": 1.0}]
+        }))
+        .unwrap();
+        let det = Detection {
+            center_m: Point3::new(0.25, 0.0, 1.0),
+            score: 1.5,
+            diameter_m: Some(0.1),
+            axis: None,
+            bbox_px: None,
+            kind: None,
+        };
+        let out = draw_overlay(&img, &cam, Some(&truth), &[det], 0.5, "test").unwrap();
+        // Truth circle: centre (100, 75), radius 200 · 0.1 / 1 = 20 px → (120, 75) is on it.
+        let on_truth =
+            (118..=122).any(|u| out.get(u, 75).is_some_and(|c| c[1] > 150 && c[0] < 100));
+        assert!(on_truth, "no green at the truth circle");
+        // Detection circle: centre (150, 75), radius 10 → (160, 75).
+        let on_det = (158..=162).any(|u| out.get(u, 75).is_some_and(|c| c[0] > 150 && c[1] < 100));
+        assert!(on_det, "no red at the detection circle");
+        assert_eq!(out.get(10, 140), Some([0, 0, 0]), "background untouched");
+    }
+}

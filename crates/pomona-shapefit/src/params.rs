@@ -30,9 +30,9 @@ pub struct ShapeFitParams {
     pub positive_tolerance_m: f64,
     /// Training keeps at most this many negative candidates per positive (seeded choice).
     pub max_negatives_per_positive: f64,
-    /// Detections whose centres are closer than this are merged, keeping the higher score.
-    /// Not in the paper, which reports split fruit as false positives (its §Discussion); 0
-    /// switches it off.
+    /// Overlapping candidates are merged, keeping the higher score: a centre inside another
+    /// candidate's shape, or centres closer than this (metres). Not in the paper, which reports
+    /// split fruit as false positives (its Discussion); 0 switches merging off.
     pub merge_radius_m: f64,
 }
 

@@ -414,19 +414,38 @@ fn detection(c: &Candidate, score: f64, camera: &PinholeCamera) -> Detection {
     }
 }
 
-/// Keeps, among detections closer than `radius_m`, the highest-scoring one.
-fn merge_close(mut detections: Vec<Detection>, radius_m: f64) -> Vec<Detection> {
-    if radius_m <= 0.0 {
-        return detections;
+/// Whether `p` lies inside the space `shape` claims: the sphere's ball, or the cylinder's
+/// radius around its axis within its extent padded by the radius.
+fn occupies(shape: &Shape, p: &Point3<f64>) -> bool {
+    match shape {
+        Shape::Sphere(s) => (p - s.center).norm() < s.radius_m,
+        Shape::Cylinder(c) => {
+            let along = (p - c.axis_point).dot(&c.axis);
+            let (lo, hi) = c.extent_m.unwrap_or((0.0, 0.0));
+            c.distance_to_axis(p) < c.radius_m && along > lo - c.radius_m && along < hi + c.radius_m
+        }
     }
-    detections.sort_by(|a, b| b.score.total_cmp(&a.score));
-    let mut kept: Vec<Detection> = Vec::with_capacity(detections.len());
-    for d in detections {
-        if kept
-            .iter()
-            .all(|k| (k.center_m - d.center_m).norm() >= radius_m)
-        {
-            kept.push(d);
+}
+
+/// Two fruit cannot fill the same space: scanning candidates by decreasing score, one is dropped
+/// when its centre lies inside a kept one's shape, a kept centre lies inside its shape, or the
+/// centres are closer than `radius_m`. Not in the paper, which counts such split fruit as false
+/// positives (its Discussion); `radius_m <= 0` switches merging off. Returns kept indices.
+fn merge_overlapping(candidates: &[Candidate], scores: &[f64], radius_m: f64) -> Vec<usize> {
+    let mut order: Vec<usize> = (0..candidates.len()).collect();
+    if radius_m <= 0.0 {
+        return order;
+    }
+    order.sort_by(|&a, &b| scores[b].total_cmp(&scores[a]).then(a.cmp(&b)));
+    let mut kept: Vec<usize> = Vec::with_capacity(order.len());
+    for i in order {
+        let (ci, si) = (candidates[i].shape.center(), &candidates[i].shape);
+        let clash = kept.iter().any(|&k| {
+            let (ck, sk) = (candidates[k].shape.center(), &candidates[k].shape);
+            (ck - ci).norm() < radius_m || occupies(sk, &ci) || occupies(si, &ck)
+        });
+        if !clash {
+            kept.push(i);
         }
     }
     kept
@@ -444,12 +463,11 @@ impl Detector for ShapeFitDetector {
     ) -> Result<Vec<Detection>, PipelineError> {
         let (candidates, features) = self.stages.candidates(frame, timings)?;
         let scores = run_stage(&self.classifier, features.as_slice(), timings)?;
-        let detections = candidates
-            .iter()
-            .zip(scores)
-            .map(|(c, s)| detection(c, s, frame.camera()))
-            .collect();
-        Ok(merge_close(detections, self.merge_radius_m))
+        let kept = merge_overlapping(&candidates, &scores, self.merge_radius_m);
+        Ok(kept
+            .into_iter()
+            .map(|i| detection(&candidates[i], scores[i], frame.camera()))
+            .collect())
     }
 }
 
@@ -457,26 +475,31 @@ impl Detector for ShapeFitDetector {
 mod tests {
     use super::*;
 
-    fn det(x: f64, score: f64) -> Detection {
-        Detection {
-            center_m: Point3::new(x, 0.0, 1.0),
-            score,
-            diameter_m: None,
-            axis: None,
-            bbox_px: None,
-            kind: None,
+    fn ball(x: f64, r: f64) -> Candidate {
+        let sphere = pomona_consensus::Sphere {
+            center: Point3::new(x, 0.0, 1.0),
+            radius_m: r,
+        };
+        Candidate {
+            shape: Shape::Sphere(sphere),
+            pixels: vec![],
+            points: vec![],
+            normals: vec![],
         }
     }
 
     #[test]
-    fn merging_keeps_best_of_close_detections() {
-        let kept = merge_close(vec![det(0.0, 1.0), det(0.01, 2.0), det(0.1, 0.5)], 0.03);
-        assert_eq!(kept.len(), 2);
-        assert_eq!(kept[0].score, 2.0);
-        assert_eq!(
-            merge_close(vec![det(0.0, 1.0), det(0.01, 2.0)], 0.0).len(),
-            2
-        );
+    fn overlapping_candidates_keep_the_best() {
+        // 0 and 1 overlap (1's centre is inside 0's 40 mm ball); 2 is far; 3 is 20 mm from 2.
+        let c = [
+            ball(0.0, 0.04),
+            ball(0.035, 0.02),
+            ball(0.3, 0.03),
+            ball(0.32, 0.005),
+        ];
+        let kept = merge_overlapping(&c, &[1.0, 2.0, 0.5, 0.1], 0.03);
+        assert_eq!(kept, vec![1, 2]);
+        assert_eq!(merge_overlapping(&c, &[1.0, 2.0, 0.5, 0.1], 0.0).len(), 4);
     }
 
     #[test]

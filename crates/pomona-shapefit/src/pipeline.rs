@@ -2,7 +2,7 @@
 //! cross-validated SVM) and the detector that chains the stages.
 
 use pomona_consensus::nalgebra::{Point2, Point3};
-use pomona_consensus::Shape;
+use pomona_consensus::{Cylinder, Shape};
 use pomona_core::{Detection, FrameTruth, PinholeCamera, PixelBox, RgbdFrame};
 use pomona_learn::{
     ClassWeights, CvMetric, GridAxis, GridSearchParams, ModelFile, Samples, SvmParams, TrainingSet,
@@ -392,8 +392,8 @@ pub struct ShapeFitDetector {
     merge_radius_m: f64,
 }
 
-fn detection(c: &Candidate, score: f64, camera: &PinholeCamera) -> Detection {
-    let (center_m, axis) = match &c.shape {
+fn detection(c: &Candidate, shape: &Shape, score: f64, camera: &PinholeCamera) -> Detection {
+    let (center_m, axis) = match shape {
         Shape::Sphere(s) => (s.center, None),
         Shape::Cylinder(cy) => (cy.midpoint(), Some(cy.axis)),
     };
@@ -407,7 +407,7 @@ fn detection(c: &Candidate, score: f64, camera: &PinholeCamera) -> Detection {
     Detection {
         center_m,
         score,
-        diameter_m: Some(2.0 * c.shape.radius_m()),
+        diameter_m: Some(2.0 * shape.radius_m()),
         axis,
         bbox_px: PixelBox::new(lo.0, lo.1, hi.0, hi.1).ok(),
         kind: None,
@@ -427,26 +427,66 @@ fn occupies(shape: &Shape, p: &Point3<f64>) -> bool {
     }
 }
 
-/// Two fruit cannot fill the same space: scanning candidates by decreasing score, one is dropped
-/// when its centre lies inside a kept one's shape, a kept centre lies inside its shape, or the
-/// centres are closer than `radius_m`. Not in the paper, which counts such split fruit as false
-/// positives (its Discussion); `radius_m <= 0` switches merging off. Returns kept indices.
-fn merge_overlapping(candidates: &[Candidate], scores: &[f64], radius_m: f64) -> Vec<usize> {
+/// The union of two pieces of one long fruit: cylinders whose axes agree within 20°, whose
+/// midpoints are within a radius of each other's axis, and whose extents along the axis overlap
+/// or leave a gap of at most two radii (a leaf across an eggplant splits it this way).
+fn coaxial_union(a: &Cylinder, b: &Cylinder) -> Option<Cylinder> {
+    let radius = a.radius_m.max(b.radius_m);
+    if a.axis.dot(&b.axis).abs() < 20f64.to_radians().cos()
+        || a.distance_to_axis(&b.midpoint()) > radius
+        || b.distance_to_axis(&a.midpoint()) > radius
+    {
+        return None;
+    }
+    let ((alo, ahi), (blo, bhi)) = (a.extent_m?, b.extent_m?);
+    let along_a = |t: f64| (b.axis_point + b.axis.into_inner() * t - a.axis_point).dot(&a.axis);
+    let (b0, b1) = (along_a(blo), along_a(bhi));
+    let (blo, bhi) = (b0.min(b1), b0.max(b1));
+    if blo > ahi + 2.0 * radius || bhi < alo - 2.0 * radius {
+        return None;
+    }
+    Some(Cylinder {
+        extent_m: Some((alo.min(blo), ahi.max(bhi))),
+        ..*a
+    })
+}
+
+/// Two fruit cannot fill the same space. Scanning candidates by decreasing score, a candidate is
+/// dropped when its centre lies inside a kept one's shape, a kept centre lies inside its shape,
+/// or the centres are closer than `radius_m`; a cylinder that continues a kept cylinder
+/// ([`coaxial_union`]) extends it instead. Not in the paper, which counts split fruit as false
+/// positives (its Discussion); `radius_m <= 0` switches merging off. Returns the kept indices
+/// with their (possibly extended) shapes.
+fn merge_overlapping(
+    candidates: &[Candidate],
+    scores: &[f64],
+    radius_m: f64,
+) -> Vec<(usize, Shape)> {
     let mut order: Vec<usize> = (0..candidates.len()).collect();
     if radius_m <= 0.0 {
-        return order;
+        return order
+            .into_iter()
+            .map(|i| (i, candidates[i].shape.clone()))
+            .collect();
     }
     order.sort_by(|&a, &b| scores[b].total_cmp(&scores[a]).then(a.cmp(&b)));
-    let mut kept: Vec<usize> = Vec::with_capacity(order.len());
-    for i in order {
-        let (ci, si) = (candidates[i].shape.center(), &candidates[i].shape);
-        let clash = kept.iter().any(|&k| {
-            let (ck, sk) = (candidates[k].shape.center(), &candidates[k].shape);
-            (ck - ci).norm() < radius_m || occupies(sk, &ci) || occupies(si, &ck)
-        });
-        if !clash {
-            kept.push(i);
+    let mut kept: Vec<(usize, Shape)> = Vec::with_capacity(order.len());
+    'candidates: for i in order {
+        let si = &candidates[i].shape;
+        let ci = si.center();
+        for (_, sk) in kept.iter_mut() {
+            if let (Shape::Cylinder(k), Shape::Cylinder(c)) = (&*sk, si) {
+                if let Some(union) = coaxial_union(k, c) {
+                    *sk = Shape::Cylinder(union);
+                    continue 'candidates;
+                }
+            }
+            let ck = sk.center();
+            if (ck - ci).norm() < radius_m || occupies(sk, &ci) || occupies(si, &ck) {
+                continue 'candidates;
+            }
         }
+        kept.push((i, si.clone()));
     }
     kept
 }
@@ -466,7 +506,7 @@ impl Detector for ShapeFitDetector {
         let kept = merge_overlapping(&candidates, &scores, self.merge_radius_m);
         Ok(kept
             .into_iter()
-            .map(|i| detection(&candidates[i], scores[i], frame.camera()))
+            .map(|(i, shape)| detection(&candidates[i], &shape, scores[i], frame.camera()))
             .collect())
     }
 }
@@ -497,9 +537,41 @@ mod tests {
             ball(0.3, 0.03),
             ball(0.32, 0.005),
         ];
-        let kept = merge_overlapping(&c, &[1.0, 2.0, 0.5, 0.1], 0.03);
+        let kept: Vec<usize> = merge_overlapping(&c, &[1.0, 2.0, 0.5, 0.1], 0.03)
+            .into_iter()
+            .map(|k| k.0)
+            .collect();
         assert_eq!(kept, vec![1, 2]);
         assert_eq!(merge_overlapping(&c, &[1.0, 2.0, 0.5, 0.1], 0.0).len(), 4);
+    }
+
+    fn piece(lo: f64, hi: f64) -> Candidate {
+        let axis = pomona_consensus::nalgebra::Vector3::y_axis();
+        let cyl = Cylinder {
+            axis_point: Point3::new(0.0, 0.0, 1.0),
+            axis,
+            radius_m: 0.03,
+            extent_m: Some((lo, hi)),
+        };
+        Candidate {
+            shape: Shape::Cylinder(cyl),
+            pixels: vec![],
+            points: vec![],
+            normals: vec![],
+        }
+    }
+
+    #[test]
+    fn pieces_of_one_long_fruit_are_joined() {
+        // Two pieces of one eggplant with a 40 mm gap (a leaf), and one 200 mm further on.
+        let c = [piece(0.0, 0.06), piece(0.10, 0.15), piece(0.35, 0.40)];
+        let kept = merge_overlapping(&c, &[2.0, 1.0, 0.5], 0.03);
+        assert_eq!(kept.len(), 2);
+        let Shape::Cylinder(joined) = &kept[0].1 else {
+            panic!("not a cylinder")
+        };
+        assert_eq!(joined.extent_m, Some((0.0, 0.15)));
+        assert!((joined.midpoint().y - 0.075).abs() < 1e-12);
     }
 
     #[test]

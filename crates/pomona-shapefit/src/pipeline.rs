@@ -466,7 +466,7 @@ fn merge_overlapping(
     if radius_m <= 0.0 {
         return order
             .into_iter()
-            .map(|i| (i, candidates[i].shape.clone()))
+            .map(|i| (i, candidates[i].shape))
             .collect();
     }
     order.sort_by(|&a, &b| scores[b].total_cmp(&scores[a]).then(a.cmp(&b)));
@@ -486,7 +486,7 @@ fn merge_overlapping(
                 continue 'candidates;
             }
         }
-        kept.push((i, si.clone()));
+        kept.push((i, *si));
     }
     kept
 }

@@ -15,6 +15,7 @@
 //! An optional extent records the inliers' span along the axis, so a detector can report the
 //! fruit's midpoint and length.
 
+use crate::damped_step::damped_step;
 use nalgebra::{Matrix2, Point3, SMatrix, SVector, Unit, Vector2, Vector3};
 use serde::{Deserialize, Serialize};
 
@@ -219,33 +220,23 @@ impl Cylinder {
                 jtj += j * j.transpose();
                 jtr += j * r;
             }
-            let mut stepped = false;
-            for _ in 0..8 {
-                let mut damped = jtj;
-                for k in 0..5 {
-                    damped[(k, k)] *= 1.0 + lambda;
+            match damped_step(
+                &jtj,
+                &jtr,
+                current_sse,
+                &mut lambda,
+                apply,
+                |c| c.is_finite() && c.radius_m > 0.0,
+                sse,
+            ) {
+                Some((next, next_sse, moved)) => {
+                    current = next;
+                    current_sse = next_sse;
+                    if !moved {
+                        break;
+                    }
                 }
-                let Some(chol) = damped.cholesky() else {
-                    lambda *= 10.0;
-                    continue;
-                };
-                let delta = chol.solve(&(-jtr));
-                let candidate = apply(&delta);
-                let cand_sse = sse(&candidate);
-                if candidate.is_finite() && candidate.radius_m > 0.0 && cand_sse <= current_sse {
-                    // Converged: a sub-0.1 µm step or a negligible relative decrease.
-                    let small =
-                        delta.norm() < 1e-10 || current_sse - cand_sse <= 1e-10 * current_sse;
-                    current = candidate;
-                    current_sse = cand_sse;
-                    lambda = (lambda * 0.1).max(1e-12);
-                    stepped = !small;
-                    break;
-                }
-                lambda *= 10.0;
-            }
-            if !stepped {
-                break;
+                None => break,
             }
         }
         Some(current)

@@ -45,6 +45,7 @@
 
 mod consensus;
 mod cylinder;
+mod damped_step;
 mod error;
 mod estimator;
 mod extraction;

@@ -11,6 +11,7 @@
 //! Gauss–Newton from the MSAC model; [`Sphere::fit_least_squares`] provides the algebraic
 //! (Kåsa) fit as a starting point when there is no model yet.
 
+use crate::damped_step::damped_step;
 use nalgebra::{Matrix3, Matrix4, Point3, Vector3, Vector4};
 use serde::{Deserialize, Serialize};
 
@@ -133,36 +134,26 @@ impl Sphere {
                 jtj += j * j.transpose();
                 jtr += j * r;
             }
-            let mut stepped = false;
-            for _ in 0..8 {
-                let mut damped = jtj;
-                for k in 0..4 {
-                    damped[(k, k)] *= 1.0 + lambda;
-                }
-                let Some(chol) = damped.cholesky() else {
-                    lambda *= 10.0;
-                    continue;
-                };
-                let delta = chol.solve(&(-jtr));
-                let candidate = Sphere {
+            match damped_step(
+                &jtj,
+                &jtr,
+                current_sse,
+                &mut lambda,
+                |delta: &Vector4<f64>| Sphere {
                     center: current.center + Vector3::new(delta[0], delta[1], delta[2]),
                     radius_m: current.radius_m + delta[3],
-                };
-                let cand_sse = sse(&candidate);
-                if candidate.is_finite() && candidate.radius_m > 0.0 && cand_sse <= current_sse {
-                    // Converged: a sub-0.1 µm step or a negligible relative decrease.
-                    let small =
-                        delta.norm() < 1e-10 || current_sse - cand_sse <= 1e-10 * current_sse;
-                    current = candidate;
-                    current_sse = cand_sse;
-                    lambda = (lambda * 0.1).max(1e-12);
-                    stepped = !small;
-                    break;
+                },
+                |c| c.is_finite() && c.radius_m > 0.0,
+                sse,
+            ) {
+                Some((next, next_sse, moved)) => {
+                    current = next;
+                    current_sse = next_sse;
+                    if !moved {
+                        break;
+                    }
                 }
-                lambda *= 10.0;
-            }
-            if !stepped {
-                break;
+                None => break,
             }
         }
         Some(current)

@@ -12,12 +12,13 @@ use serde::{Deserialize, Serialize};
 pub struct RegionGrowingParams {
     /// Largest depth step between neighbours of one cluster, metres (paper: 5 mm).
     pub max_step_m: f64,
-    /// Smallest cluster kept, in pixels at the reference resolution (paper: 150).
+    /// Smallest cluster kept, in pixels of the reference camera (paper: 150).
     pub min_pixels: usize,
-    /// Pixel count of the resolution `min_pixels` refers to (paper: Kinect v2, 512 × 424).
-    /// At other resolutions the minimum scales with the pixel count, so a cluster keeps the
-    /// same angular size whatever the camera.
-    pub reference_pixels: usize,
+    /// Focal length, pixels, of the camera `min_pixels` refers to (paper: Kinect v2 depth,
+    /// 365 px). Other cameras scale the minimum by `(fx / reference_focal_px)²`, so a cluster
+    /// keeps the same solid angle — the same fruit at the same distance — whatever the sensor's
+    /// resolution or field of view.
+    pub reference_focal_px: f64,
 }
 
 impl Default for RegionGrowingParams {
@@ -25,25 +26,28 @@ impl Default for RegionGrowingParams {
         Self {
             max_step_m: 0.005,
             min_pixels: 150,
-            reference_pixels: 512 * 424,
+            reference_focal_px: 365.0,
         }
     }
 }
 
 impl RegionGrowingParams {
-    /// The minimum cluster size for an image of `pixels` pixels (at least 10, or `min_pixels`
-    /// if that is smaller).
-    pub fn min_pixels_for(&self, pixels: usize) -> usize {
-        let scaled = self.min_pixels as f64 * pixels as f64 / self.reference_pixels.max(1) as f64;
+    /// The minimum cluster size for a camera of focal length `fx_px` (at least 10, or
+    /// `min_pixels` if that is smaller).
+    pub fn min_pixels_for(&self, fx_px: f64) -> usize {
+        let ratio = fx_px / self.reference_focal_px;
+        let scaled = self.min_pixels as f64 * ratio * ratio;
         (scaled.round() as usize).max(self.min_pixels.min(10))
     }
 }
 
-/// Groups valid pixels (finite `depth_m` where `keep` is true) into clusters of pixel indices,
+/// Groups valid pixels (finite `depth_m` where `keep` is true) of an image taken with focal
+/// length `fx_px` into clusters of pixel indices,
 /// in raster order of their first pixel; clusters below the size limit are dropped.
 pub fn grow_regions(
     width: usize,
     height: usize,
+    fx_px: f64,
     depth_m: &[f32],
     keep: &[bool],
     params: &RegionGrowingParams,
@@ -52,7 +56,7 @@ pub fn grow_regions(
     if depth_m.len() != n || keep.len() != n {
         return Vec::new();
     }
-    let min_pixels = params.min_pixels_for(n);
+    let min_pixels = params.min_pixels_for(fx_px);
     let step = params.max_step_m as f32;
     let mut visited = vec![false; n];
     let mut clusters = Vec::new();
@@ -112,15 +116,17 @@ mod tests {
         let keep = vec![true; w * h];
         let params = RegionGrowingParams {
             min_pixels: 50,
-            reference_pixels: w * h,
             ..Default::default()
         };
-        let clusters = grow_regions(w, h, &depth, &keep, &params);
+        let clusters = grow_regions(w, h, 365.0, &depth, &keep, &params);
         assert_eq!(clusters.len(), 2);
         assert_eq!(clusters[0].len(), 200);
         let mut masked = keep.clone();
         masked[5] = false;
-        assert_eq!(grow_regions(w, h, &depth, &masked, &params)[0].len(), 199);
+        assert_eq!(
+            grow_regions(w, h, 365.0, &depth, &masked, &params)[0].len(),
+            199
+        );
     }
 
     #[test]
@@ -130,11 +136,10 @@ mod tests {
         let depth: Vec<f32> = (0..w * h).map(|i| 0.5 + 0.004 * (i % w) as f32).collect();
         let params = RegionGrowingParams {
             min_pixels: 10,
-            reference_pixels: w * h,
             ..Default::default()
         };
         assert_eq!(
-            grow_regions(w, h, &depth, &vec![true; w * h], &params).len(),
+            grow_regions(w, h, 365.0, &depth, &vec![true; w * h], &params).len(),
             1
         );
         let mut diag = vec![f32::NAN; 9];
@@ -143,18 +148,18 @@ mod tests {
         }
         let p = RegionGrowingParams {
             min_pixels: 3,
-            reference_pixels: 9,
             ..Default::default()
         };
-        let c = grow_regions(3, 3, &diag, &[true; 9], &p);
+        let c = grow_regions(3, 3, 365.0, &diag, &[true; 9], &p);
         assert_eq!(c, vec![vec![0, 4, 8]]);
     }
 
     #[test]
     fn minimum_scales_with_resolution() {
         let p = RegionGrowingParams::default();
-        assert_eq!(p.min_pixels_for(512 * 424), 150);
-        assert_eq!(p.min_pixels_for(1920 * 1080), 1433);
-        assert_eq!(p.min_pixels_for(176 * 144), 18);
+        assert_eq!(p.min_pixels_for(365.0), 150);
+        assert_eq!(p.min_pixels_for(917.0), 947); // Azure Kinect colour
+        assert_eq!(p.min_pixels_for(182.5), 38); // half resolution
+        assert_eq!(p.min_pixels_for(10.0), 10);
     }
 }

@@ -63,6 +63,7 @@ impl<'a> Stage<(&'a RgbdFrame, &'a [bool]), Vec<Vec<usize>>> for RegionGrowingSt
         Ok(grow_regions(
             cam.width as usize,
             cam.height as usize,
+            cam.fx,
             frame.depth().as_slice(),
             keep,
             &self.params,

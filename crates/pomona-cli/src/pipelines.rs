@@ -9,7 +9,11 @@ use pomona_pipeline::Pipeline;
 
 /// Every pipeline the binary knows, in the order `pomona demo` runs them.
 pub fn all() -> Vec<Box<dyn Pipeline>> {
-    vec![Box::new(pomona_shapefit::ShapeFitPipeline::default())]
+    vec![
+        Box::new(pomona_shapefit::ShapeFitPipeline::default()),
+        Box::new(pomona_symmetry::SymmetryPipeline::default()),
+        Box::new(pomona_symmetry::ViewerPosePipeline::default()),
+    ]
 }
 
 /// The names of `pipelines`, comma-separated (for messages).

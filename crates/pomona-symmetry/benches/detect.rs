@@ -1,0 +1,129 @@
+//! Criterion bench of the detectors on one synthetic Kinect v2 frame (512×424, `tof` noise),
+//! single-threaded (a one-thread rayon pool), per pipeline variant, plus the symmetry-plane
+//! search on one box and the normal estimators (window vs kd-tree) on the whole frame.
+//!
+//! `cargo bench -p pomona-symmetry --bench detect`
+#![allow(clippy::unwrap_used, clippy::expect_used, missing_docs)]
+
+use criterion::{criterion_group, criterion_main, Criterion};
+use pomona_consensus::{KnnNormalParams, WindowNormalParams};
+use pomona_core::nalgebra::Point3;
+use pomona_pipeline::{
+    FrameSource, LabelledFrame, Pipeline, PipelineError, StageTimings, TrainOptions,
+};
+use pomona_symmetry::{
+    BoxDetector, FrameKind, StageParams, SymmetryPipeline, SymmetryPlaneSearch, ViewerPosePipeline,
+};
+use pomona_synth::{render, CameraPreset, NoiseModel, SceneSpec};
+
+struct MemFrames(Vec<LabelledFrame>);
+
+impl FrameSource for MemFrames {
+    fn len(&self) -> usize {
+        self.0.len()
+    }
+    fn load(&self, i: usize) -> Result<LabelledFrame, PipelineError> {
+        Ok(self.0[i].clone())
+    }
+}
+
+fn frames(n: u64) -> Vec<LabelledFrame> {
+    let spec = SceneSpec {
+        camera: CameraPreset::KinectV2.camera(),
+        noise: NoiseModel::Tof,
+        green_fraction: 0.5,
+        ..SceneSpec::default()
+    };
+    (0..n)
+        .map(|i| {
+            let out = render(&spec.sample_frame(11, i).unwrap(), &spec.camera).unwrap();
+            LabelledFrame {
+                name: format!("{i}"),
+                frame: out.frame,
+                truth: out.truth,
+                mask: Some(out.mask),
+            }
+        })
+        .collect()
+}
+
+fn bench(c: &mut Criterion) {
+    let mut all = frames(7);
+    let test = all.pop().unwrap();
+    let train = MemFrames(all);
+    let options = TrainOptions {
+        seed: 1,
+        folds: 3,
+        full_grid: false,
+    };
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    let mut group = c.benchmark_group("detect-kinect-v2-1-thread");
+    group.sample_size(10);
+    let variants: Vec<(&str, Box<dyn Pipeline>)> = vec![
+        ("symmetry+pruning", Box::new(SymmetryPipeline::default())),
+        ("symmetry", {
+            let mut p = StageParams::symmetry();
+            p.highlight.enabled = false;
+            Box::new(SymmetryPipeline::with_params(p))
+        }),
+        ("fixed+pruning", Box::new(SymmetryPipeline::fixed())),
+        ("fixed", {
+            let mut p = StageParams::symmetry();
+            p.frame = FrameKind::Fixed;
+            p.highlight.enabled = false;
+            Box::new(SymmetryPipeline::with_params(p))
+        }),
+        (
+            "viewer-pose+pruning",
+            Box::new(ViewerPosePipeline::default()),
+        ),
+    ];
+    for (name, pipeline) in variants {
+        let model = pipeline.train(&train, &options, &|_, _| {}).unwrap();
+        let detector = BoxDetector::from_model(pipeline.name(), &model).unwrap();
+        group.bench_function(name, |b| {
+            b.iter(|| {
+                one.install(|| {
+                    detector
+                        .detect_frame(&test.frame, &mut StageTimings::default())
+                        .unwrap()
+                })
+            })
+        });
+    }
+    group.finish();
+
+    let params = StageParams::symmetry();
+    let stages = pomona_symmetry::Stages::new(&params).unwrap();
+    let cloud = stages.normal_stage().cloud(&test.frame).unwrap();
+    let fruit = test
+        .truth
+        .fruits
+        .iter()
+        .filter_map(|f| f.center_m)
+        .find_map(|c| stages.sliding_box().patch(&cloud, c))
+        .unwrap();
+    let search = SymmetryPlaneSearch::new(params.symmetry);
+    c.bench_function("symmetry-plane-one-box", |b| {
+        b.iter(|| search.best(&fruit, &Point3::origin()))
+    });
+
+    let mut group = c.benchmark_group("normals-kinect-v2-1-thread");
+    group.sample_size(10);
+    let pc = test.frame.to_cloud();
+    let window = WindowNormalParams::default().check().unwrap();
+    let knn = KnnNormalParams::default().check().unwrap();
+    group.bench_function("window-5x5", |b| {
+        b.iter(|| one.install(|| window.estimate(&pc).unwrap()))
+    });
+    group.bench_function("kd-tree-knn", |b| {
+        b.iter(|| one.install(|| knn.estimate_cloud(&pc)))
+    });
+    group.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);

@@ -1,0 +1,376 @@
+//! Highlight detection for pruning (seed 000 §3.1, Eqs. 1–6).
+//!
+//! Glossy fruit show small specular highlights; image gradients around one point radially away
+//! from (or towards) its centre like a pinwheel. The detector:
+//! 1. keeps pixels with high value and low saturation, `V/S > t` (Eq. 1; a grey pixel has
+//!    `S = 0` and always passes), and at least `min_value` bright;
+//! 2. computes an orientation map from the dominant eigenvector of the Gaussian-smoothed
+//!    second-moment matrix of the intensity gradients (Eq. 2);
+//! 3. tests each candidate pixel against a multi-scale pinwheel: on every circle, the fraction of
+//!    samples whose orientation agrees with the radial direction (complex distance of Eq. 3 below
+//!    `Tα`, Eq. 4) must exceed `Ts` (Eq. 5), and more than `Th` circles must agree (Eq. 6).
+//!    The second-moment matrix gives orientations modulo π, so the complex distance is taken
+//!    between doubled angles (a radial orientation and its opposite are the same orientation);
+//! 4. turns each connected group of highlight pixels into a marker at its centre of mass and
+//!    draws a disc around it whose radius is the largest fruit's radius in pixels at the nearest
+//!    working distance (`fx · max_fruit_size / (2 · min_distance)`): the pruning mask.
+//!
+//! It works on grey images too (every pixel is then a candidate of step 1).
+
+use std::f64::consts::TAU;
+
+use pomona_core::{ColorImage, PinholeCamera, RgbdFrame};
+use pomona_pipeline::{PipelineError, Stage};
+
+use crate::{HighlightParams, SymmetryError};
+
+/// A binary mask over the image grid: `true` where boxes may be centred.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct PruningMask {
+    width: usize,
+    height: usize,
+    data: Vec<bool>,
+}
+
+impl PruningMask {
+    /// A mask from row-major values.
+    ///
+    /// # Errors
+    /// [`SymmetryError::InvalidParameter`] when `data` does not hold `width × height` values.
+    pub fn new(width: usize, height: usize, data: Vec<bool>) -> Result<Self, SymmetryError> {
+        if data.len() != width * height {
+            return Err(SymmetryError::InvalidParameter {
+                name: "pruning mask size",
+                value: data.len() as f64,
+                reason: "must equal width × height",
+            });
+        }
+        Ok(Self {
+            width,
+            height,
+            data,
+        })
+    }
+
+    /// Whether pixel `(u, v)` is inside the mask (`false` outside the image).
+    pub fn get(&self, u: usize, v: usize) -> bool {
+        u < self.width && v < self.height && self.data[v * self.width + u]
+    }
+
+    /// Fraction of pixels kept.
+    pub fn kept_fraction(&self) -> f64 {
+        self.data.iter().filter(|&&b| b).count() as f64 / self.data.len().max(1) as f64
+    }
+}
+
+/// Result of highlight detection on one image.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Highlights {
+    /// Pixels passing Eq. 1.
+    pub candidates: usize,
+    /// Marker centres (centres of mass of highlight components), pixels.
+    pub markers: Vec<(f64, f64)>,
+    /// The dilated pruning mask.
+    pub mask: PruningMask,
+}
+
+/// Eqs. 1–6 plus marker dilation; stage `highlight`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct HighlightDetector {
+    params: HighlightParams,
+}
+
+impl HighlightDetector {
+    /// A detector with validated parameters (see [`crate::StageParams::validate`]).
+    pub fn new(params: HighlightParams) -> Self {
+        Self { params }
+    }
+
+    /// Dilation radius in pixels for `camera`.
+    pub fn radius_px(&self, camera: &PinholeCamera) -> f64 {
+        camera.fx * self.params.max_fruit_size_m / (2.0 * self.params.min_distance_m)
+    }
+
+    /// Runs on a colour (or grey) image seen by `camera`.
+    pub fn detect(&self, image: &ColorImage, camera: &PinholeCamera) -> Highlights {
+        let p = &self.params;
+        let (w, h) = (image.width() as usize, image.height() as usize);
+        let mut value = vec![0f32; w * h];
+        let mut candidate = vec![false; w * h];
+        for (i, px) in image.pixels().enumerate() {
+            let max = px.iter().copied().max().unwrap_or(0) as f32 / 255.0;
+            let min = px.iter().copied().min().unwrap_or(0) as f32 / 255.0;
+            let sat = if max > 0.0 { (max - min) / max } else { 0.0 };
+            value[i] = max;
+            candidate[i] = (max as f64) >= p.min_value
+                && (sat <= 0.0 || (max / sat) as f64 > p.ratio_threshold);
+        }
+        let candidates = candidate.iter().filter(|&&c| c).count();
+        let orientation = orientation_map(&value, w, h, p.sigma_px);
+        let doubled: Vec<(f32, f32)> = orientation
+            .iter()
+            .map(|&o| {
+                if o.is_nan() {
+                    (f32::NAN, f32::NAN)
+                } else {
+                    ((2.0 * o).cos(), (2.0 * o).sin())
+                }
+            })
+            .collect();
+        let circles = self.circles();
+        let highlight: Vec<bool> = (0..w * h)
+            .map(|i| candidate[i] && self.is_pinwheel(&doubled, &circles, w, h, i % w, i / w))
+            .collect();
+        let markers = component_centres(&highlight, w, h);
+        let r = self.radius_px(camera);
+        let mut data = vec![false; w * h];
+        let r2 = r * r;
+        for &(mu, mv) in &markers {
+            let v0 = (mv - r).floor().max(0.0) as usize;
+            let v1 = ((mv + r).ceil().max(0.0) as usize).min(h.saturating_sub(1));
+            let u0 = (mu - r).floor().max(0.0) as usize;
+            let u1 = ((mu + r).ceil().max(0.0) as usize).min(w.saturating_sub(1));
+            for v in v0..=v1 {
+                for u in u0..=u1 {
+                    let (du, dv) = (u as f64 - mu, v as f64 - mv);
+                    if du * du + dv * dv <= r2 {
+                        data[v * w + u] = true;
+                    }
+                }
+            }
+        }
+        Highlights {
+            candidates,
+            markers,
+            mask: PruningMask {
+                width: w,
+                height: h,
+                data,
+            },
+        }
+    }
+
+    /// Per circle: pixel offsets of the samples with the expected (radial) orientation as a
+    /// doubled-angle unit vector, computed once per image.
+    fn circles(&self) -> Vec<Vec<(isize, isize, f32, f32)>> {
+        let m = self.params.samples_per_circle;
+        self.params
+            .radii_px
+            .iter()
+            .map(|&r| {
+                (0..m)
+                    .map(|k| {
+                        let beta = TAU * k as f64 / m as f64;
+                        (
+                            (r * beta.cos()).round() as isize,
+                            (r * beta.sin()).round() as isize,
+                            (2.0 * beta).cos() as f32,
+                            (2.0 * beta).sin() as f32,
+                        )
+                    })
+                    .collect()
+            })
+            .collect()
+    }
+
+    /// Eqs. 3–6 at pixel `(u, v)`; `doubled` holds `(cos 2o, sin 2o)` of the orientation map.
+    fn is_pinwheel(
+        &self,
+        doubled: &[(f32, f32)],
+        circles: &[Vec<(isize, isize, f32, f32)>],
+        w: usize,
+        h: usize,
+        u: usize,
+        v: usize,
+    ) -> bool {
+        let p = &self.params;
+        let t2 = (p.t_alpha * p.t_alpha) as f32;
+        let mut supporting = 0;
+        for circle in circles {
+            let mut agree = 0;
+            for &(du, dv, ce, se) in circle {
+                let (x, y) = (u as isize + du, v as isize + dv);
+                if x < 0 || y < 0 || x >= w as isize || y >= h as isize {
+                    continue;
+                }
+                let (co, so) = doubled[y as usize * w + x as usize];
+                // Eq. 3 (squared) on doubled angles; NaN (no gradient) never agrees.
+                let d2 = (co - ce) * (co - ce) + (so - se) * (so - se);
+                if d2 < t2 {
+                    agree += 1;
+                }
+            }
+            if agree as f64 / circle.len().max(1) as f64 > p.t_s {
+                supporting += 1;
+                if supporting > p.t_h {
+                    return true;
+                }
+            }
+        }
+        false
+    }
+}
+
+impl Stage<&RgbdFrame, Option<Highlights>> for HighlightDetector {
+    fn name(&self) -> &'static str {
+        "highlight"
+    }
+
+    /// `None` when pruning is disabled or the frame has no colour (pruning is then off).
+    fn run(&self, frame: &RgbdFrame) -> Result<Option<Highlights>, PipelineError> {
+        if !self.params.enabled {
+            return Ok(None);
+        }
+        Ok(frame.color().map(|c| self.detect(c, frame.camera())))
+    }
+}
+
+/// Dominant gradient orientation in `[0, π)` per pixel (NaN where the gradient vanishes), from
+/// the Gaussian-smoothed second-moment matrix (Eq. 2).
+pub fn orientation_map(intensity: &[f32], w: usize, h: usize, sigma: f64) -> Vec<f32> {
+    let at = |x: usize, y: usize| intensity[y * w + x];
+    let mut jxx = vec![0f32; w * h];
+    let mut jxy = vec![0f32; w * h];
+    let mut jyy = vec![0f32; w * h];
+    for y in 0..h {
+        for x in 0..w {
+            let gx = 0.5 * (at((x + 1).min(w - 1), y) - at(x.saturating_sub(1), y));
+            let gy = 0.5 * (at(x, (y + 1).min(h - 1)) - at(x, y.saturating_sub(1)));
+            let i = y * w + x;
+            jxx[i] = gx * gx;
+            jxy[i] = gx * gy;
+            jyy[i] = gy * gy;
+        }
+    }
+    for img in [&mut jxx, &mut jxy, &mut jyy] {
+        gaussian_blur(img, w, h, sigma);
+    }
+    (0..w * h)
+        .map(|i| {
+            let (a, b, c) = (jxx[i], jxy[i], jyy[i]);
+            if a + c <= 1e-12 {
+                f32::NAN
+            } else {
+                (0.5 * (2.0 * b).atan2(a - c)).rem_euclid(std::f32::consts::PI)
+            }
+        })
+        .collect()
+}
+
+/// Separable Gaussian blur with clamped borders, in place.
+fn gaussian_blur(img: &mut [f32], w: usize, h: usize, sigma: f64) {
+    let radius = (3.0 * sigma).ceil() as isize;
+    let kernel: Vec<f32> = (-radius..=radius)
+        .map(|k| (-(k * k) as f64 / (2.0 * sigma * sigma)).exp() as f32)
+        .collect();
+    let norm: f32 = kernel.iter().sum();
+    let mut tmp = vec![0f32; w * h];
+    for y in 0..h {
+        for x in 0..w {
+            let mut s = 0.0;
+            for (j, k) in kernel.iter().enumerate() {
+                let xx = (x as isize + j as isize - radius).clamp(0, w as isize - 1) as usize;
+                s += k * img[y * w + xx];
+            }
+            tmp[y * w + x] = s / norm;
+        }
+    }
+    for y in 0..h {
+        for x in 0..w {
+            let mut s = 0.0;
+            for (j, k) in kernel.iter().enumerate() {
+                let yy = (y as isize + j as isize - radius).clamp(0, h as isize - 1) as usize;
+                s += k * tmp[yy * w + x];
+            }
+            img[y * w + x] = s / norm;
+        }
+    }
+}
+
+/// Centres of mass of the 8-connected components of `on`, in scan order.
+fn component_centres(on: &[bool], w: usize, h: usize) -> Vec<(f64, f64)> {
+    let mut seen = vec![false; on.len()];
+    let mut out = Vec::new();
+    let mut stack = Vec::new();
+    for start in 0..on.len() {
+        if !on[start] || seen[start] {
+            continue;
+        }
+        seen[start] = true;
+        stack.push(start);
+        let (mut su, mut sv, mut n) = (0.0, 0.0, 0.0);
+        while let Some(i) = stack.pop() {
+            let (u, v) = (i % w, i / w);
+            su += u as f64;
+            sv += v as f64;
+            n += 1.0;
+            for dv in -1isize..=1 {
+                for du in -1isize..=1 {
+                    let (uu, vv) = (u as isize + du, v as isize + dv);
+                    if uu < 0 || vv < 0 || uu >= w as isize || vv >= h as isize {
+                        continue;
+                    }
+                    let j = vv as usize * w + uu as usize;
+                    if on[j] && !seen[j] {
+                        seen[j] = true;
+                        stack.push(j);
+                    }
+                }
+            }
+        }
+        out.push((su / n, sv / n));
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A dark grey image with a bright Gaussian blob (a highlight) at `(cx, cy)` and a bright
+    /// straight bar (not a highlight).
+    fn image(cx: f64, cy: f64) -> ColorImage {
+        let (w, h) = (80u32, 60u32);
+        let mut img = ColorImage::filled(w, h, [40, 90, 40]);
+        for v in 0..h {
+            for u in 0..w {
+                let d2 = (u as f64 - cx).powi(2) + (v as f64 - cy).powi(2);
+                let blob = (-d2 / (2.0 * 3.0 * 3.0)).exp();
+                let bar = if (60..64).contains(&u) { 0.9 } else { 0.0 };
+                let g = 40.0 + 215.0 * blob.max(bar);
+                img.set(
+                    u,
+                    v,
+                    [g as u8, (90.0 + 165.0 * blob.max(bar)) as u8, g as u8],
+                );
+            }
+        }
+        img
+    }
+
+    #[test]
+    fn finds_a_blob_and_ignores_a_bar() {
+        let cam = PinholeCamera::new(80, 60, 60.0, 60.0, 39.5, 29.5).unwrap();
+        let det = HighlightDetector::new(HighlightParams::default());
+        let out = det.detect(&image(25.0, 30.0), &cam);
+        assert!(out.candidates > 0);
+        assert_eq!(out.markers.len(), 1, "{:?}", out.markers);
+        let (u, v) = out.markers[0];
+        assert!((u - 25.0).abs() < 1.5 && (v - 30.0).abs() < 1.5);
+        assert!(out.mask.get(25, 30) && !out.mask.get(79, 0));
+        let r = det.radius_px(&cam);
+        assert!((r - 60.0 * 0.12 / 0.8).abs() < 1e-12);
+    }
+
+    #[test]
+    fn orientation_is_radial_around_a_blob() {
+        let img = image(40.0, 30.0);
+        let v: Vec<f32> = img.pixels().map(|p| p[1] as f32 / 255.0).collect();
+        let o = orientation_map(&v, 80, 60, 1.0);
+        // Right of the blob the gradient is horizontal, below it vertical.
+        let right = o[30 * 80 + 45];
+        let below = o[35 * 80 + 40];
+        assert!(right.min(std::f32::consts::PI - right) < 0.1, "{right}");
+        assert!((below - std::f32::consts::FRAC_PI_2).abs() < 0.1, "{below}");
+    }
+}

@@ -1,0 +1,56 @@
+//! # pomona-symmetry
+//!
+//! Shape-only fruit detectors for RGB-D frames, after seeds 000 (colour-agnostic shape-based
+//! detection with highlights and reflection symmetry), 003 (the general symmetry-frame detector)
+//! and 001 (viewer-based pose frame):
+//!
+//! * [`SymmetryPipeline`] (`symmetry`): highlight pruning → 3D sliding box → best reflection
+//!   symmetry plane per box → normal histograms in the plane's frame → RBF C-SVC → 3D NMS.
+//!   Detections carry the symmetry-plane normal as their `axis`.
+//! * [`ViewerPosePipeline`] (`viewer-pose`): the same box scan with a frame built from the box
+//!   centre and the viewing direction, seed 001's histograms, and mean-shift merging.
+//!
+//! The reference frame is a swappable stage ([`ReferenceFrame`]: [`SymmetryFrame`],
+//! [`FixedFrame`], [`ViewerFrame`]); the fixed frame is seed 000's "without symmetry" ablation.
+//! Every stage implements [`pomona_pipeline::Stage`] and is timed per frame. All parameters live
+//! in [`StageParams`], stored in the model file.
+//!
+//! Frames without colour run with pruning off and say so ([`PruningState::NoColor`], plus one
+//! line on stderr per detector).
+
+mod error;
+mod highlight;
+mod mean_shift;
+mod nms;
+mod normal_histogram;
+mod params;
+mod pipeline;
+mod reference_frame;
+mod scene_cloud;
+mod sliding_box;
+mod symmetry_plane;
+mod viewer_features;
+
+pub use error::SymmetryError;
+pub use highlight::{orientation_map, HighlightDetector, Highlights, PruningMask};
+pub use mean_shift::mean_shift;
+pub use nms::{non_maximum_suppression, ScoredBox};
+pub use normal_histogram::{normal_histogram, BinnedHistograms, FeatureStage};
+pub use params::{
+    FrameKind, HighlightParams, HistogramParams, MergeKind, MergeParams, SlidingBoxParams,
+    StageParams, SymmetryPlaneParams, TrainingParams,
+};
+pub use pipeline::{
+    BoxDetector, FrameResult, PruningState, Stages, SymmetryPipeline, ViewerPosePipeline, SYMMETRY,
+    VIEWER_POSE,
+};
+pub use reference_frame::{
+    plane_frame, up, FixedFrame, FrameStage, LocalFrame, ReferenceFrame, SymmetryFrame, ViewerFrame,
+};
+pub use scene_cloud::{NormalStage, SceneCloud};
+pub use sliding_box::{BoxPatch, SlidingBox};
+pub use symmetry_plane::{
+    canonical, is_visible, plane_normal, reflect_normal, reflect_point, SymmetryPlane,
+    SymmetryPlaneSearch,
+};
+pub use viewer_features::viewer_features;

@@ -1,0 +1,455 @@
+//! Every tunable of the two detectors, in one serde struct stored in the model's `stage_params`
+//! so that a model file alone reproduces its detector.
+//!
+//! Where the seeds give a value it is the default (V/S threshold t = 0.8, "up" = −y, 50 mm
+//! matching tolerance used for the NMS radius). The seeds give no numbers for the box size,
+//! stride, bin counts, plane grid or the weight `w` of Eq. 14; the defaults below are our
+//! choices for sweet peppers (70–105 mm wide, 80–120 mm long) and are documented per field.
+
+use pomona_consensus::WindowNormalParams;
+use serde::{Deserialize, Serialize};
+
+use crate::error::{check_at_least, check_positive, SymmetryError};
+
+/// Which reference frame a box's features are expressed in (the swappable stage).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum FrameKind {
+    /// Best reflection-symmetry plane through the box centre (seed 000 §3.3).
+    Symmetry,
+    /// A fixed camera-aligned frame: the "without symmetry" ablation of seed 000 Table 1.
+    Fixed,
+    /// Viewer-based frame from the box centre and the viewing direction (seed 001 §2.1).
+    Viewer,
+}
+
+/// How overlapping positive boxes become one detection.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum MergeKind {
+    /// Greedy 3D non-maximum suppression (seed 000).
+    Nms,
+    /// Mean-shift mode seeking over positive box centres (seed 001).
+    MeanShift,
+}
+
+/// Highlight-based pruning (seed 000 §3.1, Eqs. 1–6). The seed gives only `t = 0.8`; the other
+/// defaults were tuned on synthetic peppers (`examples/benchmark.rs` prints the mask's coverage
+/// of fruit centres), where highlights are only a few pixels wide, so one agreeing circle
+/// (`Th = 0`) is enough.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct HighlightParams {
+    /// Whether pruning runs at all (it is skipped, with a flag, on frames without colour).
+    pub enabled: bool,
+    /// Threshold `t` on V/S (Eq. 1); the paper's 0.8.
+    pub ratio_threshold: f64,
+    /// Pixels darker than this value V (0–1) are never candidates (keeps dark noise out).
+    pub min_value: f64,
+    /// σ of the Gaussian integrating the second-moment matrix (Eq. 2), pixels.
+    pub sigma_px: f64,
+    /// Radii of the concentric circles of the pinwheel model, pixels.
+    pub radii_px: Vec<f64>,
+    /// Orientation samples per circle.
+    pub samples_per_circle: usize,
+    /// `Tα`: orientations agree when their complex distance (Eq. 3) is below this (Eq. 4).
+    pub t_alpha: f64,
+    /// `Ts`: a circle supports the pixel when more than this fraction agrees (Eq. 5).
+    pub t_s: f64,
+    /// `Th`: a pixel is a highlight when more than this many circles support it (Eq. 6).
+    pub t_h: usize,
+    /// Largest fruit size in the scene, metres (sets the dilation radius).
+    pub max_fruit_size_m: f64,
+    /// Nearest working distance, metres (sets the dilation radius).
+    pub min_distance_m: f64,
+}
+
+impl Default for HighlightParams {
+    fn default() -> Self {
+        Self {
+            enabled: true,
+            ratio_threshold: 0.8,
+            min_value: 0.45,
+            sigma_px: 1.5,
+            radii_px: vec![2.0, 3.5, 5.0],
+            samples_per_circle: 16,
+            t_alpha: 0.6,
+            t_s: 0.5,
+            t_h: 0,
+            max_fruit_size_m: 0.12,
+            min_distance_m: 0.4,
+        }
+    }
+}
+
+/// The 3D sliding box.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct SlidingBoxParams {
+    /// Edge of the cubic box, metres (12 cm holds the largest pepper).
+    pub box_size_m: f64,
+    /// Spacing of box centres, metres.
+    pub stride_m: f64,
+    /// Boxes with fewer points are skipped.
+    pub min_points: usize,
+    /// Box centres nearer than this are skipped, metres.
+    pub min_range_m: f64,
+    /// Box centres farther than this are skipped (working range), metres.
+    pub max_range_m: f64,
+    /// Early rejection: a box is kept only when its centre lies behind the surface seen through
+    /// it (at most this far in front of it, for noise) and at most half a box behind it, metres.
+    /// A fruit's centre is always behind its visible skin, so boxes floating in front of surfaces
+    /// or buried deep behind them are skipped before any work is done.
+    pub max_in_front_m: f64,
+    /// Early rejection: the centre must also be at least this far behind the observed surface,
+    /// metres (a pepper's centre is 35–50 mm behind its skin; 0 disables).
+    pub min_behind_m: f64,
+    /// Early rejection of flat boxes: a box whose unit normals have a mean resultant length
+    /// `‖Σ n‖ / N` above this is a plane (leaf, backdrop) rather than a fruit, whose visible
+    /// normals spread over a hemisphere (1 disables).
+    pub max_normal_coherence: f64,
+    /// Feature points per box are thinned (by pixel step) to at most this many.
+    pub max_points: usize,
+    /// Normals are estimated only on pixels whose row and column are multiples of this, and box
+    /// points are read on that lattice (boxes are thinned anyway: a 12 cm box spans 3–6 pixels
+    /// per kept point on a Kinect v2), which cuts normal estimation by its square.
+    #[serde(default = "one")]
+    pub pixel_lattice: usize,
+}
+
+fn one() -> usize {
+    1
+}
+
+impl Default for SlidingBoxParams {
+    fn default() -> Self {
+        Self {
+            box_size_m: 0.12,
+            stride_m: 0.03,
+            min_points: 50,
+            min_range_m: 0.2,
+            max_range_m: 1.6,
+            max_in_front_m: 0.01,
+            min_behind_m: 0.02,
+            max_normal_coherence: 1.0,
+            max_points: 400,
+            pixel_lattice: 1,
+        }
+    }
+}
+
+/// Symmetry plane search (seed 000 §3.3, Eqs. 10–14).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct SymmetryPlaneParams {
+    /// Azimuth steps of the coarse plane-normal grid over 180°.
+    pub azimuth_steps: usize,
+    /// Elevation steps of the coarse grid over (−90°, 90°) (plus the pole).
+    pub elevation_steps: usize,
+    /// Refinement rounds around the best coarse normal (each halves the step).
+    pub refinements: usize,
+    /// Points scored per refined candidate plane (evenly thinned box points).
+    pub score_points: usize,
+    /// Points scored per coarse-grid plane (a cheaper first pass; the best `coarse_keep` coarse
+    /// planes are re-scored with `score_points` before refinement).
+    pub coarse_points: usize,
+    /// Coarse planes re-scored with all `score_points`.
+    pub coarse_keep: usize,
+    /// Weight `w` of the normal angle in Eq. 14, metres per radian.
+    pub angle_weight_m: f64,
+    /// Partner distances are clamped to this, metres (robustness to clutter).
+    pub max_distance_m: f64,
+    /// A plane needs at least this fraction of scored points contributing.
+    pub min_contributing: f64,
+}
+
+impl Default for SymmetryPlaneParams {
+    fn default() -> Self {
+        Self {
+            azimuth_steps: 8,
+            elevation_steps: 6,
+            refinements: 2,
+            score_points: 48,
+            coarse_points: 16,
+            coarse_keep: 3,
+            angle_weight_m: 0.02,
+            max_distance_m: 0.03,
+            min_contributing: 0.3,
+        }
+    }
+}
+
+/// Spatio-angular bins and normal histograms (seed 000 §3.2, seed 001 §2.2).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct HistogramParams {
+    /// Bins of distance from the frame's plane, over `[0, box_size/2]`.
+    pub distance_bins: usize,
+    /// Bins of the angle from the frame's reference vector, over `[0, π]`.
+    pub angle_bins: usize,
+    /// Bins of the first normal angle (θ, or angle to `u`), over `[0, π]`.
+    pub first_bins: usize,
+    /// Bins of the second normal angle (φ over `[0, 2π)`, or angle to the point ray over `[0, π]`).
+    pub second_bins: usize,
+}
+
+impl Default for HistogramParams {
+    fn default() -> Self {
+        Self {
+            distance_bins: 3,
+            angle_bins: 4,
+            first_bins: 6,
+            second_bins: 8,
+        }
+    }
+}
+
+impl HistogramParams {
+    /// Length of the feature vector.
+    pub fn feature_len(&self) -> usize {
+        self.distance_bins * self.angle_bins * (self.first_bins + self.second_bins)
+    }
+}
+
+/// Merging of positive boxes.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct MergeParams {
+    /// Boxes scoring below this SVM decision value are dropped before merging.
+    pub min_score: f64,
+    /// NMS: a box is suppressed by a better one closer than this, metres (about the smallest
+    /// pepper's width: two fruit centres are never closer).
+    pub nms_radius_m: f64,
+    /// Mean-shift: flat-kernel bandwidth, metres.
+    pub bandwidth_m: f64,
+    /// Mean-shift: iterations per seed at most.
+    pub max_iterations: usize,
+}
+
+impl Default for MergeParams {
+    fn default() -> Self {
+        Self {
+            min_score: -0.5,
+            nms_radius_m: 0.07,
+            bandwidth_m: 0.06,
+            max_iterations: 30,
+        }
+    }
+}
+
+/// Training-sample selection.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct TrainingParams {
+    /// Fruit less visible than this are not used as positives.
+    pub min_visibility: f64,
+    /// Extra positives per fruit with the centre jittered by up to half a stride per axis.
+    pub positive_jitters: usize,
+    /// Random negative boxes per frame.
+    pub negatives_per_frame: usize,
+    /// Negative box centres are at least this far from every fruit centre, metres.
+    pub negative_min_distance_m: f64,
+    /// Extra "hard" negatives per frame drawn among accepted boxes between one and two
+    /// `negative_min_distance_m` from a fruit centre (boxes that overlap a fruit off-centre and
+    /// would otherwise become duplicate detections beyond the merging radius). Off by default:
+    /// it did not raise AP on the synthetic benchmark.
+    #[serde(default)]
+    pub hard_negatives_per_frame: usize,
+}
+
+impl Default for TrainingParams {
+    fn default() -> Self {
+        Self {
+            min_visibility: 0.3,
+            positive_jitters: 2,
+            negatives_per_frame: 40,
+            negative_min_distance_m: 0.06,
+            hard_negatives_per_frame: 0,
+        }
+    }
+}
+
+/// All stage parameters of a `symmetry` or `viewer-pose` detector.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct StageParams {
+    /// Reference frame of the features.
+    pub frame: FrameKind,
+    /// Merging of positive boxes.
+    pub merge: MergeKind,
+    /// Highlight pruning.
+    pub highlight: HighlightParams,
+    /// PCA normals over image windows (pomona-consensus).
+    pub normals: WindowNormalParams,
+    /// Sliding box.
+    pub boxes: SlidingBoxParams,
+    /// Symmetry plane search.
+    pub symmetry: SymmetryPlaneParams,
+    /// Bins and histograms.
+    pub histogram: HistogramParams,
+    /// Merging.
+    pub merging: MergeParams,
+    /// Training samples.
+    pub training: TrainingParams,
+}
+
+impl StageParams {
+    /// Seed 000: symmetry frame, highlight pruning, NMS.
+    pub fn symmetry() -> Self {
+        Self {
+            frame: FrameKind::Symmetry,
+            merge: MergeKind::Nms,
+            highlight: HighlightParams::default(),
+            normals: WindowNormalParams::default(),
+            boxes: SlidingBoxParams::default(),
+            symmetry: SymmetryPlaneParams::default(),
+            histogram: HistogramParams::default(),
+            merging: MergeParams::default(),
+            training: TrainingParams::default(),
+        }
+    }
+
+    /// Seed 001: viewer frame, highlight pruning ("dark areas with no highlights"), mean-shift.
+    pub fn viewer_pose() -> Self {
+        Self {
+            frame: FrameKind::Viewer,
+            merge: MergeKind::MeanShift,
+            ..Self::symmetry()
+        }
+    }
+
+    /// Checks every field.
+    ///
+    /// # Errors
+    /// [`SymmetryError::InvalidParameter`] naming the first bad field.
+    pub fn validate(&self) -> Result<(), SymmetryError> {
+        let h = &self.highlight;
+        check_positive("highlight.ratio_threshold", h.ratio_threshold)?;
+        check_positive("highlight.sigma_px", h.sigma_px)?;
+        check_positive("highlight.t_alpha", h.t_alpha)?;
+        check_positive("highlight.max_fruit_size_m", h.max_fruit_size_m)?;
+        check_positive("highlight.min_distance_m", h.min_distance_m)?;
+        check_at_least("highlight.samples_per_circle", h.samples_per_circle, 4)?;
+        check_at_least("highlight.radii_px", h.radii_px.len(), 1)?;
+        for &r in &h.radii_px {
+            check_positive("highlight.radii_px", r)?;
+        }
+        if !(0.0..=1.0).contains(&h.t_s) || !(0.0..=1.0).contains(&h.min_value) {
+            return Err(SymmetryError::InvalidParameter {
+                name: "highlight.t_s",
+                value: h.t_s,
+                reason: "t_s and min_value must be in [0, 1]",
+            });
+        }
+        let b = &self.boxes;
+        check_positive("boxes.box_size_m", b.box_size_m)?;
+        check_positive("boxes.stride_m", b.stride_m)?;
+        check_positive("boxes.max_range_m", b.max_range_m)?;
+        check_positive("boxes.max_in_front_m", b.max_in_front_m)?;
+        check_positive("boxes.max_normal_coherence", b.max_normal_coherence)?;
+        check_at_least("boxes.min_points", b.min_points, 3)?;
+        check_at_least("boxes.pixel_lattice", b.pixel_lattice, 1)?;
+        if !(b.min_behind_m.is_finite() && b.min_behind_m < 0.5 * b.box_size_m) {
+            return Err(SymmetryError::InvalidParameter {
+                name: "boxes.min_behind_m",
+                value: b.min_behind_m,
+                reason: "must be finite and below half the box",
+            });
+        }
+        check_at_least("boxes.max_points", b.max_points, b.min_points)?;
+        if !(b.min_range_m >= 0.0 && b.min_range_m < b.max_range_m) {
+            return Err(SymmetryError::InvalidParameter {
+                name: "boxes.min_range_m",
+                value: b.min_range_m,
+                reason: "must be >= 0 and below max_range_m",
+            });
+        }
+        let cells = (2.0 * (b.max_range_m + b.box_size_m) / b.stride_m + 1.0).powi(3);
+        if cells > 5e7 {
+            return Err(SymmetryError::InvalidParameter {
+                name: "boxes.stride_m",
+                value: b.stride_m,
+                reason:
+                    "too fine for the working range (the voxel count table would exceed 5e7 cells)",
+            });
+        }
+        if b.box_size_m / b.stride_m > 64.0 {
+            return Err(SymmetryError::InvalidParameter {
+                name: "boxes.stride_m",
+                value: b.stride_m,
+                reason: "more than 64 strides per box",
+            });
+        }
+        let s = &self.symmetry;
+        check_at_least("symmetry.azimuth_steps", s.azimuth_steps, 2)?;
+        check_at_least("symmetry.elevation_steps", s.elevation_steps, 1)?;
+        check_at_least("symmetry.score_points", s.score_points, 4)?;
+        check_at_least("symmetry.coarse_points", s.coarse_points, 4)?;
+        check_at_least("symmetry.coarse_keep", s.coarse_keep, 1)?;
+        check_positive("symmetry.max_distance_m", s.max_distance_m)?;
+        if !(s.angle_weight_m.is_finite() && s.angle_weight_m >= 0.0) {
+            return Err(SymmetryError::InvalidParameter {
+                name: "symmetry.angle_weight_m",
+                value: s.angle_weight_m,
+                reason: "must be finite and >= 0",
+            });
+        }
+        if !(0.0..=1.0).contains(&s.min_contributing) {
+            return Err(SymmetryError::InvalidParameter {
+                name: "symmetry.min_contributing",
+                value: s.min_contributing,
+                reason: "must be in [0, 1]",
+            });
+        }
+        let g = &self.histogram;
+        check_at_least("histogram.distance_bins", g.distance_bins, 1)?;
+        check_at_least("histogram.angle_bins", g.angle_bins, 1)?;
+        check_at_least("histogram.first_bins", g.first_bins, 1)?;
+        check_at_least("histogram.second_bins", g.second_bins, 1)?;
+        let m = &self.merging;
+        if m.min_score.is_nan() {
+            return Err(SymmetryError::InvalidParameter {
+                name: "merging.min_score",
+                value: m.min_score,
+                reason: "must not be NaN",
+            });
+        }
+        check_positive("merging.nms_radius_m", m.nms_radius_m)?;
+        check_positive("merging.bandwidth_m", m.bandwidth_m)?;
+        check_at_least("merging.max_iterations", m.max_iterations, 1)?;
+        let t = &self.training;
+        check_positive(
+            "training.negative_min_distance_m",
+            t.negative_min_distance_m,
+        )?;
+        if !(0.0..=1.0).contains(&t.min_visibility) {
+            return Err(SymmetryError::InvalidParameter {
+                name: "training.min_visibility",
+                value: t.min_visibility,
+                reason: "must be in [0, 1]",
+            });
+        }
+        self.normals.check()?;
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn defaults_are_valid_and_round_trip() {
+        for p in [StageParams::symmetry(), StageParams::viewer_pose()] {
+            p.validate().unwrap();
+            let json = serde_json::to_value(&p).unwrap();
+            let back: StageParams = serde_json::from_value(json).unwrap();
+            assert_eq!(back, p);
+        }
+        assert_eq!(HistogramParams::default().feature_len(), 3 * 4 * 14);
+    }
+
+    #[test]
+    fn bad_values_are_named() {
+        let mut p = StageParams::symmetry();
+        p.boxes.stride_m = 0.0;
+        let err = p.validate().unwrap_err().to_string();
+        assert!(err.contains("boxes.stride_m"), "{err}");
+        let mut p = StageParams::symmetry();
+        p.histogram.angle_bins = 0;
+        assert!(p.validate().is_err());
+    }
+}

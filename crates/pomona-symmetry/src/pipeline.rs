@@ -1,0 +1,605 @@
+//! The `symmetry` and `viewer-pose` pipelines: training and detection built from the stages.
+//!
+//! Detection per frame (each step a [`Stage`] timed with [`run_stage`]):
+//! `highlight` (pruning mask, colour frames only) → `normals` → `sliding-box` →
+//! `reference-frame` → `features` → `classifier` (SVM decision value per box) → `merge`
+//! (3D NMS or mean shift).
+//!
+//! Training: positives are boxes centred on truth fruit (plus jittered copies, since at detection
+//! time box centres sit on the stride grid), negatives are random accepted boxes of the sliding
+//! box (same early rejection as detection, no pruning) whose centres are far from every fruit,
+//! plus a few "hard" ones just beyond that distance (overlapping a fruit off-centre).
+//! Random choices use ChaCha8 seeded by the training seed and the frame index, so the training set
+//! does not depend on the thread count. The RBF C-SVC is chosen by cross-validated grid search.
+
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+
+use nalgebra::{Point3, Vector3};
+use pomona_core::{Detection, RgbdFrame};
+use pomona_learn::{
+    ClassWeights, CvMetric, GridAxis, GridSearchParams, ModelFile, SvmClassifier, SvmParams,
+    TrainingSet,
+};
+use pomona_pipeline::{
+    run_stage, Detector, FrameSource, Pipeline, PipelineError, Stage, StageTimings, TrainOptions,
+};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
+
+use crate::{
+    mean_shift, non_maximum_suppression, BoxPatch, FeatureStage, FixedFrame, FrameKind, FrameStage,
+    HighlightDetector, Highlights, LocalFrame, MergeKind, NormalStage, ReferenceFrame, SceneCloud,
+    ScoredBox, SlidingBox, StageParams, SymmetryError, SymmetryFrame, SymmetryPlaneSearch,
+    ViewerFrame,
+};
+
+/// Seed 000's detector: highlight pruning, symmetry frame, normal histograms, SVM, 3D NMS.
+/// Set `params.frame = FrameKind::Fixed` (or use [`SymmetryPipeline::fixed`]) for the
+/// "without symmetry" ablation and `params.highlight.enabled = false` for "without pruning".
+#[derive(Debug, Clone, PartialEq)]
+pub struct SymmetryPipeline {
+    /// Stage parameters (stored in the model).
+    pub params: StageParams,
+}
+
+impl Default for SymmetryPipeline {
+    fn default() -> Self {
+        Self {
+            params: StageParams::symmetry(),
+        }
+    }
+}
+
+impl SymmetryPipeline {
+    /// The pipeline with the given parameters.
+    pub fn with_params(params: StageParams) -> Self {
+        Self { params }
+    }
+
+    /// The ablation without symmetry: a fixed frame instead of the symmetry plane.
+    pub fn fixed() -> Self {
+        let mut params = StageParams::symmetry();
+        params.frame = FrameKind::Fixed;
+        Self { params }
+    }
+}
+
+/// Seed 001's detector: viewer-based frame, its normal-angle histograms, SVM, mean shift.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ViewerPosePipeline {
+    /// Stage parameters (stored in the model).
+    pub params: StageParams,
+}
+
+impl Default for ViewerPosePipeline {
+    fn default() -> Self {
+        Self {
+            params: StageParams::viewer_pose(),
+        }
+    }
+}
+
+impl ViewerPosePipeline {
+    /// The pipeline with the given parameters.
+    pub fn with_params(params: StageParams) -> Self {
+        Self { params }
+    }
+}
+
+/// Pipeline name of [`SymmetryPipeline`].
+pub const SYMMETRY: &str = "symmetry";
+/// Pipeline name of [`ViewerPosePipeline`].
+pub const VIEWER_POSE: &str = "viewer-pose";
+
+impl Pipeline for SymmetryPipeline {
+    fn name(&self) -> &'static str {
+        SYMMETRY
+    }
+
+    fn train_params(&self) -> serde_json::Value {
+        serde_json::to_value(&self.params).unwrap_or(serde_json::Value::Null)
+    }
+
+    fn with_train_params(
+        &self,
+        params: serde_json::Value,
+    ) -> Result<Box<dyn Pipeline>, PipelineError> {
+        let params =
+            serde_json::from_value(params).map_err(|e| PipelineError::InvalidParameter {
+                name: "--set".into(),
+                reason: e.to_string(),
+            })?;
+        Ok(Box::new(Self { params }))
+    }
+
+    fn needs_color(&self) -> bool {
+        false
+    }
+
+    fn train(
+        &self,
+        frames: &dyn FrameSource,
+        options: &TrainOptions,
+        progress: &(dyn Fn(usize, usize) + Sync),
+    ) -> Result<ModelFile, PipelineError> {
+        train(SYMMETRY, &self.params, frames, options, progress)
+    }
+
+    fn load(&self, model: &ModelFile) -> Result<Box<dyn Detector>, PipelineError> {
+        Ok(Box::new(BoxDetector::from_model(SYMMETRY, model)?))
+    }
+}
+
+impl Pipeline for ViewerPosePipeline {
+    fn name(&self) -> &'static str {
+        VIEWER_POSE
+    }
+
+    fn train_params(&self) -> serde_json::Value {
+        serde_json::to_value(&self.params).unwrap_or(serde_json::Value::Null)
+    }
+
+    fn with_train_params(
+        &self,
+        params: serde_json::Value,
+    ) -> Result<Box<dyn Pipeline>, PipelineError> {
+        let params =
+            serde_json::from_value(params).map_err(|e| PipelineError::InvalidParameter {
+                name: "--set".into(),
+                reason: e.to_string(),
+            })?;
+        Ok(Box::new(Self { params }))
+    }
+
+    fn needs_color(&self) -> bool {
+        false
+    }
+
+    fn train(
+        &self,
+        frames: &dyn FrameSource,
+        options: &TrainOptions,
+        progress: &(dyn Fn(usize, usize) + Sync),
+    ) -> Result<ModelFile, PipelineError> {
+        train(VIEWER_POSE, &self.params, frames, options, progress)
+    }
+
+    fn load(&self, model: &ModelFile) -> Result<Box<dyn Detector>, PipelineError> {
+        Ok(Box::new(BoxDetector::from_model(VIEWER_POSE, model)?))
+    }
+}
+
+/// Whether and how the highlight pruning ran on a frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum PruningState {
+    /// Pruning ran; boxes were restricted to this fraction of the image.
+    Applied {
+        /// Fraction of pixels inside the mask.
+        kept_fraction: f64,
+        /// Highlight markers found.
+        markers: usize,
+    },
+    /// Pruning is disabled in the parameters.
+    Disabled,
+    /// The frame has no colour image, so pruning is off (depth-only operation).
+    NoColor,
+}
+
+/// Everything a detector found in a frame, for reports and benches.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FrameResult {
+    /// Merged detections, best first.
+    pub detections: Vec<Detection>,
+    /// Pruning outcome.
+    pub pruning: PruningState,
+    /// Boxes that passed early rejection and were described.
+    pub boxes: usize,
+    /// Boxes scoring at least `merging.min_score`, before merging.
+    pub positives: usize,
+}
+
+/// The stages shared by training and detection.
+pub struct Stages {
+    params: StageParams,
+    highlight: HighlightDetector,
+    normals: NormalStage,
+    boxes: SlidingBox,
+    frames: FrameStage,
+    features: FeatureStage,
+}
+
+impl Stages {
+    /// Builds every stage from validated parameters.
+    ///
+    /// # Errors
+    /// [`SymmetryError::InvalidParameter`] for invalid parameters.
+    pub fn new(params: &StageParams) -> Result<Self, SymmetryError> {
+        params.validate()?;
+        let frame: Box<dyn ReferenceFrame> = match params.frame {
+            FrameKind::Symmetry => Box::new(SymmetryFrame::new(SymmetryPlaneSearch::new(
+                params.symmetry,
+            ))),
+            FrameKind::Fixed => Box::new(FixedFrame),
+            FrameKind::Viewer => Box::new(ViewerFrame),
+        };
+        let boxes = SlidingBox::new(params.boxes);
+        Ok(Self {
+            params: params.clone(),
+            highlight: HighlightDetector::new(params.highlight.clone()),
+            normals: NormalStage::new(params.normals, params.boxes.pixel_lattice)?,
+            frames: FrameStage::new(frame),
+            features: FeatureStage::new(params.frame, boxes.half_m(), params.histogram),
+            boxes,
+        })
+    }
+
+    /// The parameters.
+    pub fn params(&self) -> &StageParams {
+        &self.params
+    }
+
+    /// The normal stage (frame → cloud).
+    pub fn normal_stage(&self) -> &NormalStage {
+        &self.normals
+    }
+
+    /// The sliding box.
+    pub fn sliding_box(&self) -> &SlidingBox {
+        &self.boxes
+    }
+
+    /// The reference-frame stage.
+    pub fn frame_stage(&self) -> &FrameStage {
+        &self.frames
+    }
+
+    /// The feature stage.
+    pub fn feature_stage(&self) -> &FeatureStage {
+        &self.features
+    }
+
+    /// Features of explicit boxes (training): patch, frame, features; boxes that fail any step
+    /// are left out.
+    pub fn describe_centres(&self, cloud: &SceneCloud, centres: &[Point3<f64>]) -> Vec<Vec<f64>> {
+        let patches: Vec<BoxPatch> = centres
+            .par_iter()
+            .filter_map(|&c| self.boxes.patch(cloud, c))
+            .collect();
+        let frames = self.frames.frames(&patches);
+        self.features
+            .features(&patches, &frames)
+            .into_iter()
+            .flatten()
+            .collect()
+    }
+}
+
+/// A trained `symmetry` or `viewer-pose` detector.
+pub struct BoxDetector {
+    name: &'static str,
+    stages: Stages,
+    classifier: SvmClassifier,
+    warned_no_color: AtomicBool,
+}
+
+impl BoxDetector {
+    /// Builds the detector stored in `model` for pipeline `name`.
+    ///
+    /// # Errors
+    /// [`PipelineError::StageParams`] when the parameters do not parse,
+    /// [`PipelineError::InvalidParameter`] when they are invalid or do not match the classifier.
+    pub fn from_model(name: &'static str, model: &ModelFile) -> Result<Self, PipelineError> {
+        let params: StageParams = serde_json::from_value(model.stage_params.clone())
+            .map_err(|e| PipelineError::StageParams(e.to_string()))?;
+        let stages = Stages::new(&params)?;
+        let classifier = model.classifier();
+        if classifier.n_features() != stages.features.feature_len() {
+            return Err(PipelineError::InvalidParameter {
+                name: "histogram".into(),
+                reason: format!(
+                    "the classifier takes {} features, the histogram parameters give {}",
+                    classifier.n_features(),
+                    stages.features.feature_len()
+                ),
+            });
+        }
+        Ok(Self {
+            name,
+            stages,
+            classifier,
+            warned_no_color: AtomicBool::new(false),
+        })
+    }
+
+    /// The stages (for benches and experiments).
+    pub fn stages(&self) -> &Stages {
+        &self.stages
+    }
+
+    /// Detects fruit in `frame` and reports how (pruning state, box counts).
+    ///
+    /// # Errors
+    /// Classifier errors (feature length mismatch, which `from_model` rules out).
+    pub fn detect_frame(
+        &self,
+        frame: &RgbdFrame,
+        timings: &mut StageTimings,
+    ) -> Result<FrameResult, PipelineError> {
+        let s = &self.stages;
+        let highlights: Option<Highlights> = run_stage(&s.highlight, frame, timings)?;
+        let pruning = match (&highlights, s.params.highlight.enabled) {
+            (Some(h), _) => PruningState::Applied {
+                kept_fraction: h.mask.kept_fraction(),
+                markers: h.markers.len(),
+            },
+            (None, true) => PruningState::NoColor,
+            (None, false) => PruningState::Disabled,
+        };
+        if pruning == PruningState::NoColor && !self.warned_no_color.swap(true, Ordering::Relaxed) {
+            eprintln!(
+                "{}: frame has no colour image; highlight pruning is off (depth-only operation)",
+                self.name
+            );
+        }
+        let cloud = run_stage(&s.normals, frame, timings)?;
+        let mask = highlights.as_ref().map(|h| &h.mask);
+        let patches = run_stage(&s.boxes, (&cloud, mask), timings)?;
+        let frames = run_stage(&s.frames, patches.as_slice(), timings)?;
+        let features = run_stage(
+            &s.features,
+            (patches.as_slice(), frames.as_slice()),
+            timings,
+        )?;
+        let classify = Classify {
+            classifier: &self.classifier,
+        };
+        let scores = run_stage(&classify, features.as_slice(), timings)?;
+        let min_score = s.params.merging.min_score;
+        let positives: Vec<ScoredBox> = patches
+            .iter()
+            .zip(&frames)
+            .zip(&scores)
+            .filter_map(|((p, f), sc)| {
+                let score = (*sc)?;
+                (score >= min_score).then(|| ScoredBox {
+                    center: p.center,
+                    score,
+                    axis: axis_of(f.as_ref(), s.params.frame),
+                })
+            })
+            .collect();
+        let merge = Merge {
+            kind: s.params.merge,
+            params: s.params.merging,
+        };
+        let merged = run_stage(&merge, positives.as_slice(), timings)?;
+        let detections = merged
+            .into_iter()
+            .map(|b| Detection {
+                center_m: b.center,
+                score: b.score,
+                diameter_m: None,
+                axis: b.axis,
+                bbox_px: None,
+                kind: None,
+            })
+            .collect();
+        Ok(FrameResult {
+            detections,
+            pruning,
+            boxes: patches.len(),
+            positives: positives.len(),
+        })
+    }
+}
+
+/// The symmetry-plane normal of a symmetry frame: the detection's axis estimate. Fixed and viewer
+/// frames carry no estimate.
+fn axis_of(frame: Option<&LocalFrame>, kind: FrameKind) -> Option<nalgebra::Unit<Vector3<f64>>> {
+    match kind {
+        FrameKind::Symmetry => frame.map(|f| f.normal),
+        FrameKind::Fixed | FrameKind::Viewer => None,
+    }
+}
+
+impl Detector for BoxDetector {
+    fn pipeline(&self) -> &'static str {
+        self.name
+    }
+
+    fn detect(
+        &self,
+        frame: &RgbdFrame,
+        timings: &mut StageTimings,
+    ) -> Result<Vec<Detection>, PipelineError> {
+        Ok(self.detect_frame(frame, timings)?.detections)
+    }
+}
+
+/// Stage `classifier`: SVM decision value per described box.
+struct Classify<'a> {
+    classifier: &'a SvmClassifier,
+}
+
+impl Stage<&[Option<Vec<f64>>], Vec<Option<f64>>> for Classify<'_> {
+    fn name(&self) -> &'static str {
+        "classifier"
+    }
+
+    fn run(&self, features: &[Option<Vec<f64>>]) -> Result<Vec<Option<f64>>, PipelineError> {
+        features
+            .par_iter()
+            .map(|f| match f {
+                Some(f) => self.classifier.decision_value(f).map(Some),
+                None => Ok(None),
+            })
+            .collect::<Result<Vec<_>, _>>()
+            .map_err(PipelineError::from)
+    }
+}
+
+/// Stage `merge`: NMS or mean shift.
+struct Merge {
+    kind: MergeKind,
+    params: crate::MergeParams,
+}
+
+impl Stage<&[ScoredBox], Vec<ScoredBox>> for Merge {
+    fn name(&self) -> &'static str {
+        "merge"
+    }
+
+    fn run(&self, boxes: &[ScoredBox]) -> Result<Vec<ScoredBox>, PipelineError> {
+        let mut out = match self.kind {
+            MergeKind::Nms => non_maximum_suppression(boxes, self.params.nms_radius_m),
+            MergeKind::MeanShift => mean_shift(
+                boxes,
+                self.params.min_score,
+                self.params.bandwidth_m,
+                self.params.max_iterations,
+            ),
+        };
+        out.sort_by(|a, b| b.score.total_cmp(&a.score));
+        Ok(out)
+    }
+}
+
+/// Positive and negative feature vectors of one training frame.
+type FrameSamples = (Vec<Vec<f64>>, Vec<Vec<f64>>);
+
+/// Positive and negative feature vectors of one training frame.
+fn frame_samples(
+    stages: &Stages,
+    frames: &dyn FrameSource,
+    index: usize,
+    seed: u64,
+) -> Result<FrameSamples, PipelineError> {
+    let p = stages.params();
+    let labelled = frames.load(index)?;
+    let cloud = stages.normals.cloud(&labelled.frame)?;
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    rng.set_stream(index as u64);
+    let stride = p.boxes.stride_m;
+    let fruit_centres: Vec<Point3<f64>> = labelled
+        .truth
+        .fruits
+        .iter()
+        .filter_map(|f| f.center_m)
+        .collect();
+    let mut positive_centres = Vec::new();
+    for fruit in &labelled.truth.fruits {
+        let (Some(c), vis) = (fruit.center_m, fruit.visibility.unwrap_or(1.0)) else {
+            continue;
+        };
+        if vis < p.training.min_visibility {
+            continue;
+        }
+        positive_centres.push(c);
+        for _ in 0..p.training.positive_jitters {
+            let j = Vector3::from_fn(|_, _| rng.gen_range(-0.5..=0.5) * stride);
+            positive_centres.push(c + j);
+        }
+    }
+    let min_d = p.training.negative_min_distance_m;
+    let nearest_fruit = |c: &Point3<f64>| {
+        fruit_centres
+            .iter()
+            .map(|f| (f - c).norm())
+            .fold(f64::INFINITY, f64::min)
+    };
+    let (mut near, mut far): (Vec<Point3<f64>>, Vec<Point3<f64>>) = (Vec::new(), Vec::new());
+    for c in stages.boxes.centres(&cloud, None) {
+        let d = nearest_fruit(&c);
+        if d >= 2.0 * min_d {
+            far.push(c);
+        } else if d >= min_d {
+            near.push(c);
+        }
+    }
+    let mut candidates = pick(&mut rng, far, p.training.negatives_per_frame);
+    candidates.extend(pick(&mut rng, near, p.training.hard_negatives_per_frame));
+    let positives = stages.describe_centres(&cloud, &positive_centres);
+    let negatives = stages.describe_centres(&cloud, &candidates);
+    Ok((positives, negatives))
+}
+
+/// A seeded random subset of `items` of size at most `n` (partial Fisher–Yates).
+fn pick(rng: &mut ChaCha8Rng, mut items: Vec<Point3<f64>>, n: usize) -> Vec<Point3<f64>> {
+    let want = n.min(items.len());
+    for i in 0..want {
+        let j = rng.gen_range(i..items.len());
+        items.swap(i, j);
+    }
+    items.truncate(want);
+    items
+}
+
+/// Trains the classifier of pipeline `name` with `params` on `frames`.
+fn train(
+    name: &'static str,
+    params: &StageParams,
+    frames: &dyn FrameSource,
+    options: &TrainOptions,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<ModelFile, PipelineError> {
+    let stages = Stages::new(params)?;
+    let total = frames.len();
+    let done = AtomicUsize::new(0);
+    let per_frame: Vec<FrameSamples> = (0..total)
+        .into_par_iter()
+        .map(|i| {
+            let r = frame_samples(&stages, frames, i, options.seed);
+            progress(done.fetch_add(1, Ordering::Relaxed) + 1, total);
+            r
+        })
+        .collect::<Result<_, _>>()?;
+    let mut rows = Vec::new();
+    let mut labels = Vec::new();
+    for (pos, neg) in per_frame {
+        labels.extend(std::iter::repeat_n(true, pos.len()));
+        rows.extend(pos);
+        labels.extend(std::iter::repeat_n(false, neg.len()));
+        rows.extend(neg);
+    }
+    let n_pos = labels.iter().filter(|&&l| l).count();
+    let n_neg = labels.len() - n_pos;
+    if n_pos < 2 || n_neg < 2 {
+        return Err(PipelineError::NotEnoughTrainingData {
+            pipeline: name,
+            reason: format!("{n_pos} positive and {n_neg} negative boxes (need 2 of each)"),
+        });
+    }
+    let data = TrainingSet::from_rows(&rows, labels)?;
+    let folds = options.folds.clamp(2, n_pos.min(n_neg));
+    let grid = if options.full_grid {
+        GridSearchParams::default()
+    } else {
+        GridSearchParams {
+            log2_c: GridAxis {
+                start: 1.0,
+                stop: 7.0,
+                step: 2.0,
+            },
+            log2_gamma: GridAxis {
+                start: -3.0,
+                stop: -9.0,
+                step: 2.0,
+            },
+            fine: false,
+            ..GridSearchParams::default()
+        }
+    };
+    let search = GridSearchParams {
+        folds,
+        seed: options.seed,
+        metric: CvMetric::BalancedAccuracy,
+        base: SvmParams::default().class_weights(ClassWeights::Balanced),
+        ..grid
+    }
+    .check()?
+    .fit(&data)?;
+    let stage_params =
+        serde_json::to_value(params).map_err(|e| PipelineError::StageParams(e.to_string()))?;
+    Ok(ModelFile::new(name, stage_params, &search.model))
+}

@@ -1,0 +1,372 @@
+//! The 3D sliding box: fixed-size cubes on a regular grid of centres, each cut out of the
+//! organised cloud (seed 000 §3.2, seed 003 §3).
+//!
+//! Most of space is empty, so boxes are rejected as early and cheaply as possible, in order:
+//! 1. centres outside the working range `[min_range_m, max_range_m]` or outside the image;
+//! 2. centres whose pixel is outside the pruning mask (when pruning is on);
+//! 3. centres not just behind the surface seen through them (a fruit's centre is behind its
+//!    visible skin by about its radius): the observed depth at the centre's pixel must lie within
+//!    `[z − box/2, z + max_in_front_m]`, or `[z − box/2, z − min_behind_m]` when
+//!    `min_behind_m > 0`;
+//! 4. flat boxes (optional, `max_normal_coherence`): nearly parallel normals mean a leaf or the
+//!    backdrop, never a fruit;
+//! 5. boxes with too few points, counted in O(1) with a summed-volume table over stride-sized
+//!    voxels (an over-estimate by at most one voxel layer), then exactly while cutting the box.
+//!
+//! Box centres sit on multiples of the stride in the camera frame, so the grid does not depend
+//! on the frame's content and results do not depend on the thread count.
+
+use nalgebra::{Point3, Unit, Vector3};
+use pomona_pipeline::{PipelineError, Stage};
+use rayon::prelude::*;
+
+use crate::{PruningMask, SceneCloud, SlidingBoxParams};
+
+/// The points of one box, with their normals.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BoxPatch {
+    /// Box centre, camera frame, metres.
+    pub center: Point3<f64>,
+    /// Points inside the box (thinned to at most `max_points`).
+    pub points: Vec<Point3<f64>>,
+    /// Unit normal of each point, oriented towards the camera.
+    pub normals: Vec<Unit<Vector3<f64>>>,
+}
+
+/// Cuts boxes out of a [`SceneCloud`]; stage `sliding-box`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SlidingBox {
+    params: SlidingBoxParams,
+}
+
+impl SlidingBox {
+    /// A sliding box with validated parameters (see [`crate::StageParams::validate`]).
+    pub fn new(params: SlidingBoxParams) -> Self {
+        Self { params }
+    }
+
+    /// Half the box edge, metres.
+    pub fn half_m(&self) -> f64 {
+        0.5 * self.params.box_size_m
+    }
+
+    /// Box centres that pass rejection rules 1–3 and 5 (see the module docs), in grid order.
+    pub fn centres(&self, cloud: &SceneCloud, mask: Option<&PruningMask>) -> Vec<Point3<f64>> {
+        let p = &self.params;
+        let Some(voxels) = VoxelCounts::build(cloud, p) else {
+            return Vec::new();
+        };
+        let half = self.half_m();
+        let k = (half / p.stride_m).floor() as i64;
+        let mut out = Vec::new();
+        // Centres reach half a box beyond the occupied voxels.
+        for iz in voxels.lo[2] - k..=voxels.hi[2] + k {
+            let z = iz as f64 * p.stride_m;
+            if z < p.min_range_m || z > p.max_range_m {
+                continue;
+            }
+            for iy in voxels.lo[1] - k..=voxels.hi[1] + k {
+                for ix in voxels.lo[0] - k..=voxels.hi[0] + k {
+                    let c = Point3::new(ix as f64 * p.stride_m, iy as f64 * p.stride_m, z);
+                    if c.coords.norm() > p.max_range_m {
+                        continue;
+                    }
+                    let Some((u, v)) = cloud
+                        .camera
+                        .project(&c)
+                        .and_then(|px| cloud.camera.pixel_of(&px))
+                    else {
+                        continue;
+                    };
+                    if mask.is_some_and(|m| !m.get(u as usize, v as usize)) {
+                        continue;
+                    }
+                    let Some(surface) = cloud.point_at(u as usize, v as usize) else {
+                        continue;
+                    };
+                    let upper = if p.min_behind_m > 0.0 {
+                        z - p.min_behind_m
+                    } else {
+                        z + p.max_in_front_m
+                    };
+                    if surface.z < z - half || surface.z > upper {
+                        continue;
+                    }
+                    if voxels.count_around([ix, iy, iz], k) < p.min_points {
+                        continue;
+                    }
+                    out.push(c);
+                }
+            }
+        }
+        out
+    }
+
+    /// The points of the box centred at `center`, or `None` when it holds fewer than
+    /// `min_points` points with normals (estimated before thinning).
+    pub fn patch(&self, cloud: &SceneCloud, center: Point3<f64>) -> Option<BoxPatch> {
+        let p = &self.params;
+        let half = self.half_m();
+        let cam = &cloud.camera;
+        // Pixel rectangle covering the box: project its eight corners.
+        let (mut umin, mut umax, mut vmin, mut vmax) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
+        for corner in 0..8 {
+            let s = |bit: i32| if corner & bit == 0 { -half } else { half };
+            let q = center + Vector3::new(s(1), s(2), s(4));
+            if q.z <= 1e-3 {
+                return None;
+            }
+            let px = cam.project(&q)?;
+            umin = umin.min(px.x);
+            umax = umax.max(px.x);
+            vmin = vmin.min(px.y);
+            vmax = vmax.max(px.y);
+        }
+        let (w, h) = (cloud.width() as f64, cloud.height() as f64);
+        let u0 = umin.round().clamp(0.0, w - 1.0) as usize;
+        let u1 = umax.round().clamp(0.0, w - 1.0) as usize;
+        let v0 = vmin.round().clamp(0.0, h - 1.0) as usize;
+        let v1 = vmax.round().clamp(0.0, h - 1.0) as usize;
+        let area = ((u1 - u0 + 1) * (v1 - v0 + 1)) as f64;
+        // Thin by a pixel step so that at most about `max_points` pixels are read, on the
+        // lattice where normals exist.
+        let g = p.pixel_lattice.max(1);
+        let step = ((area / p.max_points as f64).sqrt().ceil() as usize).max(1);
+        let step = step.div_ceil(g) * g;
+        let (u0, v0) = (u0.div_ceil(g) * g, v0.div_ceil(g) * g);
+        if u0 > u1 || v0 > v1 {
+            return None;
+        }
+        let mut points = Vec::new();
+        let mut normals = Vec::new();
+        let width = cloud.width();
+        for v in (v0..=v1).step_by(step) {
+            for u in (u0..=u1).step_by(step) {
+                let i = v * width + u;
+                let q = cloud.points[i];
+                let d = q - center;
+                if !(d.x.abs() <= half && d.y.abs() <= half && d.z.abs() <= half) {
+                    continue; // also rejects NaN
+                }
+                if let Some(n) = cloud.normals[i] {
+                    points.push(q);
+                    normals.push(n);
+                }
+            }
+        }
+        if points.len() * step * step < p.min_points || points.len() < 3 {
+            return None;
+        }
+        if p.max_normal_coherence < 1.0 {
+            let sum: Vector3<f64> = normals
+                .iter()
+                .map(|n: &Unit<Vector3<f64>>| n.into_inner())
+                .sum();
+            if sum.norm() > p.max_normal_coherence * normals.len() as f64 {
+                return None;
+            }
+        }
+        Some(BoxPatch {
+            center,
+            points,
+            normals,
+        })
+    }
+
+    /// Every accepted box of the frame, in grid order (parallel, order-preserving).
+    pub fn patches(&self, cloud: &SceneCloud, mask: Option<&PruningMask>) -> Vec<BoxPatch> {
+        let centres = self.centres(cloud, mask);
+        centres
+            .into_par_iter()
+            .filter_map(|c| self.patch(cloud, c))
+            .collect()
+    }
+}
+
+impl Stage<(&SceneCloud, Option<&PruningMask>), Vec<BoxPatch>> for SlidingBox {
+    fn name(&self) -> &'static str {
+        "sliding-box"
+    }
+
+    fn run(
+        &self,
+        (cloud, mask): (&SceneCloud, Option<&PruningMask>),
+    ) -> Result<Vec<BoxPatch>, PipelineError> {
+        Ok(self.patches(cloud, mask))
+    }
+}
+
+/// Point counts per stride-sized voxel (voxel `i` is centred on grid node `i · stride`) with a
+/// summed-volume table for O(1) box counts.
+struct VoxelCounts {
+    lo: [i64; 3],
+    hi: [i64; 3],
+    dims: [usize; 3],
+    /// Inclusive prefix sums with a zero border: `(dims + 1)^3` entries.
+    sat: Vec<u32>,
+}
+
+impl VoxelCounts {
+    fn build(cloud: &SceneCloud, p: &SlidingBoxParams) -> Option<Self> {
+        let inv = 1.0 / p.stride_m;
+        let reach = p.max_range_m + p.box_size_m;
+        let idx = |q: &Point3<f64>| {
+            [
+                (q.x * inv).round() as i64,
+                (q.y * inv).round() as i64,
+                (q.z * inv).round() as i64,
+            ]
+        };
+        let mut lo = [i64::MAX; 3];
+        let mut hi = [i64::MIN; 3];
+        let in_reach = |q: &Point3<f64>| q.z.is_finite() && q.z > 0.0 && q.coords.norm() <= reach;
+        for q in cloud.points.iter().filter(|q| in_reach(q)) {
+            let i = idx(q);
+            for a in 0..3 {
+                lo[a] = lo[a].min(i[a]);
+                hi[a] = hi[a].max(i[a]);
+            }
+        }
+        if lo[0] > hi[0] {
+            return None;
+        }
+        let dims = [0, 1, 2].map(|a| (hi[a] - lo[a] + 1) as usize);
+        let (sx, sy) = (dims[0] + 1, dims[1] + 1);
+        let mut sat = vec![0u32; sx * sy * (dims[2] + 1)];
+        let at = |x: usize, y: usize, z: usize| (z * sy + y) * sx + x;
+        for q in cloud.points.iter().filter(|q| in_reach(q)) {
+            let i = idx(q);
+            let (x, y, z) = (
+                (i[0] - lo[0]) as usize + 1,
+                (i[1] - lo[1]) as usize + 1,
+                (i[2] - lo[2]) as usize + 1,
+            );
+            sat[at(x, y, z)] += 1;
+        }
+        for z in 1..=dims[2] {
+            for y in 1..=dims[1] {
+                for x in 1..=dims[0] {
+                    let v = sat[at(x, y, z)] as i64
+                        + sat[at(x - 1, y, z)] as i64
+                        + sat[at(x, y - 1, z)] as i64
+                        + sat[at(x, y, z - 1)] as i64
+                        - sat[at(x - 1, y - 1, z)] as i64
+                        - sat[at(x - 1, y, z - 1)] as i64
+                        - sat[at(x, y - 1, z - 1)] as i64
+                        + sat[at(x - 1, y - 1, z - 1)] as i64;
+                    sat[at(x, y, z)] = v as u32;
+                }
+            }
+        }
+        Some(Self { lo, hi, dims, sat })
+    }
+
+    /// Points in the voxels within `k` of node `i` along every axis.
+    fn count_around(&self, i: [i64; 3], k: i64) -> usize {
+        let (sx, sy) = (self.dims[0] + 1, self.dims[1] + 1);
+        let at = |x: usize, y: usize, z: usize| (z * sy + y) * sx + x;
+        let mut a = [0usize; 3];
+        let mut b = [0usize; 3];
+        for d in 0..3 {
+            let lo = (i[d] - k - self.lo[d]).clamp(0, self.dims[d] as i64);
+            let hi = (i[d] + k - self.lo[d] + 1).clamp(0, self.dims[d] as i64);
+            if hi <= lo {
+                return 0;
+            }
+            a[d] = lo as usize;
+            b[d] = hi as usize;
+        }
+        let s = |x: usize, y: usize, z: usize| self.sat[at(x, y, z)] as i64;
+        let n =
+            s(b[0], b[1], b[2]) - s(a[0], b[1], b[2]) - s(b[0], a[1], b[2]) - s(b[0], b[1], a[2])
+                + s(a[0], a[1], b[2])
+                + s(a[0], b[1], a[2])
+                + s(b[0], a[1], a[2])
+                - s(a[0], a[1], a[2]);
+        n.max(0) as usize
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use pomona_core::PinholeCamera;
+
+    /// A flat wall at `z` seen by a small camera, normals facing the camera.
+    fn wall(z: f64) -> SceneCloud {
+        let camera = PinholeCamera::new(64, 48, 60.0, 60.0, 31.5, 23.5).unwrap();
+        let points: Vec<_> = (0..48 * 64)
+            .map(|i| camera.back_project((i % 64) as f64, (i / 64) as f64, z))
+            .collect();
+        let normals = vec![Some(-Vector3::z_axis()); points.len()];
+        SceneCloud {
+            camera,
+            points,
+            normals,
+        }
+    }
+
+    #[test]
+    fn boxes_sit_just_behind_the_surface() {
+        let params = SlidingBoxParams {
+            min_points: 20,
+            ..Default::default()
+        };
+        let sb = SlidingBox::new(params);
+        let cloud = wall(0.8);
+        let centres = sb.centres(&cloud, None);
+        assert!(!centres.is_empty());
+        for c in &centres {
+            // 20 mm (min_behind_m) to 60 mm (half a box) behind the wall.
+            assert!(c.z >= 0.82 - 1e-9 && c.z <= 0.86 + 1e-9, "{c}");
+        }
+        let patches = sb.patches(&cloud, None);
+        assert!(!patches.is_empty());
+        for p in &patches {
+            assert!(p.points.len() <= 2 * params.max_points);
+            for q in &p.points {
+                assert!((q - p.center).amax() <= 0.06 + 1e-12);
+            }
+        }
+    }
+
+    #[test]
+    fn mask_and_range_reject_boxes() {
+        let sb = SlidingBox::new(SlidingBoxParams {
+            min_points: 20,
+            ..Default::default()
+        });
+        let cloud = wall(0.8);
+        let empty = PruningMask::new(64, 48, vec![false; 64 * 48]).unwrap();
+        assert!(sb.centres(&cloud, Some(&empty)).is_empty());
+        let far = SlidingBox::new(SlidingBoxParams {
+            max_range_m: 0.5,
+            min_points: 20,
+            ..Default::default()
+        });
+        assert!(far.centres(&cloud, None).is_empty());
+    }
+
+    #[test]
+    fn voxel_counts_match_brute_force() {
+        let cloud = wall(0.7);
+        let p = SlidingBoxParams {
+            stride_m: 0.02,
+            ..Default::default()
+        };
+        let vc = VoxelCounts::build(&cloud, &p).unwrap();
+        let node = [0i64, 0, 35];
+        let brute = cloud
+            .points
+            .iter()
+            .filter(|q| {
+                (0..3).all(|a| {
+                    let i = (q[a] / p.stride_m).round() as i64;
+                    (i - node[a]).abs() <= 3
+                })
+            })
+            .count();
+        assert_eq!(vc.count_around(node, 3), brute);
+        assert!(brute > 0);
+    }
+}

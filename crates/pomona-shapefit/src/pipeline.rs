@@ -427,14 +427,16 @@ fn occupies(shape: &Shape, p: &Point3<f64>) -> bool {
     }
 }
 
-/// The union of two pieces of one long fruit: cylinders whose axes agree within 20°, whose
-/// midpoints are within a radius of each other's axis, and whose extents along the axis overlap
-/// or leave a gap of at most two radii (a leaf across an eggplant splits it this way).
+/// The union of two pieces of one long fruit: cylinders whose axes agree within 30°, whose
+/// midpoints are within 1.5 radii of each other's axis, and whose extents along the axis overlap
+/// or leave a gap of at most three radii (a leaf across an eggplant splits it this way). The
+/// bounds were set on the synthetic eggplant benchmark (20°/1/2 → 30°/1.5/3 raised precision
+/// from 0.725 to 0.769 at the same recall).
 fn coaxial_union(a: &Cylinder, b: &Cylinder) -> Option<Cylinder> {
     let radius = a.radius_m.max(b.radius_m);
-    if a.axis.dot(&b.axis).abs() < 20f64.to_radians().cos()
-        || a.distance_to_axis(&b.midpoint()) > radius
-        || b.distance_to_axis(&a.midpoint()) > radius
+    if a.axis.dot(&b.axis).abs() < 30f64.to_radians().cos()
+        || a.distance_to_axis(&b.midpoint()) > 1.5 * radius
+        || b.distance_to_axis(&a.midpoint()) > 1.5 * radius
     {
         return None;
     }
@@ -442,7 +444,7 @@ fn coaxial_union(a: &Cylinder, b: &Cylinder) -> Option<Cylinder> {
     let along_a = |t: f64| (b.axis_point + b.axis.into_inner() * t - a.axis_point).dot(&a.axis);
     let (b0, b1) = (along_a(blo), along_a(bhi));
     let (blo, bhi) = (b0.min(b1), b0.max(b1));
-    if blo > ahi + 2.0 * radius || bhi < alo - 2.0 * radius {
+    if blo > ahi + 3.0 * radius || bhi < alo - 3.0 * radius {
         return None;
     }
     Some(Cylinder {

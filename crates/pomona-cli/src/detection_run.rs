@@ -34,7 +34,8 @@ impl std::fmt::Display for ModelSource {
     }
 }
 
-/// Reads the model for `pipeline`: `model` when given, otherwise the pipeline's built-in one.
+/// Reads the model for `pipeline`: `model` when given, otherwise the pipeline's built-in one
+/// (its depth-only built-in model when the data has no colour and the pipeline ships one).
 ///
 /// # Errors
 /// An unreadable model or one made for another pipeline or format version (naming the file), or
@@ -42,6 +43,7 @@ impl std::fmt::Display for ModelSource {
 pub fn read_model(
     pipeline: &dyn Pipeline,
     model: Option<&Path>,
+    has_color: bool,
 ) -> Result<(ModelFile, ModelSource)> {
     let name = pipeline.name();
     match model {
@@ -50,7 +52,14 @@ pub fn read_model(
             Ok((m, ModelSource::File(path.to_owned())))
         }
         None => {
-            let Some(text) = pipeline.default_model() else {
+            let built_in = if has_color {
+                pipeline.default_model()
+            } else {
+                pipeline
+                    .default_depth_only_model()
+                    .or_else(|| pipeline.default_model())
+            };
+            let Some(text) = built_in else {
                 bail!(
                     "pipeline `{name}` has no built-in model yet; train one with \
                      `pomona train --pipeline {name} --data DIR --out MODEL` and pass it with --model MODEL"

@@ -614,3 +614,30 @@ fn demo_runs_pipelines_with_a_builtin_model() {
         assert!(out.join("blob/pr.png").exists());
     }
 }
+
+#[test]
+fn built_in_shape_fit_detects_with_and_without_colour() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = dir.path().join("data");
+    synth_dataset(&data, 2, 17);
+    for (label, drop_colour) in [("colour", false), ("depth-only", true)] {
+        if drop_colour {
+            std::fs::remove_dir_all(data.join("color")).unwrap();
+        }
+        let out_dir = dir.path().join(label);
+        let out = pomona(&[
+            "detect",
+            "--pipeline",
+            "shape-fit",
+            "--data",
+            data.to_str().unwrap(),
+            "--out",
+            out_dir.to_str().unwrap(),
+        ]);
+        assert!(out.status.success(), "{label}: {}", stderr(&out));
+        let dets = read_detections(&out_dir);
+        assert_eq!(dets.len(), 2, "{label}");
+        assert!(dets.iter().all(|d| d.pipeline == "shape-fit"));
+        assert!(dets.iter().any(|d| !d.detections.is_empty()), "{label}: nothing found");
+    }
+}

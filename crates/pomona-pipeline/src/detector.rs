@@ -94,6 +94,12 @@ pub trait Pipeline: Send + Sync {
         None
     }
 
+    /// A built-in model for frames without colour, for pipelines whose default model uses
+    /// colour; `pomona detect` without `--model` picks it for depth-only datasets.
+    fn default_depth_only_model(&self) -> Option<&'static str> {
+        None
+    }
+
     /// Builds a detector from a model made by [`Pipeline::train`].
     ///
     /// # Errors

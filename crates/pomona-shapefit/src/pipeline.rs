@@ -193,6 +193,10 @@ impl Pipeline for ShapeFitPipeline {
         Some(include_str!("../models/default.json")).filter(|s| !s.trim().is_empty())
     }
 
+    fn default_depth_only_model(&self) -> Option<&'static str> {
+        Some(include_str!("../models/default-depth.json")).filter(|s| !s.trim().is_empty())
+    }
+
     fn train(
         &self,
         frames: &dyn FrameSource,

@@ -213,7 +213,7 @@ pub fn run_with(pipelines: &[Box<dyn Pipeline>], args: &DemoArgs) -> Result<Demo
             without.push(name.to_owned());
             continue;
         }
-        let (model, source) = read_model(pipeline.as_ref(), None)?;
+        let (model, source) = read_model(pipeline.as_ref(), None, true)?;
         let detector = build_detector(pipeline.as_ref(), model, &source, &[])?;
         let det_dir = args.out.join(name).join("detections");
         let ovl_dir = args.out.join(name).join("overlay");

@@ -104,7 +104,7 @@ pub fn run_with(pipelines: &[Box<dyn Pipeline>], args: &DetectArgs) -> Result<De
     let dataset = Dataset::open(&args.data)
         .with_context(|| format!("cannot open dataset {}", args.data.display()))?;
     check_color(pipeline, dataset.has_color(), &args.data)?;
-    let (model, source) = read_model(pipeline, args.model.as_deref())?;
+    let (model, source) = read_model(pipeline, args.model.as_deref(), dataset.has_color())?;
     let detector = build_detector(pipeline, model, &source, &args.set)?;
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create output folder {}", args.out.display()))?;

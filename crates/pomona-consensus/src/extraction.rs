@@ -177,6 +177,10 @@ impl Shape {
 pub struct ShapeExtractionParams {
     /// The MSAC loop (T = 25 mm, d = 2 mm, L = 500).
     pub msac: MsacParams,
+    /// A different MSAC loop for cylinders, when set (for example without early stopping:
+    /// nearly every two-point cylinder sample looks good, so an early stop settles on poor ones).
+    #[serde(default)]
+    pub cylinder_msac: Option<MsacParams>,
     /// Sphere estimator (radius prior).
     pub sphere: SphereEstimatorParams,
     /// Cylinder estimator (radius prior, optional normal-angle test).
@@ -204,6 +208,7 @@ impl ShapeExtractionParams {
         }
         Ok(ShapeExtractor {
             msac: self.msac.check()?,
+            cylinder_msac: self.cylinder_msac.unwrap_or(self.msac).check()?,
             sphere: self.sphere.check()?,
             cylinder: self.cylinder.check()?,
             params: self,
@@ -216,6 +221,7 @@ impl ShapeExtractionParams {
 pub struct ShapeExtractor {
     params: ShapeExtractionParams,
     msac: Msac,
+    cylinder_msac: Msac,
     sphere: SphereEstimator,
     cylinder: CylinderEstimator,
 }
@@ -266,7 +272,7 @@ impl ShapeExtractor {
             }
             ShapeChoice::Cylinder => {
                 Ok(
-                    extract_repeated(&self.msac, &self.cylinder, data, &p.limits, |r| {
+                    extract_repeated(&self.cylinder_msac, &self.cylinder, data, &p.limits, |r| {
                         sampler(r, 1)
                     })?
                     .into_iter()
@@ -300,7 +306,7 @@ impl ShapeExtractor {
                 limits,
             )?;
             let cylinder = accepted(
-                self.msac
+                self.cylinder_msac
                     .fit(&self.cylinder, &subset, &mut sampler(round, 1)),
                 limits,
             )?;

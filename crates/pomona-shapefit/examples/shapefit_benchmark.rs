@@ -5,6 +5,10 @@
 //! ```
 //! Arguments: fruit (pepper|eggplant|guava|apple|orange|mixed), training frames, test frames,
 //! noise (none|low|tof). Prints the evaluation summary and per-stage timings.
+//!
+//! Environment knobs for experiments: `EARLY_STOP=C` (MSAC early-stop confidence; the default
+//! parameters' 0.99 when unset), `GPCD_POINTS=N` (descriptor subsample size), `POMONA_DEBUG=1` (print each positive
+//! detection against its nearest truth fruit; add `POMONA_DEBUG_ALL=1` for every detection).
 
 use std::time::Instant;
 
@@ -64,7 +68,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         FruitChoice::Only(_) => ShapeChoice::Sphere,
         _ => ShapeChoice::Both,
     };
-    pipeline.params.shapes.msac.early_stop_confidence = pipeline_early_stop;
+    if pipeline_early_stop.is_some() {
+        pipeline.params.shapes.msac.early_stop_confidence = pipeline_early_stop;
+    }
     if let Some(m) = max_points {
         pipeline.params.gpcd.max_points = m;
     }

@@ -638,6 +638,9 @@ fn built_in_shape_fit_detects_with_and_without_colour() {
         let dets = read_detections(&out_dir);
         assert_eq!(dets.len(), 2, "{label}");
         assert!(dets.iter().all(|d| d.pipeline == "shape-fit"));
-        assert!(dets.iter().any(|d| !d.detections.is_empty()), "{label}: nothing found");
+        assert!(
+            dets.iter().any(|d| !d.detections.is_empty()),
+            "{label}: nothing found"
+        );
     }
 }

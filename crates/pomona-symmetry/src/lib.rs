@@ -21,6 +21,7 @@
 mod error;
 mod highlight;
 mod mean_shift;
+mod nearest;
 mod nms;
 mod normal_histogram;
 mod params;
@@ -34,6 +35,7 @@ mod viewer_features;
 pub use error::SymmetryError;
 pub use highlight::{orientation_map, HighlightDetector, Highlights, PruningMask};
 pub use mean_shift::mean_shift;
+pub use nearest::PointGrid;
 pub use nms::{non_maximum_suppression, ScoredBox};
 pub use normal_histogram::{normal_histogram, BinnedHistograms, FeatureStage};
 pub use params::{

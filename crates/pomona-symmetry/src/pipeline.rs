@@ -418,8 +418,73 @@ impl Detector for BoxDetector {
 }
 
 /// Stage `classifier`: SVM decision value per described box.
+///
+/// Speed (ours): `SvmClassifier::decision_value` sums each squared distance to a support vector
+/// in one strict left-to-right chain, which the compiler cannot vectorise; here the 168-value
+/// distance uses four independent partial sums, and boxes are taken [`CLASSIFY_BLOCK`] at a time
+/// so that each support vector is read once per block instead of once per box. The value of a
+/// box does not depend on the block it falls in or on the thread count; it differs from
+/// `decision_value` only by rounding (≈ 1e-15 relative); no AP figure in the README changed.
+/// Measured (Kinect v2, 6 frames, 1201 boxes/frame, one thread, old and new code in the same
+/// session): stage 37.4 ms → 16.9 ms per frame (earlier measurement of the old code: 48.2 ms).
 struct Classify<'a> {
     classifier: &'a SvmClassifier,
+}
+
+/// Boxes scored together against each support vector.
+const CLASSIFY_BLOCK: usize = 8;
+
+/// `‖a − b‖²` with four independent partial sums (fixed order, so deterministic).
+fn squared_distance(a: &[f64], b: &[f64]) -> f64 {
+    let mut acc = [0.0f64; 4];
+    let (ca, cb) = (a.chunks_exact(4), b.chunks_exact(4));
+    let (ra, rb) = (ca.remainder(), cb.remainder());
+    for (x, y) in ca.zip(cb) {
+        for k in 0..4 {
+            let d = x[k] - y[k];
+            acc[k] += d * d;
+        }
+    }
+    for (x, y) in ra.iter().zip(rb) {
+        let d = x - y;
+        acc[0] += d * d;
+    }
+    (acc[0] + acc[1]) + (acc[2] + acc[3])
+}
+
+impl Classify<'_> {
+    /// Decision values of a block of raw feature vectors.
+    fn block(&self, rows: &[&Vec<f64>]) -> Result<Vec<f64>, pomona_learn::LearnError> {
+        let c = self.classifier;
+        let n = c.n_features();
+        let scaled: Vec<Vec<f64>> = rows
+            .iter()
+            .map(|x| {
+                if x.len() != n {
+                    return Err(pomona_learn::LearnError::FeatureCount {
+                        expected: n,
+                        found: x.len(),
+                    });
+                }
+                match &c.scaler {
+                    Some(s) => {
+                        let mut out = vec![0.0; n];
+                        s.transform_row(x, &mut out)?;
+                        Ok(out)
+                    }
+                    None => Ok(x.to_vec()),
+                }
+            })
+            .collect::<Result<_, _>>()?;
+        let svm = &c.svm;
+        let mut sums = vec![0.0; rows.len()];
+        for (sv, coef) in svm.support_vectors.chunks_exact(n).zip(&svm.coef) {
+            for (sum, x) in sums.iter_mut().zip(&scaled) {
+                *sum += coef * (-svm.gamma * squared_distance(sv, x)).exp();
+            }
+        }
+        Ok(sums.into_iter().map(|s| s - svm.rho).collect())
+    }
 }
 
 impl Stage<&[Option<Vec<f64>>], Vec<Option<f64>>> for Classify<'_> {
@@ -428,14 +493,20 @@ impl Stage<&[Option<Vec<f64>>], Vec<Option<f64>>> for Classify<'_> {
     }
 
     fn run(&self, features: &[Option<Vec<f64>>]) -> Result<Vec<Option<f64>>, PipelineError> {
-        features
-            .par_iter()
-            .map(|f| match f {
-                Some(f) => self.classifier.decision_value(f).map(Some),
-                None => Ok(None),
-            })
+        let described: Vec<&Vec<f64>> = features.iter().flatten().collect();
+        let values: Vec<f64> = described
+            .par_chunks(CLASSIFY_BLOCK)
+            .map(|rows| self.block(rows))
             .collect::<Result<Vec<_>, _>>()
-            .map_err(PipelineError::from)
+            .map_err(PipelineError::from)?
+            .into_iter()
+            .flatten()
+            .collect();
+        let mut values = values.into_iter();
+        Ok(features
+            .iter()
+            .map(|f| f.as_ref().and_then(|_| values.next()))
+            .collect())
     }
 }
 
@@ -602,4 +673,53 @@ fn train(
     let stage_params =
         serde_json::to_value(params).map_err(|e| PipelineError::StageParams(e.to_string()))?;
     Ok(ModelFile::new(name, stage_params, &search.model))
+}
+
+#[cfg(test)]
+mod classify_tests {
+    use super::*;
+    use pomona_learn::RbfSvm;
+    use rand::{Rng, SeedableRng};
+
+    #[test]
+    fn blocked_decision_values_match_the_classifier() {
+        let mut rng = ChaCha8Rng::seed_from_u64(5);
+        for n in [10, 168] {
+            let n_sv = 37;
+            let svm = RbfSvm {
+                n_features: n,
+                gamma: 0.05,
+                rho: 0.3,
+                support_vectors: (0..n * n_sv).map(|_| rng.gen_range(-1.0..1.0)).collect(),
+                coef: (0..n_sv).map(|i| if i < 20 { -0.7 } else { 0.9 }).collect(),
+                n_support_negative: 20,
+                n_support_positive: n_sv - 20,
+                probability: None,
+            };
+            let classifier = SvmClassifier {
+                scaler: None,
+                svm,
+                info: None,
+            };
+            let features: Vec<Option<Vec<f64>>> = (0..29)
+                .map(|i| (i % 4 != 1).then(|| (0..n).map(|_| rng.gen_range(-1.0..1.0)).collect()))
+                .collect();
+            let scores = Classify {
+                classifier: &classifier,
+            }
+            .run(&features)
+            .unwrap();
+            assert_eq!(scores.len(), features.len());
+            for (f, s) in features.iter().zip(&scores) {
+                match (f, s) {
+                    (Some(f), Some(s)) => {
+                        let expected = classifier.decision_value(f).unwrap();
+                        assert!((s - expected).abs() <= 1e-12 * (1.0 + expected.abs()));
+                    }
+                    (None, None) => {}
+                    _ => panic!("described boxes and scores do not line up"),
+                }
+            }
+        }
+    }
 }

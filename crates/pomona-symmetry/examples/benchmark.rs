@@ -9,11 +9,14 @@
 //! ```
 //!
 //! Options:
-//! * data: `--camera kinect-v2|sr4000|d435`, `--noise none|low|tof`, `--green F`, `--train N`,
+//! * data: `--camera kinect-v2|sr4000|d435`, `--noise none|low|tof`, `--fruit pepper|mixed`
+//!   (mixed: one kind per frame), `--green F`, `--train N`,
 //!   `--test N`, `--seed S`, `--splits K` (K independent train/test datasets with seeds S, S+1,
 //!   …; mean ± sd at the end);
 //! * runs: `--threads T` (detection timing; training always uses every core), `--variants a,b`
-//!   from `symmetry`, `fixed`, `viewer`, each optionally suffixed `+pruning`, `--quality N`
+//!   from `symmetry`, `fixed`, `viewer`, each optionally suffixed `+pruning` and (symmetry only)
+//!   `+cascade` (the fixed-frame pre-filter, threshold `--cascade-min S`, default −1; without
+//!   the suffix the cascade is off, the paper's detector), `--quality N`
 //!   (noise-free frames for the plane-quality figure, 0 to skip), `--folds K`;
 //! * parameters: `--negatives N` (per frame), `--nms M`, `--bandwidth M`, `--stride M`,
 //!   `--min-behind M`, `--coherence C`, `--lattice G`, `--score-points N`, `--refinements N`,
@@ -33,7 +36,7 @@ use pomona_symmetry::{
     BoxDetector, FrameKind, MergeKind, PruningState, SlidingBox, StageParams, SymmetryPipeline,
     SymmetryPlaneSearch, ViewerPosePipeline,
 };
-use pomona_synth::{render, CameraPreset, NoiseModel, SceneSpec};
+use pomona_synth::{render, CameraPreset, FruitChoice, NoiseModel, SceneSpec};
 
 struct MemFrames(Vec<LabelledFrame>);
 
@@ -112,6 +115,7 @@ fn main() {
     merging.bandwidth_m = arg(&args, "--bandwidth", &merging.bandwidth_m.to_string())
         .parse()
         .unwrap();
+    let cascade_min: f64 = arg(&args, "--cascade-min", "-1").parse().unwrap();
     let negatives: usize = arg(&args, "--negatives", "40").parse().unwrap();
     let variants: Vec<String> = arg(&args, "--variants", "symmetry+pruning,fixed+pruning")
         .split(',')
@@ -144,10 +148,15 @@ fn main() {
         .parse()
         .unwrap();
 
+    let fruit = match arg(&args, "--fruit", "pepper") {
+        "mixed" => FruitChoice::Mixed,
+        _ => SceneSpec::default().fruit,
+    };
     let spec = SceneSpec {
         camera: camera.camera(),
         noise,
         green_fraction: green,
+        fruit,
         ..SceneSpec::default()
     };
     println!(
@@ -182,8 +191,9 @@ fn main() {
             .build()
             .unwrap();
         for (vi, v) in variants.iter().enumerate() {
-            let pruning = v.ends_with("+pruning");
-            let mut params = match v.trim_end_matches("+pruning") {
+            let pruning = v.contains("+pruning");
+            let cascade = v.contains("+cascade");
+            let mut params = match v.split('+').next().unwrap_or_default() {
                 "viewer" => StageParams::viewer_pose(),
                 "fixed" => {
                     let mut p = StageParams::symmetry();
@@ -193,6 +203,8 @@ fn main() {
                 _ => StageParams::symmetry(),
             };
             params.highlight.enabled = pruning;
+            params.cascade.enabled = cascade;
+            params.cascade.min_score = cascade_min;
             params.symmetry = sym;
             params.boxes = boxes;
             params.merging = merging;
@@ -217,12 +229,13 @@ fn main() {
             let detector = BoxDetector::from_model(pipeline.name(), &model).unwrap();
             let mut timings = StageTimings::default();
             let mut inputs = Vec::new();
-            let (mut boxes, mut kept) = (0usize, 0.0);
+            let (mut boxes, mut searched, mut kept) = (0usize, 0usize, 0.0);
             let t = Instant::now();
             pool.install(|| {
                 for f in &test {
                     let r = detector.detect_frame(&f.frame, &mut timings).unwrap();
                     boxes += r.boxes;
+                    searched += r.searched;
                     if let PruningState::Applied { kept_fraction, .. } = r.pruning {
                         kept += kept_fraction;
                     }
@@ -237,13 +250,14 @@ fn main() {
             let report = evaluate(&inputs, &spec.camera, &EvalConfig::default()).unwrap();
             println!(
             "\n== {v}: AP@50mm voc11 {:.3} all-point {:.3} | precision {:.3} recall {:.3} at score 0 \
-             | {ms:.1} ms/frame ({threads} thread(s)) | {:.0} boxes/frame | mask keeps {:.0}% | \
+             | {ms:.1} ms/frame ({threads} thread(s)) | {:.0} boxes/frame ({:.0} searched) | mask keeps {:.0}% | \
              train {train_s:.1} s, {} SVs",
             report.ap_voc11.unwrap_or(f64::NAN),
             report.ap.unwrap_or(f64::NAN),
             report.precision.unwrap_or(f64::NAN),
             report.recall.unwrap_or(f64::NAN),
             boxes as f64 / test.len().max(1) as f64,
+            searched as f64 / test.len().max(1) as f64,
             100.0 * kept / test.len().max(1) as f64,
             model.svm.n_support(),
         );

@@ -39,8 +39,8 @@ pub use nearest::PointGrid;
 pub use nms::{non_maximum_suppression, ScoredBox};
 pub use normal_histogram::{normal_histogram, BinnedHistograms, FeatureStage};
 pub use params::{
-    FrameKind, HighlightParams, HistogramParams, MergeKind, MergeParams, SlidingBoxParams,
-    StageParams, SymmetryPlaneParams, TrainingParams,
+    CascadeClassifier, CascadeParams, FrameKind, HighlightParams, HistogramParams, MergeKind,
+    MergeParams, SlidingBoxParams, StageParams, SymmetryPlaneParams, TrainingParams,
 };
 pub use pipeline::{
     BoxDetector, FrameResult, PruningState, Stages, SymmetryPipeline, ViewerPosePipeline, SYMMETRY,
@@ -50,7 +50,7 @@ pub use reference_frame::{
     plane_frame, up, FixedFrame, FrameStage, LocalFrame, ReferenceFrame, SymmetryFrame, ViewerFrame,
 };
 pub use scene_cloud::{NormalStage, SceneCloud};
-pub use sliding_box::{BoxPatch, SlidingBox};
+pub use sliding_box::{BoxCandidate, BoxPatch, SlidingBox};
 pub use symmetry_plane::{
     canonical, is_visible, plane_normal, reflect_normal, reflect_point, SymmetryPlane,
     SymmetryPlaneSearch,

@@ -7,6 +7,7 @@
 //! choices for sweet peppers (70–105 mm wide, 80–120 mm long) and are documented per field.
 
 use pomona_consensus::WindowNormalParams;
+use pomona_learn::{MinMaxScaler, RbfSvm, SvmClassifier};
 use serde::{Deserialize, Serialize};
 
 use crate::error::{check_at_least, check_positive, SymmetryError};
@@ -263,6 +264,63 @@ impl Default for TrainingParams {
     }
 }
 
+/// The detection cascade (ours, for speed; symmetry frame only): every box is first scored by a
+/// second SVM on its *fixed-frame* features, which cost no plane search, and only boxes scoring
+/// at least `min_score` get the symmetry search, symmetry features and the main SVM. Training
+/// fits that SVM on the fixed-frame features of the same training boxes and stores it here, so
+/// the model file stays self-contained. `enabled: false` is seed 000's detector (every box
+/// searched); the crate README gives the speed and AP of both settings.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CascadeParams {
+    /// Whether the fixed-frame pre-filter runs (ignored for the fixed and viewer frames, which
+    /// are cheap already).
+    pub enabled: bool,
+    /// Boxes whose fixed-frame decision value is below this skip the symmetry search.
+    pub min_score: f64,
+    /// The fixed-frame classifier, filled in by training.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub classifier: Option<CascadeClassifier>,
+}
+
+impl Default for CascadeParams {
+    /// Off (the paper's behaviour; also what models from before the cascade load as).
+    fn default() -> Self {
+        Self {
+            enabled: false,
+            min_score: -1.0,
+            classifier: None,
+        }
+    }
+}
+
+/// The cascade's fixed-frame SVM (as in a model file: optional scaler, RBF SVM).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CascadeClassifier {
+    /// Feature scaling learnt in training.
+    pub scaler: Option<MinMaxScaler>,
+    /// The SVM.
+    pub svm: RbfSvm,
+}
+
+impl CascadeClassifier {
+    /// Stores a trained classifier.
+    pub fn from_classifier(c: &SvmClassifier) -> Self {
+        Self {
+            scaler: c.scaler.clone(),
+            svm: c.svm.clone(),
+        }
+    }
+
+    /// The classifier back.
+    pub fn classifier(&self) -> SvmClassifier {
+        SvmClassifier {
+            scaler: self.scaler.clone(),
+            svm: self.svm.clone(),
+            info: None,
+        }
+    }
+}
+
 /// All stage parameters of a `symmetry` or `viewer-pose` detector.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct StageParams {
@@ -284,6 +342,9 @@ pub struct StageParams {
     pub merging: MergeParams,
     /// Training samples.
     pub training: TrainingParams,
+    /// Fixed-frame pre-filter before the symmetry search (absent in older models: off).
+    #[serde(default)]
+    pub cascade: CascadeParams,
 }
 
 impl StageParams {
@@ -299,6 +360,10 @@ impl StageParams {
             histogram: HistogramParams::default(),
             merging: MergeParams::default(),
             training: TrainingParams::default(),
+            cascade: CascadeParams {
+                enabled: true,
+                ..CascadeParams::default()
+            },
         }
     }
 
@@ -307,6 +372,7 @@ impl StageParams {
         Self {
             frame: FrameKind::Viewer,
             merge: MergeKind::MeanShift,
+            cascade: CascadeParams::default(),
             ..Self::symmetry()
         }
     }
@@ -420,6 +486,13 @@ impl StageParams {
                 name: "training.min_visibility",
                 value: t.min_visibility,
                 reason: "must be in [0, 1]",
+            });
+        }
+        if self.cascade.min_score.is_nan() {
+            return Err(SymmetryError::InvalidParameter {
+                name: "cascade.min_score",
+                value: self.cascade.min_score,
+                reason: "must not be NaN",
             });
         }
         self.normals.check()?;

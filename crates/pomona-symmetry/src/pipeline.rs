@@ -1,8 +1,11 @@
 //! The `symmetry` and `viewer-pose` pipelines: training and detection built from the stages.
 //!
 //! Detection per frame (each step a [`Stage`] timed with [`run_stage`]):
-//! `highlight` (pruning mask, colour frames only) → `normals` → `sliding-box` →
-//! `reference-frame` → `features` → `classifier` (SVM decision value per box) → `merge`
+//! `highlight` (pruning mask, colour frames only) → `cloud` (points) → `sliding-box` (box
+//! candidates: early rejection and their pixels) → `normals` (only at those pixels) →
+//! `box-cut` (patches) → `cascade`
+//! (symmetry frame with `cascade.enabled` only: a fixed-frame SVM drops clearly negative boxes)
+//! → `reference-frame` → `features` → `classifier` (SVM decision value per box) → `merge`
 //! (3D NMS or mean shift).
 //!
 //! Training: positives are boxes centred on truth fruit (plus jittered copies, since at detection
@@ -27,11 +30,13 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
+use crate::scene_cloud::CloudStage;
+use crate::sliding_box::BoxCut;
 use crate::{
-    mean_shift, non_maximum_suppression, BoxPatch, FeatureStage, FixedFrame, FrameKind, FrameStage,
-    HighlightDetector, Highlights, LocalFrame, MergeKind, NormalStage, ReferenceFrame, SceneCloud,
-    ScoredBox, SlidingBox, StageParams, SymmetryError, SymmetryFrame, SymmetryPlaneSearch,
-    ViewerFrame,
+    mean_shift, non_maximum_suppression, BoxPatch, CascadeClassifier, FeatureStage, FixedFrame,
+    FrameKind, FrameStage, HighlightDetector, Highlights, LocalFrame, MergeKind, NormalStage,
+    ReferenceFrame, SceneCloud, ScoredBox, SlidingBox, StageParams, SymmetryError, SymmetryFrame,
+    SymmetryPlaneSearch, ViewerFrame,
 };
 
 /// Seed 000's detector: highlight pruning, symmetry frame, normal histograms, SVM, 3D NMS.
@@ -117,6 +122,12 @@ impl Pipeline for SymmetryPipeline {
         false
     }
 
+    /// `models/symmetry.json`, trained by `examples/train_symmetry_defaults.rs` (synthetic
+    /// Kinect v2 frames of mixed fruit, `tof` noise, dataset seed 1000).
+    fn default_model(&self) -> Option<&'static str> {
+        Some(include_str!("../models/symmetry.json")).filter(|s| !s.trim().is_empty())
+    }
+
     fn train(
         &self,
         frames: &dyn FrameSource,
@@ -165,6 +176,12 @@ impl Pipeline for ViewerPosePipeline {
         train(VIEWER_POSE, &self.params, frames, options, progress)
     }
 
+    /// `models/viewer-pose.json`, trained by `examples/train_symmetry_defaults.rs` (same frames
+    /// as the `symmetry` default).
+    fn default_model(&self) -> Option<&'static str> {
+        Some(include_str!("../models/viewer-pose.json")).filter(|s| !s.trim().is_empty())
+    }
+
     fn load(&self, model: &ModelFile) -> Result<Box<dyn Detector>, PipelineError> {
         Ok(Box::new(BoxDetector::from_model(VIEWER_POSE, model)?))
     }
@@ -193,8 +210,11 @@ pub struct FrameResult {
     pub detections: Vec<Detection>,
     /// Pruning outcome.
     pub pruning: PruningState,
-    /// Boxes that passed early rejection and were described.
+    /// Boxes that passed early rejection.
     pub boxes: usize,
+    /// Boxes given the full reference frame, features and classifier (fewer than `boxes` when
+    /// the cascade dropped some).
+    pub searched: usize,
     /// Boxes scoring at least `merging.min_score`, before merging.
     pub positives: usize,
 }
@@ -207,6 +227,8 @@ pub struct Stages {
     boxes: SlidingBox,
     frames: FrameStage,
     features: FeatureStage,
+    /// Fixed-frame features, for the cascade (symmetry frame with `cascade.enabled`).
+    cascade_features: Option<FeatureStage>,
 }
 
 impl Stages {
@@ -224,7 +246,10 @@ impl Stages {
             FrameKind::Viewer => Box::new(ViewerFrame),
         };
         let boxes = SlidingBox::new(params.boxes);
+        let cascade_features = (params.cascade.enabled && params.frame == FrameKind::Symmetry)
+            .then(|| FeatureStage::new(FrameKind::Fixed, boxes.half_m(), params.histogram));
         Ok(Self {
+            cascade_features,
             params: params.clone(),
             highlight: HighlightDetector::new(params.highlight.clone()),
             normals: NormalStage::new(params.normals, params.boxes.pixel_lattice)?,
@@ -262,16 +287,73 @@ impl Stages {
     /// Features of explicit boxes (training): patch, frame, features; boxes that fail any step
     /// are left out.
     pub fn describe_centres(&self, cloud: &SceneCloud, centres: &[Point3<f64>]) -> Vec<Vec<f64>> {
+        self.describe_centres_with_cascade(cloud, centres).0
+    }
+
+    /// [`Stages::describe_centres`], plus the fixed-frame features of every box with a patch
+    /// when the cascade is on (its training samples; empty otherwise).
+    pub fn describe_centres_with_cascade(
+        &self,
+        cloud: &SceneCloud,
+        centres: &[Point3<f64>],
+    ) -> (Vec<Vec<f64>>, Vec<Vec<f64>>) {
         let patches: Vec<BoxPatch> = centres
             .par_iter()
             .filter_map(|&c| self.boxes.patch(cloud, c))
             .collect();
         let frames = self.frames.frames(&patches);
-        self.features
+        let main = self
+            .features
             .features(&patches, &frames)
             .into_iter()
             .flatten()
-            .collect()
+            .collect();
+        let cascade = match &self.cascade_features {
+            Some(fs) => patches
+                .iter()
+                .filter_map(|p| {
+                    FixedFrame
+                        .frame(p, &Point3::origin())
+                        .map(|f| fs.describe(p, &f))
+                })
+                .collect(),
+            None => Vec::new(),
+        };
+        (main, cascade)
+    }
+}
+
+/// Stage `cascade`: fixed-frame features and decision value per box; keeps the boxes scoring at
+/// least `min_score` (see [`crate::CascadeParams`]).
+struct Cascade<'a> {
+    classifier: &'a SvmClassifier,
+    features: &'a FeatureStage,
+    min_score: f64,
+}
+
+impl Stage<Vec<BoxPatch>, Vec<BoxPatch>> for Cascade<'_> {
+    fn name(&self) -> &'static str {
+        "cascade"
+    }
+
+    fn run(&self, patches: Vec<BoxPatch>) -> Result<Vec<BoxPatch>, PipelineError> {
+        let features: Vec<Option<Vec<f64>>> = patches
+            .par_iter()
+            .map(|p| {
+                FixedFrame
+                    .frame(p, &Point3::origin())
+                    .map(|f| self.features.describe(p, &f))
+            })
+            .collect();
+        let scores = Classify {
+            classifier: self.classifier,
+        }
+        .run(&features)?;
+        Ok(patches
+            .into_iter()
+            .zip(scores)
+            .filter_map(|(p, s)| s.is_some_and(|s| s >= self.min_score).then_some(p))
+            .collect())
     }
 }
 
@@ -280,6 +362,8 @@ pub struct BoxDetector {
     name: &'static str,
     stages: Stages,
     classifier: SvmClassifier,
+    /// The cascade's fixed-frame classifier, when the cascade is on.
+    cascade: Option<SvmClassifier>,
     warned_no_color: AtomicBool,
 }
 
@@ -304,10 +388,36 @@ impl BoxDetector {
                 ),
             });
         }
+        let cascade = match (&stages.cascade_features, &params.cascade.classifier) {
+            (None, _) => None,
+            (Some(fs), Some(c)) => {
+                let c = c.classifier();
+                if c.n_features() != fs.feature_len() {
+                    return Err(PipelineError::InvalidParameter {
+                        name: "cascade.classifier".into(),
+                        reason: format!(
+                            "takes {} features, the histogram parameters give {}",
+                            c.n_features(),
+                            fs.feature_len()
+                        ),
+                    });
+                }
+                Some(c)
+            }
+            (Some(_), None) => {
+                return Err(PipelineError::InvalidParameter {
+                    name: "cascade.classifier".into(),
+                    reason: "the cascade is enabled but the model holds no cascade classifier \
+                             (retrain, or set cascade.enabled to false)"
+                        .into(),
+                })
+            }
+        };
         Ok(Self {
             name,
             stages,
             classifier,
+            cascade,
             warned_no_color: AtomicBool::new(false),
         })
     }
@@ -342,9 +452,24 @@ impl BoxDetector {
                 self.name
             );
         }
-        let cloud = run_stage(&s.normals, frame, timings)?;
+        // Normals only where some box reads them (exact; see `scene_cloud.rs`).
+        let (points, mut cloud) = run_stage(&CloudStage(&s.normals), frame, timings)?;
         let mask = highlights.as_ref().map(|h| &h.mask);
-        let patches = run_stage(&s.boxes, (&cloud, mask), timings)?;
+        let candidates = run_stage(&s.boxes, (&cloud, mask), timings)?;
+        cloud.normals = run_stage(&s.normals, (&points, candidates.as_slice()), timings)?;
+        let patches = run_stage(&BoxCut(&s.boxes), (&cloud, candidates.as_slice()), timings)?;
+        let candidates = patches.len();
+        let patches = match (&self.cascade, &s.cascade_features) {
+            (Some(classifier), Some(features)) => {
+                let cascade = Cascade {
+                    classifier,
+                    features,
+                    min_score: s.params.cascade.min_score,
+                };
+                run_stage(&cascade, patches, timings)?
+            }
+            _ => patches,
+        };
         let frames = run_stage(&s.frames, patches.as_slice(), timings)?;
         let features = run_stage(
             &s.features,
@@ -388,7 +513,8 @@ impl BoxDetector {
         Ok(FrameResult {
             detections,
             pruning,
-            boxes: patches.len(),
+            boxes: candidates,
+            searched: patches.len(),
             positives: positives.len(),
         })
     }
@@ -536,8 +662,14 @@ impl Stage<&[ScoredBox], Vec<ScoredBox>> for Merge {
     }
 }
 
-/// Positive and negative feature vectors of one training frame.
-type FrameSamples = (Vec<Vec<f64>>, Vec<Vec<f64>>);
+/// Positive and negative feature vectors of one training frame, for the main classifier and
+/// (empty unless the cascade is on) for the cascade's fixed-frame classifier.
+struct FrameSamples {
+    positives: Vec<Vec<f64>>,
+    negatives: Vec<Vec<f64>>,
+    cascade_positives: Vec<Vec<f64>>,
+    cascade_negatives: Vec<Vec<f64>>,
+}
 
 /// Positive and negative feature vectors of one training frame.
 fn frame_samples(
@@ -590,9 +722,15 @@ fn frame_samples(
     }
     let mut candidates = pick(&mut rng, far, p.training.negatives_per_frame);
     candidates.extend(pick(&mut rng, near, p.training.hard_negatives_per_frame));
-    let positives = stages.describe_centres(&cloud, &positive_centres);
-    let negatives = stages.describe_centres(&cloud, &candidates);
-    Ok((positives, negatives))
+    let (positives, cascade_positives) =
+        stages.describe_centres_with_cascade(&cloud, &positive_centres);
+    let (negatives, cascade_negatives) = stages.describe_centres_with_cascade(&cloud, &candidates);
+    Ok(FrameSamples {
+        positives,
+        negatives,
+        cascade_positives,
+        cascade_negatives,
+    })
 }
 
 /// A seeded random subset of `items` of size at most `n` (partial Fisher–Yates).
@@ -625,22 +763,43 @@ fn train(
             r
         })
         .collect::<Result<_, _>>()?;
-    let mut rows = Vec::new();
-    let mut labels = Vec::new();
-    for (pos, neg) in per_frame {
-        labels.extend(std::iter::repeat_n(true, pos.len()));
-        rows.extend(pos);
-        labels.extend(std::iter::repeat_n(false, neg.len()));
-        rows.extend(neg);
+    let mut main = (Vec::new(), Vec::new());
+    let mut cascade = (Vec::new(), Vec::new());
+    for f in per_frame {
+        main.0.extend(f.positives);
+        main.1.extend(f.negatives);
+        cascade.0.extend(f.cascade_positives);
+        cascade.1.extend(f.cascade_negatives);
     }
-    let n_pos = labels.iter().filter(|&&l| l).count();
-    let n_neg = labels.len() - n_pos;
+    let model = fit_classifier(name, main, options)?;
+    let mut params = params.clone();
+    if stages.cascade_features.is_some() {
+        let c = fit_classifier(name, cascade, options)?;
+        params.cascade.classifier = Some(CascadeClassifier::from_classifier(&c));
+    }
+    let stage_params =
+        serde_json::to_value(&params).map_err(|e| PipelineError::StageParams(e.to_string()))?;
+    Ok(ModelFile::new(name, stage_params, &model))
+}
+
+/// RBF C-SVC on positive and negative rows, by cross-validated grid search (balanced class
+/// weights, balanced accuracy).
+fn fit_classifier(
+    name: &'static str,
+    (positives, negatives): (Vec<Vec<f64>>, Vec<Vec<f64>>),
+    options: &TrainOptions,
+) -> Result<SvmClassifier, PipelineError> {
+    let (n_pos, n_neg) = (positives.len(), negatives.len());
     if n_pos < 2 || n_neg < 2 {
         return Err(PipelineError::NotEnoughTrainingData {
             pipeline: name,
             reason: format!("{n_pos} positive and {n_neg} negative boxes (need 2 of each)"),
         });
     }
+    let mut labels = vec![true; n_pos];
+    labels.extend(std::iter::repeat_n(false, n_neg));
+    let mut rows = positives;
+    rows.extend(negatives);
     let data = TrainingSet::from_rows(&rows, labels)?;
     let folds = options.folds.clamp(2, n_pos.min(n_neg));
     let grid = if options.full_grid {
@@ -670,9 +829,7 @@ fn train(
     }
     .check()?
     .fit(&data)?;
-    let stage_params =
-        serde_json::to_value(params).map_err(|e| PipelineError::StageParams(e.to_string()))?;
-    Ok(ModelFile::new(name, stage_params, &search.model))
+    Ok(search.model)
 }
 
 #[cfg(test)]

@@ -33,6 +33,19 @@ pub struct BoxPatch {
     pub normals: Vec<Unit<Vector3<f64>>>,
 }
 
+/// A box that passed early rejection, before normals are known: its centre and the pixels
+/// (row-major indices, thinned) whose points lie inside it. Detection estimates normals only at
+/// the union of these pixels, then [`SlidingBox::cut`]s the boxes.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BoxCandidate {
+    /// Box centre, camera frame, metres.
+    pub center: Point3<f64>,
+    /// Pixels whose points lie inside the box (thinned by `step`).
+    pub pixels: Vec<u32>,
+    /// The thinning step, pixels.
+    step: usize,
+}
+
 /// Cuts boxes out of a [`SceneCloud`]; stage `sliding-box`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SlidingBox {
@@ -105,6 +118,14 @@ impl SlidingBox {
     /// The points of the box centred at `center`, or `None` when it holds fewer than
     /// `min_points` points with normals (estimated before thinning).
     pub fn patch(&self, cloud: &SceneCloud, center: Point3<f64>) -> Option<BoxPatch> {
+        self.candidate(cloud, center)
+            .and_then(|c| self.cut(cloud, &c))
+    }
+
+    /// The pixels of the box centred at `center` (normals are not read), or `None` when even
+    /// counting every point inside it the box has fewer than `min_points` (estimated before
+    /// thinning) — a box [`SlidingBox::cut`] would reject whatever the normals.
+    pub fn candidate(&self, cloud: &SceneCloud, center: Point3<f64>) -> Option<BoxCandidate> {
         let p = &self.params;
         let half = self.half_m();
         let cam = &cloud.camera;
@@ -137,21 +158,39 @@ impl SlidingBox {
         if u0 > u1 || v0 > v1 {
             return None;
         }
-        let mut points = Vec::new();
-        let mut normals = Vec::new();
+        let mut pixels = Vec::new();
         let width = cloud.width();
         for v in (v0..=v1).step_by(step) {
             for u in (u0..=u1).step_by(step) {
                 let i = v * width + u;
-                let q = cloud.points[i];
-                let d = q - center;
-                if !(d.x.abs() <= half && d.y.abs() <= half && d.z.abs() <= half) {
-                    continue; // also rejects NaN
+                let d = cloud.points[i] - center;
+                if d.x.abs() <= half && d.y.abs() <= half && d.z.abs() <= half {
+                    pixels.push(i as u32); // NaN fails the test above
                 }
-                if let Some(n) = cloud.normals[i] {
-                    points.push(q);
-                    normals.push(n);
-                }
+            }
+        }
+        if pixels.len() * step * step < p.min_points || pixels.len() < 3 {
+            return None;
+        }
+        Some(BoxCandidate {
+            center,
+            pixels,
+            step,
+        })
+    }
+
+    /// The patch of a candidate: its points that have normals, or `None` when fewer than
+    /// `min_points` (estimated before thinning) remain, or the box is flat
+    /// (`max_normal_coherence`).
+    pub fn cut(&self, cloud: &SceneCloud, candidate: &BoxCandidate) -> Option<BoxPatch> {
+        let p = &self.params;
+        let step = candidate.step;
+        let mut points = Vec::with_capacity(candidate.pixels.len());
+        let mut normals = Vec::with_capacity(candidate.pixels.len());
+        for &i in &candidate.pixels {
+            if let Some(n) = cloud.normals[i as usize] {
+                points.push(cloud.points[i as usize]);
+                normals.push(n);
             }
         }
         if points.len() * step * step < p.min_points || points.len() < 3 {
@@ -167,10 +206,28 @@ impl SlidingBox {
             }
         }
         Some(BoxPatch {
-            center,
+            center: candidate.center,
             points,
             normals,
         })
+    }
+
+    /// Candidates of every box passing rules 1–3 and 5, in grid order (parallel,
+    /// order-preserving); no normal is read.
+    pub fn candidates(&self, cloud: &SceneCloud, mask: Option<&PruningMask>) -> Vec<BoxCandidate> {
+        self.centres(cloud, mask)
+            .into_par_iter()
+            .filter_map(|c| self.candidate(cloud, c))
+            .collect()
+    }
+
+    /// Patches of `candidates` (parallel, order-preserving), once the cloud has normals at
+    /// their pixels.
+    pub fn cut_all(&self, cloud: &SceneCloud, candidates: &[BoxCandidate]) -> Vec<BoxPatch> {
+        candidates
+            .par_iter()
+            .filter_map(|c| self.cut(cloud, c))
+            .collect()
     }
 
     /// Every accepted box of the frame, in grid order (parallel, order-preserving).
@@ -183,7 +240,8 @@ impl SlidingBox {
     }
 }
 
-impl Stage<(&SceneCloud, Option<&PruningMask>), Vec<BoxPatch>> for SlidingBox {
+/// Stage `sliding-box` of detection: the candidates (early rejection and pixels, no normals).
+impl Stage<(&SceneCloud, Option<&PruningMask>), Vec<BoxCandidate>> for SlidingBox {
     fn name(&self) -> &'static str {
         "sliding-box"
     }
@@ -191,8 +249,24 @@ impl Stage<(&SceneCloud, Option<&PruningMask>), Vec<BoxPatch>> for SlidingBox {
     fn run(
         &self,
         (cloud, mask): (&SceneCloud, Option<&PruningMask>),
+    ) -> Result<Vec<BoxCandidate>, PipelineError> {
+        Ok(self.candidates(cloud, mask))
+    }
+}
+
+/// Stage `box-cut` of detection: candidates → patches once normals are known.
+pub(crate) struct BoxCut<'a>(pub(crate) &'a SlidingBox);
+
+impl Stage<(&SceneCloud, &[BoxCandidate]), Vec<BoxPatch>> for BoxCut<'_> {
+    fn name(&self) -> &'static str {
+        "box-cut"
+    }
+
+    fn run(
+        &self,
+        (cloud, candidates): (&SceneCloud, &[BoxCandidate]),
     ) -> Result<Vec<BoxPatch>, PipelineError> {
-        Ok(self.patches(cloud, mask))
+        Ok(self.0.cut_all(cloud, candidates))
     }
 }
 

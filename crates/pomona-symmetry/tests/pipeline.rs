@@ -23,6 +23,21 @@ impl FrameSource for MemFrames {
     }
 }
 
+/// Frames `0..n` of the synthetic dataset `(spec, seed)`.
+fn rendered(spec: &SceneSpec, seed: u64, n: u64) -> Vec<LabelledFrame> {
+    (0..n)
+        .map(|i| {
+            let out = render(&spec.sample_frame(seed, i).unwrap(), &spec.camera).unwrap();
+            LabelledFrame {
+                name: format!("{i:06}"),
+                frame: out.frame,
+                truth: out.truth,
+                mask: Some(out.mask),
+            }
+        })
+        .collect()
+}
+
 /// 12 training and 4 test frames: SR4000, `tof` noise, half the peppers green.
 fn data() -> &'static (MemFrames, Vec<LabelledFrame>) {
     static DATA: OnceLock<(MemFrames, Vec<LabelledFrame>)> = OnceLock::new();
@@ -33,17 +48,7 @@ fn data() -> &'static (MemFrames, Vec<LabelledFrame>) {
             green_fraction: 0.5,
             ..SceneSpec::default()
         };
-        let mut frames: Vec<LabelledFrame> = (0..16)
-            .map(|i| {
-                let out = render(&spec.sample_frame(7, i).unwrap(), &spec.camera).unwrap();
-                LabelledFrame {
-                    name: format!("{i:06}"),
-                    frame: out.frame,
-                    truth: out.truth,
-                    mask: Some(out.mask),
-                }
-            })
-            .collect();
+        let mut frames = rendered(&spec, 7, 16);
         let test = frames.split_off(12);
         (MemFrames(frames), test)
     })
@@ -209,4 +214,74 @@ fn training_does_not_depend_on_thread_count() {
             })
     };
     assert_eq!(train(1), train(2));
+}
+
+/// The models compiled into the binary load and find fruit on mixed Kinect v2 frames that were
+/// not used to train them (dataset seed 1000 is the defaults' own; this is seed 5).
+#[test]
+fn embedded_default_models_load_and_detect() {
+    let spec = SceneSpec {
+        fruit: pomona_synth::FruitChoice::Mixed,
+        camera: CameraPreset::KinectV2.camera(),
+        noise: NoiseModel::Tof,
+        ..SceneSpec::default()
+    };
+    let frames = rendered(&spec, 5, 6);
+    let pipelines: [Box<dyn Pipeline>; 2] = [
+        Box::new(SymmetryPipeline::default()),
+        Box::new(ViewerPosePipeline::default()),
+    ];
+    for p in pipelines {
+        let text = p.default_model().expect("a built-in model");
+        let model = ModelFile::from_json(text, std::path::Path::new("built-in"), p.name()).unwrap();
+        let detector = p.load(&model).unwrap();
+        let found: usize = frames
+            .iter()
+            .map(|f| {
+                detector
+                    .detect(&f.frame, &mut StageTimings::default())
+                    .unwrap()
+                    .len()
+            })
+            .sum();
+        assert!(found > 0, "{}: nothing found", p.name());
+        let ap = ap(detector.as_ref(), &frames);
+        eprintln!("{}: AP {ap}", p.name());
+        assert!(ap > 0.2, "{}: AP {ap}", p.name());
+    }
+}
+
+/// With the cascade off the detector searches every box (seed 000's behaviour); with it on, no
+/// more boxes than that, and the stage shows up in the timings.
+#[test]
+fn cascade_can_be_switched_off() {
+    let model = symmetry_model();
+    assert!(model.stage_params["cascade"]["enabled"].as_bool().unwrap());
+    assert!(model.stage_params["cascade"]["classifier"].is_object());
+    let on = BoxDetector::from_model("symmetry", model).unwrap();
+    let mut off_model = model.clone();
+    off_model.stage_params["cascade"]["enabled"] = serde_json::Value::Bool(false);
+    let off = BoxDetector::from_model("symmetry", &off_model).unwrap();
+    let frame = &data().1[0].frame;
+    let mut t_on = StageTimings::default();
+    let r_on = on.detect_frame(frame, &mut t_on).unwrap();
+    let r_off = off
+        .detect_frame(frame, &mut StageTimings::default())
+        .unwrap();
+    assert_eq!(r_on.boxes, r_off.boxes);
+    assert_eq!(r_off.searched, r_off.boxes);
+    assert!(
+        r_on.searched < r_on.boxes,
+        "{} of {}",
+        r_on.searched,
+        r_on.boxes
+    );
+    assert!(t_on.table().contains("cascade"));
+    // A model claiming a cascade without its classifier is refused.
+    let mut broken = model.clone();
+    broken.stage_params["cascade"]
+        .as_object_mut()
+        .unwrap()
+        .remove("classifier");
+    assert!(BoxDetector::from_model("symmetry", &broken).is_err());
 }

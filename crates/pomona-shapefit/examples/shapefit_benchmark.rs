@@ -7,7 +7,8 @@
 //! noise (none|low|tof). Prints the evaluation summary and per-stage timings.
 //!
 //! Environment knobs for experiments: `EARLY_STOP=C` (MSAC early-stop confidence; the default
-//! parameters' 0.99 when unset), `GPCD_POINTS=N` (descriptor subsample size), `POMONA_DEBUG=1` (print each positive
+//! parameters' 0.99 when unset), `GPCD_POINTS=N` (descriptor subsample size), `LABEL_RULE=mask-majority` (training labels), `CLASS_WEIGHTS=equal` (unweighted SVM,
+//! accuracy as the grid-search criterion), `POMONA_DEBUG=1` (print each positive
 //! detection against its nearest truth fruit; add `POMONA_DEBUG_ALL=1` for every detection).
 
 use std::time::Instant;
@@ -71,6 +72,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     if pipeline_early_stop.is_some() {
         pipeline.params.shapes.msac.early_stop_confidence = pipeline_early_stop;
     }
+    if std::env::var("LABEL_RULE").is_ok_and(|r| r == "mask-majority") {
+        pipeline.params.label_rule = pomona_shapefit::LabelRule::MaskMajority;
+    }
+    if std::env::var("CLASS_WEIGHTS").is_ok_and(|r| r == "equal") {
+        pipeline.params.class_weights = pomona_learn::ClassWeights::Fixed {
+            positive: 1.0,
+            negative: 1.0,
+        };
+        pipeline.params.cv_metric = pomona_learn::CvMetric::Accuracy;
+    }
     if let Some(m) = max_points {
         pipeline.params.gpcd.max_points = m;
     }
@@ -113,9 +124,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 {
                     let e = d.center_m - t.1;
                     println!(
-                        "truth d {:.3} vis {:.2} det d {:.3} err [{:+.3} {:+.3} {:+.3}]",
+                        "{} truth {} d {:.3} vis {:.2} det score {:.2} d {:.3} err [{:+.3} {:+.3} {:+.3}]",
+                        lf.name,
+                        t.0.id,
                         t.0.diameter_m.unwrap_or(0.0),
                         t.0.visibility.unwrap_or(0.0),
+                        d.score,
                         d.diameter_m.unwrap_or(0.0),
                         e.x,
                         e.y,

@@ -73,27 +73,17 @@ pub fn gpcd(
             d2[bin] += 2.0; // both orders
             d2_votes += 2.0;
             // Angular features for both orders of the pair.
-            for (s, t, dir) in [(i, j, d / dist), (j, i, -d / dist)] {
+            for (s, t, along) in [(i, j, d), (j, i, -d)] {
                 let (Some(u), Some(nt)) = (
                     normals.get(s).copied().flatten(),
                     normals.get(t).copied().flatten(),
                 ) else {
                     continue;
                 };
-                let v = dir.cross(&u);
-                let v_norm = v.norm();
-                if v_norm < 1e-12 {
-                    continue;
+                if let Some(b) = angular_bin(&u, &nt, &along, dist) {
+                    angular[b] += 1.0;
+                    angular_votes += 1.0;
                 }
-                let v = v / v_norm;
-                let w = u.cross(&v);
-                let f1 = (1.0 + v.dot(&nt)) / 2.0;
-                let f2 = (1.0 + u.dot(&dir)) / 2.0;
-                let f3 = (std::f64::consts::FRAC_PI_2 + w.dot(&nt).atan2(u.dot(&nt)))
-                    / std::f64::consts::PI;
-                let q = |f: f64| ((3.0 * f).floor() as isize).clamp(0, 2) as usize;
-                angular[q(f1) + 3 * q(f2) + 9 * q(f3)] += 1.0;
-                angular_votes += 1.0;
             }
         }
     }
@@ -118,6 +108,54 @@ pub fn gpcd(
         }
     }
     out
+}
+
+/// Bin of one ordered pair in the 27-bin angular histogram: source normal `u`, target normal
+/// `nt`, `along` = target − source, `dist = |along|`; `None` when `along` is parallel to `u`.
+///
+/// With `v = along × u / |along × u|`, `w = u × v` and the direction `along / dist`, the features
+/// are `f1 = (1 + v·nt)/2`, `f2 = (1 + u·along/dist)/2`, `f3 = (π/2 + atan2(w·nt, u·nt))/π`, each
+/// cut into thirds. Every cut is a sign test, so the bins are found without normalising `v`
+/// or calling `atan2` (the same bins up to rounding at a cut; see
+/// `angular_bins_match_the_formulas`):
+/// `f < 1/3 ⇔ x < −1/3` for `f = (1 + x)/2`, and `f3`'s thirds are `atan2 < −π/6`,
+/// `−π/6 ≤ atan2 < π/6`, `atan2 ≥ π/6`.
+fn angular_bin(
+    u: &Unit<Vector3<f64>>,
+    nt: &Unit<Vector3<f64>>,
+    along: &Vector3<f64>,
+    dist: f64,
+) -> Option<usize> {
+    let v = along.cross(u); // |v| = dist · sin(angle), v/|v| is the frame's v
+    let v_norm2 = v.norm_squared();
+    if v_norm2 < 1e-24 * dist * dist {
+        return None;
+    }
+    // Third of x/scale in [−1, 1] (scale > 0).
+    let third = |x: f64, scale: f64| {
+        if 3.0 * x < -scale {
+            0
+        } else if 3.0 * x < scale {
+            1
+        } else {
+            2
+        }
+    };
+    let v_norm = v_norm2.sqrt();
+    let q1 = third(v.dot(nt), v_norm);
+    let q2 = third(u.dot(along), dist);
+    // u × v is the frame's w scaled by |v|, so scale u·nt alike; atan2's thirds are then
+    // sign and slope tests.
+    let (x, y) = (u.dot(nt) * v_norm, u.cross(&v).dot(nt));
+    const TAN_30: f64 = 0.577_350_269_189_625_8;
+    let q3 = if x > 0.0 && y.abs() < x * TAN_30 {
+        1
+    } else if y < 0.0 {
+        0
+    } else {
+        2
+    };
+    Some(q1 + 3 * q2 + 9 * q3)
 }
 
 #[cfg(test)]
@@ -193,6 +231,42 @@ mod tests {
             .map(|(x, y)| (x - y).abs())
             .sum();
         assert!(l1 > 0.5, "angular histograms should differ, L1 {l1}");
+    }
+
+    /// The bin of one ordered pair computed the direct way (normalised frame, `atan2`).
+    fn bin_by_formula(u: &Vector3<f64>, nt: &Vector3<f64>, along: &Vector3<f64>) -> usize {
+        let dir = along.normalize();
+        let v = dir.cross(u).normalize();
+        let w = u.cross(&v);
+        let f1 = (1.0 + v.dot(nt)) / 2.0;
+        let f2 = (1.0 + u.dot(&dir)) / 2.0;
+        let f3 = (std::f64::consts::FRAC_PI_2 + w.dot(nt).atan2(u.dot(nt))) / std::f64::consts::PI;
+        let q = |f: f64| ((3.0 * f).floor() as isize).clamp(0, 2) as usize;
+        q(f1) + 3 * q(f2) + 9 * q(f3)
+    }
+
+    #[test]
+    fn angular_bins_match_the_formulas() {
+        // Pseudo-random unit vectors and offsets (a fixed LCG: no RNG dependency needed).
+        let mut state = 12345u64;
+        let mut next = || {
+            state = state
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1);
+            ((state >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+        };
+        let mut seen = [false; 27];
+        for _ in 0..20_000 {
+            let u = Unit::new_normalize(Vector3::new(next(), next(), next()));
+            let nt = Unit::new_normalize(Vector3::new(next(), next(), next()));
+            let along = Vector3::new(next(), next(), next()) * 0.05;
+            let b = angular_bin(&u, &nt, &along, along.norm()).unwrap();
+            assert_eq!(b, bin_by_formula(&u, &nt, &along));
+            seen[b] = true;
+        }
+        assert!(seen.iter().all(|&s| s), "every bin is exercised");
+        let u = Vector3::z_axis();
+        assert_eq!(angular_bin(&u, &u, &Vector3::new(0.0, 0.0, 0.1), 0.1), None);
     }
 
     #[test]

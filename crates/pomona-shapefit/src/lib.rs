@@ -25,7 +25,7 @@ pub use candidate::Candidate;
 pub use color_model::{ColorBayes, ColorBayesParams, ColorHistograms, ColorLut};
 pub use gpcd::{gpcd, GpcdParams, GPCD_LEN};
 pub use hsv::rgb_to_hsv;
-pub use params::ShapeFitParams;
+pub use params::{LabelRule, ShapeFitParams};
 pub use pipeline::{ShapeFitDetector, ShapeFitPipeline, ShapeFitStageParams, PIPELINE_NAME};
 pub use region_growing::{grow_regions, RegionGrowingParams};
 pub use synthetic_frames::SyntheticFrames;

@@ -6,6 +6,7 @@ use pomona_consensus::{
     Acceptance, CylinderEstimatorParams, MsacParams, RepeatLimits, ShapeChoice,
     ShapeExtractionParams, SphereEstimatorParams, WindowNormalParams,
 };
+use pomona_learn::{ClassWeights, CvMetric};
 use serde::{Deserialize, Serialize};
 
 use crate::{ColorBayesParams, GpcdParams, RegionGrowingParams};
@@ -28,6 +29,16 @@ pub struct ShapeFitParams {
     /// A training candidate is positive when its centre is within this of a truth centre
     /// (metres; the evaluation tolerance of seed 000, 50 mm).
     pub positive_tolerance_m: f64,
+    /// How training candidates are labelled against truth (absent in older model files:
+    /// training-only, so the default is harmless there).
+    #[serde(default)]
+    pub label_rule: LabelRule,
+    /// Per-class weights of the SVM's `C` in training.
+    #[serde(default = "balanced")]
+    pub class_weights: ClassWeights,
+    /// What the grid search's cross-validation maximises.
+    #[serde(default = "balanced_accuracy")]
+    pub cv_metric: CvMetric,
     /// Training keeps at most this many negative candidates per positive (seeded choice).
     pub max_negatives_per_positive: f64,
     /// Overlapping candidates are merged, keeping the higher score: a centre inside another
@@ -46,10 +57,38 @@ impl Default for ShapeFitParams {
             shapes: default_shapes(),
             gpcd: GpcdParams::default(),
             positive_tolerance_m: 0.05,
+            label_rule: LabelRule::default(),
+            class_weights: balanced(),
+            cv_metric: balanced_accuracy(),
             max_negatives_per_positive: 5.0,
             merge_radius_m: 0.03,
         }
     }
+}
+
+fn balanced() -> ClassWeights {
+    ClassWeights::Balanced
+}
+
+fn balanced_accuracy() -> CvMetric {
+    CvMetric::BalancedAccuracy
+}
+
+/// How a training candidate is labelled positive.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum LabelRule {
+    /// Seed 002's rule, and the evaluation's: the candidate's centre is within
+    /// `positive_tolerance_m` of a truth centre (or, for truth without centres, projects into the
+    /// fruit's box). A piece of a long fruit whose midpoint is far from the fruit's centre is a
+    /// negative, so the classifier learns to reject the pieces the evaluation would count as
+    /// false positives.
+    #[default]
+    CenterWithinTolerance,
+    /// With an instance mask: most of the candidate's inlier pixels lie on one fruit, whatever
+    /// its centre (every piece of a fruit is positive). Falls back to the centre rule without a
+    /// mask.
+    MaskMajority,
 }
 
 /// MSAC as in the paper (T = 25 mm, L = 500) except for three documented changes:

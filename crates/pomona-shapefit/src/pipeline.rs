@@ -4,9 +4,7 @@
 use pomona_consensus::nalgebra::{Point2, Point3};
 use pomona_consensus::{Cylinder, Shape};
 use pomona_core::{Detection, FrameTruth, PinholeCamera, PixelBox, RgbdFrame};
-use pomona_learn::{
-    ClassWeights, CvMetric, GridAxis, GridSearchParams, ModelFile, Samples, SvmParams, TrainingSet,
-};
+use pomona_learn::{GridAxis, GridSearchParams, ModelFile, Samples, SvmParams, TrainingSet};
 use pomona_pipeline::{
     run_stage, Detector, FrameSource, LabelledFrame, Pipeline, PipelineError, StageTimings,
     TrainOptions,
@@ -17,7 +15,7 @@ use serde::{Deserialize, Serialize};
 use crate::stages::{
     ClassifierStage, ColorMaskStage, DescriptorStage, RegionGrowingStage, ShapeStage,
 };
-use crate::{Candidate, ColorBayes, ColorHistograms, ShapeFitParams};
+use crate::{Candidate, ColorBayes, ColorHistograms, LabelRule, ShapeFitParams};
 
 /// Name of the pipeline on the command line and in model files.
 pub const PIPELINE_NAME: &str = "shape-fit";
@@ -61,13 +59,10 @@ fn color_histograms(lf: &LabelledFrame, bins: usize) -> ColorHistograms {
     h
 }
 
-/// Training label of a candidate. With an instance mask: most of its inlier pixels lie on one
-/// fruit (exact, and right for pieces of long fruit whose centre is far from the fruit's).
-/// Otherwise: its centre is within the tolerance of a truth centre, or (truth without centre)
-/// projects into the fruit's box.
-fn label(c: &Candidate, lf: &LabelledFrame, tolerance_m: f64) -> bool {
-    match &lf.mask {
-        Some(mask) => {
+/// Training label of a candidate under `rule` (see [`LabelRule`]).
+fn label(c: &Candidate, lf: &LabelledFrame, tolerance_m: f64, rule: LabelRule) -> bool {
+    match (&lf.mask, rule) {
+        (Some(mask), LabelRule::MaskMajority) => {
             let ids = mask.as_slice();
             let mut counts = std::collections::HashMap::<u16, usize>::new();
             for &p in &c.pixels {
@@ -77,7 +72,7 @@ fn label(c: &Candidate, lf: &LabelledFrame, tolerance_m: f64) -> bool {
             }
             counts.values().any(|&n| 2 * n > c.pixels.len())
         }
-        None => is_positive(&c.shape.center(), &lf.truth, lf.frame.camera(), tolerance_m),
+        _ => is_positive(&c.shape.center(), &lf.truth, lf.frame.camera(), tolerance_m),
     }
 }
 
@@ -267,7 +262,14 @@ impl Pipeline for ShapeFitPipeline {
                 }
                 let labels = candidates
                     .iter()
-                    .map(|c| label(c, &lf, stage_params.params.positive_tolerance_m))
+                    .map(|c| {
+                        label(
+                            c,
+                            &lf,
+                            stage_params.params.positive_tolerance_m,
+                            stage_params.params.label_rule,
+                        )
+                    })
                     .collect();
                 progress(
                     done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1,
@@ -318,9 +320,9 @@ impl Pipeline for ShapeFitPipeline {
             folds: options.folds,
             fine: options.full_grid,
             seed: options.seed,
-            metric: CvMetric::BalancedAccuracy,
+            metric: stage_params.params.cv_metric,
             base: SvmParams::default()
-                .class_weights(ClassWeights::Balanced)
+                .class_weights(stage_params.params.class_weights)
                 .seed(options.seed),
         }
         .check()?

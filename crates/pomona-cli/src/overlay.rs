@@ -1,5 +1,5 @@
 //! Overlay images: truth and detections drawn on a frame's colour image, for looking at what a
-//! detector did (`pomona demo`).
+//! detector did (`pomona demo`, `pomona detect --overlay`).
 //!
 //! Truth fruit: green — a cross at the projected centre and a circle of the projected diameter
 //! (`r = fx · d/2 / z`); truth that evaluation ignores (visibility below the threshold) is drawn
@@ -16,6 +16,7 @@ use anyhow::{anyhow, bail, Result};
 use plotters::prelude::*;
 use plotters::style::{register_font, FontStyle};
 use pomona_core::{ColorImage, DepthImage, Detection, FrameTruth, PinholeCamera};
+use pomona_io::Dataset;
 
 /// Radius, pixels, of a detection without a diameter.
 const NO_SIZE_RADIUS_PX: i32 = 6;
@@ -29,6 +30,19 @@ fn font_ready() -> bool {
     *READY.get_or_init(|| {
         register_font("sans-serif", FontStyle::Normal, dejavu::sans::regular()).is_ok()
     })
+}
+
+/// What an overlay of `frame` is drawn on (its colour image, or its depth as grey) and its truth.
+///
+/// # Errors
+/// The dataset's errors reading the frame or its truth, naming the file.
+pub fn view_of(dataset: &Dataset, frame: &str) -> Result<(ColorImage, Option<FrameTruth>)> {
+    let rgbd = dataset.load_frame(frame)?;
+    let image = match rgbd.color() {
+        Some(c) => c.clone(),
+        None => depth_as_gray(rgbd.depth()),
+    };
+    Ok((image, dataset.load_truth(frame)?))
 }
 
 /// Depth as a grey image (near = bright, no reading = black), for frames without colour.

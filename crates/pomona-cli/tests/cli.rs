@@ -266,6 +266,7 @@ fn detect_args(
         timings: true,
         threads: None,
         set: Vec::new(),
+        overlay: None,
     }
 }
 
@@ -344,12 +345,23 @@ fn train_detect_eval_through_an_injected_pipeline() {
         d.detections
     );
 
-    // Same files with one thread.
+    // Same files with one thread; --overlay draws one PNG of the frame's size per frame.
     let det1 = dir.path().join("det1");
     let mut one = detect_args("blob", Some(&model), &test_ds, &det1);
     one.threads = Some(1);
+    let overlays = dir.path().join("overlays");
+    one.overlay = Some(overlays.clone());
     detect::run_with(&pipelines, &one).unwrap();
     assert_eq!(read_detections(&det1), files);
+    let ds = pomona_io::Dataset::open(&test_ds).unwrap();
+    let color = ds.load_color("000000").unwrap().unwrap();
+    let png = pomona_io::read_color_image(
+        &overlays.join("000000.png"),
+        (color.width(), color.height()),
+    )
+    .unwrap();
+    assert_ne!(png, color, "something is drawn");
+    assert_eq!(std::fs::read_dir(&overlays).unwrap().count(), 4);
 
     // The binary evaluates what the library wrote.
     let report = dir.path().join("report.json");

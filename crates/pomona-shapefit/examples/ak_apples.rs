@@ -5,6 +5,12 @@
 //! ```sh
 //! cargo run --release -p pomona-shapefit --example ak_apples -- ../shared/data/ak-apples
 //! ```
+//!
+//! Knobs (environment): `RIM_PX`, `RADIUS_MM=lo,hi`, `COST_MM`, `REFINE_MM`, `INLIER_MM`,
+//! `EARLY_STOP` (a confidence, or anything else for none), `POMONA_DEBUG=1` (each located apple
+//! against its nearest detection), `AK_DIAG=1` (first, a free-radius sphere fitted to the depth
+//! points of each truth box's inner 60 %, the points the truth centres were derived from: how
+//! large the data says the apples are).
 
 use pomona_eval::{evaluate, EvalConfig, FrameInput};
 use pomona_io::Dataset;
@@ -26,8 +32,28 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     // sphere's radius (within 0.6 rad), which keeps spheres from swelling over neighbouring
     // leaves; on noisy time-of-flight synthetic data the same check hurts.
     pipeline.params.shapes.sphere.max_normal_deviation_rad = Some(0.6);
+    if let Ok(r) = std::env::var("RIM_PX") {
+        pipeline.params.regions.rim_px = r.parse()?;
+    }
+    if let Ok(r) = std::env::var("RADIUS_MM") {
+        let (lo, hi) = r.split_once(',').ok_or("RADIUS_MM=lo,hi")?;
+        pipeline.params.shapes.sphere.radius_range_m =
+            (lo.parse::<f64>()? / 1000.0, hi.parse::<f64>()? / 1000.0);
+    }
+    if let Ok(t) = std::env::var("COST_MM") {
+        pipeline.params.shapes.msac.cost_threshold_m = t.parse::<f64>()? / 1000.0;
+    }
+    if let Ok(t) = std::env::var("REFINE_MM") {
+        pipeline.params.shapes.msac.refine_threshold_m = Some(t.parse::<f64>()? / 1000.0);
+    }
+    if let Ok(c) = std::env::var("EARLY_STOP") {
+        pipeline.params.shapes.msac.early_stop_confidence = c.parse::<f64>().ok();
+    }
     if let Ok(t) = std::env::var("INLIER_MM") {
         pipeline.params.shapes.msac.inlier_threshold_m = t.parse::<f64>()? / 1000.0;
+    }
+    if std::env::var_os("AK_DIAG").is_some() {
+        sphere_fits_on_truth_boxes(&all)?;
     }
     let mut inputs = Vec::new();
     let mut timings = StageTimings::default();
@@ -45,6 +71,29 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let lf = all.load(test)?;
         let detections = detector.detect(&lf.frame, &mut timings)?;
         println!("{}: {} detections", lf.name, detections.len());
+        if std::env::var_os("POMONA_DEBUG").is_some() {
+            // Each located truth apple against its nearest detection with a positive score.
+            for t in &lf.truth.fruits {
+                let Some(c) = t.center_m else { continue };
+                let nearest = detections
+                    .iter()
+                    .filter(|d| d.score >= 0.0)
+                    .min_by(|a, b| (a.center_m - c).norm().total_cmp(&(b.center_m - c).norm()));
+                if let Some(d) = nearest.filter(|d| (d.center_m - c).norm() < 0.05) {
+                    let e = d.center_m - c;
+                    println!(
+                        "  {} d {:.1} mm → {:.1} mm, z {:.2} m, err [{:+.1} {:+.1} {:+.1}] mm",
+                        t.id,
+                        1e3 * t.diameter_m.unwrap_or(0.0),
+                        1e3 * d.diameter_m.unwrap_or(0.0),
+                        c.z,
+                        1e3 * e.x,
+                        1e3 * e.y,
+                        1e3 * e.z
+                    );
+                }
+            }
+        }
         inputs.push(FrameInput {
             frame: lf.name,
             truth: lf.truth,
@@ -62,5 +111,50 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     )?;
     println!("{}", report.to_markdown());
     println!("{}", timings.table());
+    Ok(())
+}
+
+/// Fits a free-radius sphere to the depth points of each truth box's inner 60 % and prints its
+/// diameter against the caliper's: the bias any sphere fit on this depth inherits.
+fn sphere_fits_on_truth_boxes(all: &DatasetFrames) -> Result<(), Box<dyn std::error::Error>> {
+    let mut errors = Vec::new();
+    for i in 0..all.len() {
+        let lf = all.load(i)?;
+        let camera = *lf.frame.camera();
+        for t in &lf.truth.fruits {
+            let (Some(b), Some(d)) = (t.bbox_px, t.diameter_m) else {
+                continue;
+            };
+            let (cu, cv) = ((b.xmin + b.xmax) / 2.0, (b.ymin + b.ymax) / 2.0);
+            let (hu, hv) = (0.3 * b.width(), 0.3 * (b.ymax - b.ymin));
+            let mut points = Vec::new();
+            for v in (cv - hv).ceil() as u32..=(cv + hv).floor() as u32 {
+                for u in (cu - hu).ceil() as u32..=(cu + hu).floor() as u32 {
+                    if let Some(z) = lf.frame.depth().get(u, v).filter(|z| z.is_finite()) {
+                        points.push(camera.back_project(u as f64, v as f64, f64::from(z)));
+                    }
+                }
+            }
+            if let Some(s) = pomona_consensus::Sphere::fit_least_squares(&points) {
+                println!(
+                    "  {} {}: caliper {:.1} mm, free fit {:.1} mm over {} points",
+                    lf.name,
+                    t.id,
+                    1e3 * d,
+                    2e3 * s.radius_m,
+                    points.len()
+                );
+                errors.push(2.0 * s.radius_m - d);
+            }
+        }
+    }
+    errors.sort_by(f64::total_cmp);
+    if !errors.is_empty() {
+        println!(
+            "free-fit diameter minus caliper: median {:+.1} mm over {} boxes",
+            1e3 * errors[errors.len() / 2],
+            errors.len()
+        );
+    }
     Ok(())
 }

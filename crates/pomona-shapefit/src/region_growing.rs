@@ -19,6 +19,13 @@ pub struct RegionGrowingParams {
     /// keeps the same solid angle — the same fruit at the same distance — whatever the sensor's
     /// resolution or field of view.
     pub reference_focal_px: f64,
+    /// Pixels within this many pixels (8-neighbour steps) of a cluster's outline are dropped
+    /// after the size test (not in the paper; 0 = off). Depth at a silhouette mixes the fruit
+    /// and what lies behind it (time-of-flight flying pixels, depth registered to a
+    /// higher-resolution colour camera), which pulls points backwards and swells fitted
+    /// spheres; the rim is where that happens. Absent in older model files (then 0).
+    #[serde(default)]
+    pub rim_px: usize,
 }
 
 impl Default for RegionGrowingParams {
@@ -27,6 +34,7 @@ impl Default for RegionGrowingParams {
             max_step_m: 0.005,
             min_pixels: 150,
             reference_focal_px: 365.0,
+            rim_px: 0,
         }
     }
 }
@@ -96,7 +104,43 @@ pub fn grow_regions(
             clusters.push(cluster);
         }
     }
+    if params.rim_px > 0 {
+        for cluster in &mut clusters {
+            *cluster = erode(width, height, cluster, params.rim_px);
+        }
+        clusters.retain(|c| !c.is_empty());
+    }
     clusters
+}
+
+/// The pixels of a sorted `cluster` whose every pixel within `rim_px` 8-neighbour steps (a
+/// square of side `2 rim_px + 1`) belongs to the cluster; sorted.
+fn erode(width: usize, height: usize, cluster: &[usize], rim_px: usize) -> Vec<usize> {
+    let r = rim_px as isize;
+    let mut current = cluster.to_vec();
+    // Separable: a (2r+1)-pixel erosion along rows, then along columns.
+    for (du, dv) in [(1isize, 0isize), (0, 1)] {
+        let previous = std::mem::take(&mut current);
+        let run_inside = |i: usize| {
+            let (u, v) = ((i % width) as isize, (i / width) as isize);
+            (-r..=r).all(|k| {
+                let (nu, nv) = (u + k * du, v + k * dv);
+                nu >= 0
+                    && nv >= 0
+                    && nu < width as isize
+                    && nv < height as isize
+                    && previous
+                        .binary_search(&(nv as usize * width + nu as usize))
+                        .is_ok()
+            })
+        };
+        current = previous
+            .iter()
+            .copied()
+            .filter(|&i| run_inside(i))
+            .collect();
+    }
+    current
 }
 
 #[cfg(test)]
@@ -152,6 +196,34 @@ mod tests {
         };
         let c = grow_regions(3, 3, 365.0, &diag, &[true; 9], &p);
         assert_eq!(c, vec![vec![0, 4, 8]]);
+    }
+
+    #[test]
+    fn rim_erosion_drops_outline_pixels() {
+        // A 10×8 block in a 20×20 image: one pixel of rim leaves 8×6, two leave 6×4.
+        let (w, h) = (20, 20);
+        let mut depth = vec![f32::NAN; w * h];
+        for v in 5..13 {
+            for u in 3..13 {
+                depth[v * w + u] = 0.8;
+            }
+        }
+        let keep = vec![true; w * h];
+        let with_rim = |rim_px| RegionGrowingParams {
+            min_pixels: 10,
+            rim_px,
+            ..Default::default()
+        };
+        let full = grow_regions(w, h, 365.0, &depth, &keep, &with_rim(0));
+        assert_eq!(full[0].len(), 80);
+        let one = grow_regions(w, h, 365.0, &depth, &keep, &with_rim(1));
+        assert_eq!(one[0].len(), 48);
+        assert!(one[0].contains(&(6 * w + 4)) && !one[0].contains(&(5 * w + 4)));
+        assert_eq!(
+            grow_regions(w, h, 365.0, &depth, &keep, &with_rim(2))[0].len(),
+            24
+        );
+        assert!(grow_regions(w, h, 365.0, &depth, &keep, &with_rim(4)).is_empty());
     }
 
     #[test]

@@ -18,7 +18,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{bail, Context, Result};
-use pomona_core::{ColorImage, FrameDetections, FrameTruth};
+use pomona_core::FrameDetections;
 use pomona_eval::{evaluate, write_pr_plot, EvalConfig, EvalReport, FrameInput};
 use pomona_io::Dataset;
 use pomona_pipeline::Pipeline;
@@ -29,7 +29,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::detection_run::{build_detector, detect_frames, read_model, thread_pool};
-use crate::overlay::{depth_as_gray, write_overlay};
+use crate::overlay::{view_of, write_overlay};
 use crate::pipelines;
 use crate::progress::progress_bar;
 
@@ -181,14 +181,7 @@ pub fn run_with(pipelines: &[Box<dyn Pipeline>], args: &DemoArgs) -> Result<Demo
     let overlay_dir = args.out.join("overlay");
     std::fs::create_dir_all(&overlay_dir)
         .with_context(|| format!("cannot create {}", overlay_dir.display()))?;
-    let load_view = |stem: &str| -> Result<(ColorImage, Option<FrameTruth>)> {
-        let frame = dataset.load_frame(stem)?;
-        let image = match frame.color() {
-            Some(c) => c.clone(),
-            None => depth_as_gray(frame.depth()),
-        };
-        Ok((image, dataset.load_truth(stem)?))
-    };
+    let load_view = |stem: &str| view_of(&dataset, stem);
     pool.install(|| {
         stems.par_iter().try_for_each(|stem| -> Result<()> {
             let (image, truth) = load_view(stem)?;

@@ -8,13 +8,14 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{Context, Result};
-use pomona_core::FrameDetections;
+use pomona_core::{Detection, FrameDetections};
 use pomona_io::Dataset;
 use pomona_pipeline::{Pipeline, StageTimings};
 
 use crate::detection_run::{
     build_detector, check_color, detect_frames, read_model, thread_pool, ModelSource,
 };
+use crate::overlay::{view_of, write_overlay};
 use crate::params::{parse_override, ParamOverride};
 use crate::pipelines;
 use crate::progress::progress_bar;
@@ -43,6 +44,10 @@ pub struct DetectArgs {
     /// Override a stage parameter of the model, KEY=VALUE (dotted keys, JSON values); repeat.
     #[arg(long = "set", value_name = "KEY=VALUE", value_parser = parse_override)]
     pub set: Vec<ParamOverride>,
+    /// Also draw each frame's truth (green) and detections scoring at least 0 (red, score and
+    /// diameter) on its colour image, written as `<DIR>/<frame>.png`.
+    #[arg(long, value_name = "DIR")]
+    pub overlay: Option<PathBuf>,
 }
 
 /// What a detection run did.
@@ -108,6 +113,10 @@ pub fn run_with(pipelines: &[Box<dyn Pipeline>], args: &DetectArgs) -> Result<De
     let detector = build_detector(pipeline, model, &source, &args.set)?;
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create output folder {}", args.out.display()))?;
+    if let Some(dir) = &args.overlay {
+        std::fs::create_dir_all(dir)
+            .with_context(|| format!("cannot create overlay folder {}", dir.display()))?;
+    }
 
     let frames = dataset.frames();
     let pool = thread_pool(args.threads.map(|n| n as usize))?;
@@ -130,6 +139,24 @@ pub fn run_with(pipelines: &[Box<dyn Pipeline>], args: &DetectArgs) -> Result<De
                     detections: result.detections.clone(),
                 };
                 pomona_io::write_json(&args.out.join(format!("{}.json", frames[i])), &record)?;
+                if let Some(dir) = &args.overlay {
+                    let (image, truth) = view_of(&dataset, &frames[i])?;
+                    let shown: Vec<Detection> = result
+                        .detections
+                        .iter()
+                        .filter(|d| d.score >= 0.0)
+                        .cloned()
+                        .collect();
+                    write_overlay(
+                        &dir.join(format!("{}.png", frames[i])),
+                        &image,
+                        dataset.camera(),
+                        truth.as_ref(),
+                        &shown,
+                        0.5,
+                        &format!("{}: {name} ({} scoring ≥ 0)", frames[i], shown.len()),
+                    )?;
+                }
                 Ok(())
             },
             &|| bar.inc(1),

@@ -7,6 +7,7 @@
 
 pub mod commands;
 pub mod detection_run;
+pub mod error_line;
 pub mod overlay;
 pub mod params;
 pub mod pipelines;

@@ -57,8 +57,7 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(err) => {
-            // One line: the context chain joined, outermost first.
-            eprintln!("error: {err:#}");
+            eprintln!("error: {}", pomona_cli::error_line::error_line(&err));
             ExitCode::FAILURE
         }
     }

@@ -201,22 +201,9 @@ impl Cylinder {
             };
             let mut jtj = SMatrix::<f64, 5, 5>::zeros();
             let mut jtr = SVector::<f64, 5>::zeros();
-            const H: f64 = 1e-7;
-            let shifted: Vec<[Cylinder; 2]> = (0..5)
-                .map(|k| {
-                    let mut d = SVector::<f64, 5>::zeros();
-                    d[k] = H;
-                    let plus = apply(&d);
-                    d[k] = -H;
-                    [plus, apply(&d)]
-                })
-                .collect();
             for p in points {
+                let j = current.residual_jacobian(p, &u, &v);
                 let r = current.signed_distance(p);
-                let mut j = SVector::<f64, 5>::zeros();
-                for (k, [plus, minus]) in shifted.iter().enumerate() {
-                    j[k] = (plus.signed_distance(p) - minus.signed_distance(p)) / (2.0 * H);
-                }
                 jtj += j * j.transpose();
                 jtr += j * r;
             }
@@ -240,6 +227,30 @@ impl Cylinder {
             }
         }
         Some(current)
+    }
+}
+
+impl Cylinder {
+    /// Gradient of `signed_distance(p)` with respect to the refinement's five parameters at
+    /// zero (axis tilt towards `u` and `v`, axis shift along `u` and `v`, radius), for `u`, `v`
+    /// orthonormal and perpendicular to the axis. With `q = p − axis_point`, `t = q·a` and the
+    /// radial vector `w` of length `ρ`: tilting the axis by `δ u` moves `w` by `−δ (t u + (q·u) a)`,
+    /// shifting it by `δ u` moves `w` by `−δ u`, so the derivatives are `−t (q·u)/ρ`,
+    /// `−t (q·v)/ρ`, `−(q·u)/ρ`, `−(q·v)/ρ` and `−1` (only the radius term on the axis itself).
+    fn residual_jacobian(
+        &self,
+        p: &Point3<f64>,
+        u: &Vector3<f64>,
+        v: &Vector3<f64>,
+    ) -> SVector<f64, 5> {
+        let q = p - self.axis_point;
+        let rho = self.radial_vector(p).norm();
+        if !(rho > 0.0) {
+            return SVector::<f64, 5>::new(0.0, 0.0, 0.0, 0.0, -1.0);
+        }
+        let t = q.dot(&self.axis);
+        let (qu, qv) = (q.dot(u) / rho, q.dot(v) / rho);
+        SVector::<f64, 5>::new(-t * qu, -t * qv, -qu, -qv, -1.0)
     }
 }
 
@@ -381,6 +392,42 @@ impl<D: Positioned> Estimator<D> for CylinderEstimator {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn residual_jacobian_matches_finite_differences() {
+        let c = Cylinder {
+            axis_point: Point3::new(0.01, -0.02, 0.9),
+            axis: Unit::new_normalize(Vector3::new(0.2, 1.0, -0.3)),
+            radius_m: 0.03,
+            extent_m: None,
+        };
+        let a = c.axis.into_inner();
+        let u = a.cross(&Vector3::x()).normalize();
+        let v = a.cross(&u);
+        // The refinement's parameterisation.
+        let apply = |d: &SVector<f64, 5>| Cylinder {
+            axis_point: c.axis_point + u * d[2] + v * d[3],
+            axis: Unit::new_normalize(a + u * d[0] + v * d[1]),
+            radius_m: c.radius_m + d[4],
+            extent_m: None,
+        };
+        for p in [
+            Point3::new(0.04, 0.05, 0.92),
+            Point3::new(-0.03, -0.1, 0.85),
+            Point3::new(0.0, 0.2, 1.0),
+        ] {
+            let j = c.residual_jacobian(&p, &u, &v);
+            for k in 0..5 {
+                let h = 1e-6;
+                let mut d = SVector::<f64, 5>::zeros();
+                d[k] = h;
+                let plus = apply(&d).signed_distance(&p);
+                d[k] = -h;
+                let numeric = (plus - apply(&d).signed_distance(&p)) / (2.0 * h);
+                assert!((j[k] - numeric).abs() < 1e-6, "d{k}: {} vs {numeric}", j[k]);
+            }
+        }
+    }
 
     #[test]
     fn two_exact_oriented_points_recover_the_cylinder() {

@@ -245,7 +245,7 @@ impl Cylinder {
     ) -> SVector<f64, 5> {
         let q = p - self.axis_point;
         let rho = self.radial_vector(p).norm();
-        if !(rho > 0.0) {
+        if rho.is_nan() || rho <= 0.0 {
             return SVector::<f64, 5>::new(0.0, 0.0, 0.0, 0.0, -1.0);
         }
         let t = q.dot(&self.axis);

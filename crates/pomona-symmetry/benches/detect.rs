@@ -1,5 +1,7 @@
 //! Criterion bench of the detectors on one synthetic Kinect v2 frame (512×424, `tof` noise),
-//! single-threaded (a one-thread rayon pool), per pipeline variant, plus the symmetry-plane
+//! single-threaded (a one-thread rayon pool), per pipeline variant (`symmetry+pruning+cascade`
+//! is the default `symmetry` pipeline; without `+cascade` every box gets the symmetry search,
+//! as in seed 000), plus the symmetry-plane
 //! search on one box and the normal estimators (window vs kd-tree) on the whole frame.
 //!
 //! `cargo bench -p pomona-symmetry --bench detect`
@@ -62,13 +64,20 @@ fn bench(c: &mut Criterion) {
         .unwrap();
     let mut group = c.benchmark_group("detect-kinect-v2-1-thread");
     group.sample_size(10);
+    let symmetry = |pruning: bool, cascade: bool| -> Box<dyn Pipeline> {
+        let mut p = StageParams::symmetry();
+        p.highlight.enabled = pruning;
+        p.cascade.enabled = cascade;
+        Box::new(SymmetryPipeline::with_params(p))
+    };
     let variants: Vec<(&str, Box<dyn Pipeline>)> = vec![
-        ("symmetry+pruning", Box::new(SymmetryPipeline::default())),
-        ("symmetry", {
-            let mut p = StageParams::symmetry();
-            p.highlight.enabled = false;
-            Box::new(SymmetryPipeline::with_params(p))
-        }),
+        (
+            "symmetry+pruning+cascade",
+            Box::new(SymmetryPipeline::default()),
+        ),
+        ("symmetry+cascade", symmetry(false, true)),
+        ("symmetry+pruning", symmetry(true, false)),
+        ("symmetry", symmetry(false, false)),
         ("fixed+pruning", Box::new(SymmetryPipeline::fixed())),
         ("fixed", {
             let mut p = StageParams::symmetry();

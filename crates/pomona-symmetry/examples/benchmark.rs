@@ -15,7 +15,7 @@
 //!   …; mean ± sd at the end);
 //! * runs: `--threads T` (detection timing; training always uses every core), `--variants a,b`
 //!   from `symmetry`, `fixed`, `viewer`, each optionally suffixed `+pruning` and (symmetry only)
-//!   `+cascade` (the fixed-frame pre-filter, threshold `--cascade-min S`, default −1; without
+//!   `+cascade` (the fixed-frame pre-filter, threshold `--cascade-min S`, default 0, bins `--cascade-bins D,A,F,S` (distance, angle, θ, φ bins); without
 //!   the suffix the cascade is off, the paper's detector), `--quality N`
 //!   (noise-free frames for the plane-quality figure, 0 to skip), `--folds K`;
 //! * parameters: `--negatives N` (per frame), `--nms M`, `--bandwidth M`, `--stride M`,
@@ -115,7 +115,15 @@ fn main() {
     merging.bandwidth_m = arg(&args, "--bandwidth", &merging.bandwidth_m.to_string())
         .parse()
         .unwrap();
-    let cascade_min: f64 = arg(&args, "--cascade-min", "-1").parse().unwrap();
+    let cascade_min: f64 = arg(&args, "--cascade-min", "0").parse().unwrap();
+    let mut cascade_bins = StageParams::symmetry().cascade.histogram;
+    if let Some(b) = args.iter().position(|a| a == "--cascade-bins") {
+        let v: Vec<usize> = args[b + 1].split(',').map(|x| x.parse().unwrap()).collect();
+        cascade_bins.distance_bins = v[0];
+        cascade_bins.angle_bins = v[1];
+        cascade_bins.first_bins = v[2];
+        cascade_bins.second_bins = v[3];
+    }
     let negatives: usize = arg(&args, "--negatives", "40").parse().unwrap();
     let variants: Vec<String> = arg(&args, "--variants", "symmetry+pruning,fixed+pruning")
         .split(',')
@@ -205,6 +213,7 @@ fn main() {
             params.highlight.enabled = pruning;
             params.cascade.enabled = cascade;
             params.cascade.min_score = cascade_min;
+            params.cascade.histogram = cascade_bins;
             params.symmetry = sym;
             params.boxes = boxes;
             params.merging = merging;

@@ -106,20 +106,16 @@ impl HighlightDetector {
                 && (sat <= 0.0 || (max / sat) as f64 > p.ratio_threshold);
         }
         let candidates = candidate.iter().filter(|&&c| c).count();
-        let orientation = orientation_map(&value, w, h, p.sigma_px);
-        let doubled: Vec<(f32, f32)> = orientation
-            .iter()
-            .map(|&o| {
-                if o.is_nan() {
-                    (f32::NAN, f32::NAN)
-                } else {
-                    ((2.0 * o).cos(), (2.0 * o).sin())
-                }
-            })
-            .collect();
+        // Orientations are read only on the circles around candidates, so they are computed
+        // there, on first use (exact: the same per-pixel formula as `orientation_map`).
+        let tensor = structure_tensor(&value, w, h, p.sigma_px);
+        let mut doubled = vec![NOT_YET; w * h];
         let circles = self.circles();
         let highlight: Vec<bool> = (0..w * h)
-            .map(|i| candidate[i] && self.is_pinwheel(&doubled, &circles, w, h, i % w, i / w))
+            .map(|i| {
+                candidate[i]
+                    && self.is_pinwheel(&tensor, &mut doubled, &circles, w, h, i % w, i / w)
+            })
             .collect();
         let markers = component_centres(&highlight, w, h);
         let r = self.radius_px(camera);
@@ -173,10 +169,13 @@ impl HighlightDetector {
             .collect()
     }
 
-    /// Eqs. 3–6 at pixel `(u, v)`; `doubled` holds `(cos 2o, sin 2o)` of the orientation map.
+    /// Eqs. 3–6 at pixel `(u, v)`; `doubled` caches `(cos 2o, sin 2o)` of the orientation map
+    /// ([`NOT_YET`] where not computed yet).
+    #[allow(clippy::too_many_arguments)]
     fn is_pinwheel(
         &self,
-        doubled: &[(f32, f32)],
+        tensor: &StructureTensor,
+        doubled: &mut [(f32, f32)],
         circles: &[Vec<(isize, isize, f32, f32)>],
         w: usize,
         h: usize,
@@ -193,7 +192,11 @@ impl HighlightDetector {
                 if x < 0 || y < 0 || x >= w as isize || y >= h as isize {
                     continue;
                 }
-                let (co, so) = doubled[y as usize * w + x as usize];
+                let k = y as usize * w + x as usize;
+                if doubled[k].0 == NOT_YET.0 {
+                    doubled[k] = doubled_angle(tensor.orientation(k));
+                }
+                let (co, so) = doubled[k];
                 // Eq. 3 (squared) on doubled angles; NaN (no gradient) never agrees.
                 let d2 = (co - ce) * (co - ce) + (so - se) * (so - se);
                 if d2 < t2 {
@@ -225,9 +228,46 @@ impl Stage<&RgbdFrame, Option<Highlights>> for HighlightDetector {
     }
 }
 
+/// Marks an orientation not computed yet (real entries are finite or NaN).
+const NOT_YET: (f32, f32) = (f32::INFINITY, f32::INFINITY);
+
+/// `(cos 2o, sin 2o)` of an orientation, NaN for NaN.
+fn doubled_angle(o: f32) -> (f32, f32) {
+    if o.is_nan() {
+        (f32::NAN, f32::NAN)
+    } else {
+        ((2.0 * o).cos(), (2.0 * o).sin())
+    }
+}
+
+/// The Gaussian-smoothed second-moment matrix of the intensity gradients (Eq. 2), per pixel.
+struct StructureTensor {
+    jxx: Vec<f32>,
+    jxy: Vec<f32>,
+    jyy: Vec<f32>,
+}
+
+impl StructureTensor {
+    /// Dominant gradient orientation in `[0, π)` at pixel `i`, NaN where the gradient vanishes.
+    fn orientation(&self, i: usize) -> f32 {
+        let (a, b, c) = (self.jxx[i], self.jxy[i], self.jyy[i]);
+        if a + c <= 1e-12 {
+            f32::NAN
+        } else {
+            (0.5 * (2.0 * b).atan2(a - c)).rem_euclid(std::f32::consts::PI)
+        }
+    }
+}
+
 /// Dominant gradient orientation in `[0, π)` per pixel (NaN where the gradient vanishes), from
 /// the Gaussian-smoothed second-moment matrix (Eq. 2).
 pub fn orientation_map(intensity: &[f32], w: usize, h: usize, sigma: f64) -> Vec<f32> {
+    let t = structure_tensor(intensity, w, h, sigma);
+    (0..w * h).map(|i| t.orientation(i)).collect()
+}
+
+/// Eq. 2's smoothed second-moment matrix of `intensity`.
+fn structure_tensor(intensity: &[f32], w: usize, h: usize, sigma: f64) -> StructureTensor {
     let at = |x: usize, y: usize| intensity[y * w + x];
     let mut jxx = vec![0f32; w * h];
     let mut jxy = vec![0f32; w * h];
@@ -245,44 +285,50 @@ pub fn orientation_map(intensity: &[f32], w: usize, h: usize, sigma: f64) -> Vec
     for img in [&mut jxx, &mut jxy, &mut jyy] {
         gaussian_blur(img, w, h, sigma);
     }
-    (0..w * h)
-        .map(|i| {
-            let (a, b, c) = (jxx[i], jxy[i], jyy[i]);
-            if a + c <= 1e-12 {
-                f32::NAN
-            } else {
-                (0.5 * (2.0 * b).atan2(a - c)).rem_euclid(std::f32::consts::PI)
-            }
-        })
-        .collect()
+    StructureTensor { jxx, jxy, jyy }
 }
 
 /// Separable Gaussian blur with clamped borders, in place.
+///
+/// Speed (exact): each pass accumulates a whole row at a time, tap by tap, from a row padded
+/// by clamping, so every output pixel gets the same products added in the same order as a
+/// per-pixel loop (bit-for-bit; unit test `blur_matches_the_per_pixel_loop`), but the inner
+/// loop is a straight multiply-add over contiguous rows that the compiler vectorises.
 fn gaussian_blur(img: &mut [f32], w: usize, h: usize, sigma: f64) {
     let radius = (3.0 * sigma).ceil() as isize;
     let kernel: Vec<f32> = (-radius..=radius)
         .map(|k| (-(k * k) as f64 / (2.0 * sigma * sigma)).exp() as f32)
         .collect();
     let norm: f32 = kernel.iter().sum();
+    if w == 0 || h == 0 {
+        return;
+    }
+    let r = radius.max(0) as usize;
     let mut tmp = vec![0f32; w * h];
-    for y in 0..h {
-        for x in 0..w {
-            let mut s = 0.0;
-            for (j, k) in kernel.iter().enumerate() {
-                let xx = (x as isize + j as isize - radius).clamp(0, w as isize - 1) as usize;
-                s += k * img[y * w + xx];
+    let mut padded = vec![0f32; w + 2 * r];
+    for (row, out) in img.chunks_exact(w).zip(tmp.chunks_exact_mut(w)) {
+        for (i, p) in padded.iter_mut().enumerate() {
+            *p = row[(i as isize - radius).clamp(0, w as isize - 1) as usize];
+        }
+        for (j, &k) in kernel.iter().enumerate() {
+            for (o, &v) in out.iter_mut().zip(&padded[j..j + w]) {
+                *o += k * v;
             }
-            tmp[y * w + x] = s / norm;
+        }
+        for o in out.iter_mut() {
+            *o /= norm;
         }
     }
-    for y in 0..h {
-        for x in 0..w {
-            let mut s = 0.0;
-            for (j, k) in kernel.iter().enumerate() {
-                let yy = (y as isize + j as isize - radius).clamp(0, h as isize - 1) as usize;
-                s += k * tmp[yy * w + x];
+    for (y, out) in img.chunks_exact_mut(w).enumerate() {
+        out.fill(0.0);
+        for (j, &k) in kernel.iter().enumerate() {
+            let yy = (y as isize + j as isize - radius).clamp(0, h as isize - 1) as usize;
+            for (o, &v) in out.iter_mut().zip(&tmp[yy * w..(yy + 1) * w]) {
+                *o += k * v;
             }
-            img[y * w + x] = s / norm;
+        }
+        for o in out.iter_mut() {
+            *o /= norm;
         }
     }
 }
@@ -325,6 +371,114 @@ fn component_centres(on: &[bool], w: usize, h: usize) -> Vec<(f64, f64)> {
 
 #[cfg(test)]
 mod tests {
+    /// The blur before the speed-up (per-pixel loops).
+    fn per_pixel_blur(img: &mut [f32], w: usize, h: usize, sigma: f64) {
+        let radius = (3.0 * sigma).ceil() as isize;
+        let kernel: Vec<f32> = (-radius..=radius)
+            .map(|k| (-(k * k) as f64 / (2.0 * sigma * sigma)).exp() as f32)
+            .collect();
+        let norm: f32 = kernel.iter().sum();
+        let mut tmp = vec![0f32; w * h];
+        for y in 0..h {
+            for x in 0..w {
+                let mut s = 0.0;
+                for (j, k) in kernel.iter().enumerate() {
+                    let xx = (x as isize + j as isize - radius).clamp(0, w as isize - 1) as usize;
+                    s += k * img[y * w + xx];
+                }
+                tmp[y * w + x] = s / norm;
+            }
+        }
+        for y in 0..h {
+            for x in 0..w {
+                let mut s = 0.0;
+                for (j, k) in kernel.iter().enumerate() {
+                    let yy = (y as isize + j as isize - radius).clamp(0, h as isize - 1) as usize;
+                    s += k * tmp[yy * w + x];
+                }
+                img[y * w + x] = s / norm;
+            }
+        }
+    }
+
+    /// Highlights with every orientation computed up front (the code before the lazy cache) equal
+    /// those of `detect` on a rendered frame.
+    #[test]
+    fn lazy_orientations_give_the_same_highlights() {
+        use pomona_synth::{render, CameraPreset, NoiseModel, SceneSpec};
+        let spec = SceneSpec {
+            camera: CameraPreset::KinectV2.camera(),
+            noise: NoiseModel::Tof,
+            green_fraction: 0.5,
+            ..SceneSpec::default()
+        };
+        let frame = render(&spec.sample_frame(3, 0).unwrap(), &spec.camera)
+            .unwrap()
+            .frame;
+        let image = frame.color().unwrap();
+        let det = HighlightDetector::new(HighlightParams::default());
+        let got = det.detect(image, frame.camera());
+        let (w, h) = (image.width() as usize, image.height() as usize);
+        let p = &det.params;
+        let value: Vec<f32> = image
+            .pixels()
+            .map(|px| px.iter().copied().max().unwrap_or(0) as f32 / 255.0)
+            .collect();
+        let candidate: Vec<bool> = image
+            .pixels()
+            .zip(&value)
+            .map(|(px, &max)| {
+                let min = px.iter().copied().min().unwrap_or(0) as f32 / 255.0;
+                let sat = if max > 0.0 { (max - min) / max } else { 0.0 };
+                (max as f64) >= p.min_value
+                    && (sat <= 0.0 || (max / sat) as f64 > p.ratio_threshold)
+            })
+            .collect();
+        let mut eager: Vec<(f32, f32)> = orientation_map(&value, w, h, p.sigma_px)
+            .into_iter()
+            .map(doubled_angle)
+            .collect();
+        let unused = StructureTensor {
+            jxx: Vec::new(),
+            jxy: Vec::new(),
+            jyy: Vec::new(),
+        };
+        let circles = det.circles();
+        let highlight: Vec<bool> = (0..w * h)
+            .map(|i| {
+                candidate[i] && det.is_pinwheel(&unused, &mut eager, &circles, w, h, i % w, i / w)
+            })
+            .collect();
+        let markers = component_centres(&highlight, w, h);
+        assert!(markers.len() > 5, "{}", markers.len());
+        assert_eq!(got.markers, markers);
+        assert_eq!(got.candidates, candidate.iter().filter(|&&c| c).count());
+    }
+
+    #[test]
+    fn blur_matches_the_per_pixel_loop() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+        for (w, h, sigma) in [
+            (37, 23, 1.5),
+            (3, 9, 1.5),
+            (64, 2, 0.7),
+            (1, 1, 2.0),
+            (50, 40, 2.5),
+        ] {
+            let img: Vec<f32> = (0..w * h).map(|_| rng.gen_range(0.0..1.0)).collect();
+            let (mut fast, mut slow) = (img.clone(), img);
+            gaussian_blur(&mut fast, w, h, sigma);
+            per_pixel_blur(&mut slow, w, h, sigma);
+            assert!(
+                fast.iter()
+                    .zip(&slow)
+                    .all(|(a, b)| a.to_bits() == b.to_bits()),
+                "{w}x{h}"
+            );
+        }
+    }
+
     use super::*;
 
     /// A dark grey image with a bright Gaussian blob (a highlight) at `(cx, cy)` and a bright

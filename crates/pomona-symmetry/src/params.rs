@@ -275,8 +275,14 @@ pub struct CascadeParams {
     /// Whether the fixed-frame pre-filter runs (ignored for the fixed and viewer frames, which
     /// are cheap already).
     pub enabled: bool,
-    /// Boxes whose fixed-frame decision value is below this skip the symmetry search.
+    /// Boxes whose fixed-frame decision value is below this skip the symmetry search (0, the
+    /// SVM's own boundary: chosen on SR4000 splits 1–2 among −1, −0.5, 0 and 0.5, see the
+    /// README).
     pub min_score: f64,
+    /// Bins of the cascade's fixed-frame features (the cascade's cost is mostly its SVM, in
+    /// proportion to the feature length).
+    #[serde(default)]
+    pub histogram: HistogramParams,
     /// The fixed-frame classifier, filled in by training.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub classifier: Option<CascadeClassifier>,
@@ -287,7 +293,8 @@ impl Default for CascadeParams {
     fn default() -> Self {
         Self {
             enabled: false,
-            min_score: -1.0,
+            min_score: 0.0,
+            histogram: HistogramParams::default(),
             classifier: None,
         }
     }
@@ -465,6 +472,11 @@ impl StageParams {
         check_at_least("histogram.angle_bins", g.angle_bins, 1)?;
         check_at_least("histogram.first_bins", g.first_bins, 1)?;
         check_at_least("histogram.second_bins", g.second_bins, 1)?;
+        let g = &self.cascade.histogram;
+        check_at_least("cascade.histogram.distance_bins", g.distance_bins, 1)?;
+        check_at_least("cascade.histogram.angle_bins", g.angle_bins, 1)?;
+        check_at_least("cascade.histogram.first_bins", g.first_bins, 1)?;
+        check_at_least("cascade.histogram.second_bins", g.second_bins, 1)?;
         let m = &self.merging;
         if m.min_score.is_nan() {
             return Err(SymmetryError::InvalidParameter {

@@ -247,7 +247,7 @@ impl Stages {
         };
         let boxes = SlidingBox::new(params.boxes);
         let cascade_features = (params.cascade.enabled && params.frame == FrameKind::Symmetry)
-            .then(|| FeatureStage::new(FrameKind::Fixed, boxes.half_m(), params.histogram));
+            .then(|| FeatureStage::new(FrameKind::Fixed, boxes.half_m(), params.cascade.histogram));
         Ok(Self {
             cascade_features,
             params: params.clone(),

@@ -8,7 +8,8 @@
 //!
 //! Environment knobs for experiments: `EARLY_STOP=C` (MSAC early-stop confidence; the default
 //! parameters' 0.99 when unset), `GPCD_POINTS=N` (descriptor subsample size), `LABEL_RULE=mask-majority` (training labels), `CLASS_WEIGHTS=equal` (unweighted SVM,
-//! accuracy as the grid-search criterion), `RIM_PX=N` (cluster rim dropped before fitting), `POMONA_DEBUG=1` (print each positive
+//! accuracy as the grid-search criterion), `RIM_PX=N` (cluster rim dropped before fitting),
+//! `MAX_SHAPES=N` (shapes extracted per cluster), `POMONA_DEBUG=1` (print each positive
 //! detection against its nearest truth fruit; add `POMONA_DEBUG_ALL=1` for every detection).
 
 use std::time::Instant;
@@ -81,6 +82,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             negative: 1.0,
         };
         pipeline.params.cv_metric = pomona_learn::CvMetric::Accuracy;
+    }
+    if let Ok(m) = std::env::var("MAX_SHAPES") {
+        pipeline.params.shapes.limits.max_shapes = m.parse()?;
     }
     if let Ok(r) = std::env::var("RIM_PX") {
         pipeline.params.regions.rim_px = r.parse()?;

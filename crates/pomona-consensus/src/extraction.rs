@@ -132,15 +132,20 @@ fn take<M>(fit: Fit<M>, remaining: &mut Vec<usize>) -> Extracted<M> {
     }
 }
 
-/// Which shape models to look for.
+/// Which shape models to look for. Written in kebab-case like every other parameter value
+/// (`"sphere"`); the capitalised names of older model files are still read.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
 pub enum ShapeChoice {
     /// Spheres only (peppers, guavas, apples, oranges).
     #[default]
+    #[serde(alias = "Sphere")]
     Sphere,
     /// Cylinders only (eggplants); needs normals.
+    #[serde(alias = "Cylinder")]
     Cylinder,
     /// Both each round; the accepted one with the lower cost wins.
+    #[serde(alias = "Both")]
     Both,
 }
 

@@ -132,3 +132,25 @@ fn default_shapes() -> ShapeExtractionParams {
         seed: 0,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn shape_choice_is_kebab_case_and_old_names_still_load() {
+        let mut json = serde_json::to_value(ShapeFitParams::default()).unwrap();
+        assert_eq!(json["shapes"]["shapes"], "both");
+        for (old, new) in [
+            ("Sphere", ShapeChoice::Sphere),
+            ("Cylinder", ShapeChoice::Cylinder),
+        ] {
+            json["shapes"]["shapes"] = old.into();
+            let p: ShapeFitParams = serde_json::from_value(json.clone()).unwrap();
+            assert_eq!(p.shapes.shapes, new);
+        }
+        json["shapes"]["shapes"] = "cylinder".into();
+        let p: ShapeFitParams = serde_json::from_value(json).unwrap();
+        assert_eq!(p.shapes.shapes, ShapeChoice::Cylinder);
+    }
+}

@@ -10,12 +10,14 @@
 //! * [`Detector`]: a trained detector: frame in, detections out.
 //! * [`Pipeline`]: a method by name: trains a [`ModelFile`] from labelled frames and loads a
 //!   [`Detector`] from one.
-//! * [`FrameSource`]: labelled frames for training, loaded lazily from datasets.
+//! * [`FrameSource`]: labelled frames for training, loaded lazily from datasets
+//!   ([`DatasetFrames`]) or rendered on demand ([`SyntheticFrames`]).
 
 mod detector;
 mod error;
 mod frame_source;
 mod stage;
+mod synthetic_frames;
 mod timings;
 
 pub use detector::{Detector, Pipeline, TrainOptions};
@@ -23,4 +25,5 @@ pub use error::PipelineError;
 pub use frame_source::{DatasetFrames, FrameSource, LabelledFrame};
 pub use pomona_learn::ModelFile;
 pub use stage::{run_stage, Stage};
+pub use synthetic_frames::SyntheticFrames;
 pub use timings::StageTimings;

@@ -6,8 +6,9 @@
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use pomona_learn::ModelFile;
+use pomona_pipeline::SyntheticFrames;
 use pomona_pipeline::{FrameSource, Pipeline, StageTimings};
-use pomona_shapefit::{ShapeFitPipeline, SyntheticFrames};
+use pomona_shapefit::ShapeFitPipeline;
 use pomona_synth::{FruitChoice, FruitKind, NoiseModel, SceneSpec};
 
 fn detect(c: &mut Criterion) {

@@ -16,8 +16,9 @@ use std::time::Instant;
 
 use pomona_consensus::ShapeChoice;
 use pomona_eval::{evaluate, EvalConfig, FrameInput};
+use pomona_pipeline::SyntheticFrames;
 use pomona_pipeline::{FrameSource, Pipeline, StageTimings, TrainOptions};
-use pomona_shapefit::{ShapeFitPipeline, SyntheticFrames};
+use pomona_shapefit::ShapeFitPipeline;
 use pomona_synth::{FruitChoice, FruitKind, NoiseModel, SceneSpec};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {

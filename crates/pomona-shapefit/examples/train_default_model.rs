@@ -8,8 +8,9 @@
 //! ```
 
 use pomona_core::RgbdFrame;
+use pomona_pipeline::SyntheticFrames;
 use pomona_pipeline::{FrameSource, LabelledFrame, Pipeline, PipelineError, TrainOptions};
-use pomona_shapefit::{ShapeFitPipeline, SyntheticFrames};
+use pomona_shapefit::ShapeFitPipeline;
 use pomona_synth::{FruitChoice, NoiseModel, SceneSpec};
 
 /// Frames rendered for training; seed 1000 is reserved for the default model (tests and

@@ -19,7 +19,6 @@ mod params;
 mod pipeline;
 mod region_growing;
 pub mod stages;
-mod synthetic_frames;
 
 pub use candidate::Candidate;
 pub use color_model::{ColorBayes, ColorBayesParams, ColorHistograms, ColorLut};
@@ -28,4 +27,3 @@ pub use hsv::rgb_to_hsv;
 pub use params::{LabelRule, ShapeFitParams};
 pub use pipeline::{ShapeFitDetector, ShapeFitPipeline, ShapeFitStageParams, PIPELINE_NAME};
 pub use region_growing::{grow_regions, RegionGrowingParams};
-pub use synthetic_frames::SyntheticFrames;

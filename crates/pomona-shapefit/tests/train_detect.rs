@@ -6,10 +6,11 @@
 use pomona_core::RgbdFrame;
 use pomona_eval::{evaluate, EvalConfig, FrameInput};
 use pomona_learn::ModelFile;
+use pomona_pipeline::SyntheticFrames;
 use pomona_pipeline::{
     Detector, FrameSource, LabelledFrame, Pipeline, PipelineError, StageTimings, TrainOptions,
 };
-use pomona_shapefit::{ShapeFitPipeline, SyntheticFrames};
+use pomona_shapefit::ShapeFitPipeline;
 use pomona_synth::{CameraPreset, FruitChoice, FruitKind, NoiseModel, SceneSpec};
 
 fn spec() -> SceneSpec {

@@ -20,8 +20,8 @@
 //! ```
 
 use pomona_learn::ModelFile;
+use pomona_pipeline::SyntheticFrames;
 use pomona_pipeline::{Pipeline, TrainOptions};
-use pomona_shapefit::SyntheticFrames;
 use pomona_symmetry::{SymmetryPipeline, ViewerPosePipeline};
 use pomona_synth::{CameraPreset, FruitChoice, NoiseModel, SceneSpec};
 

@@ -1,7 +1,7 @@
 //! In-memory synthetic training and test frames (a [`FrameSource`] over `pomona-synth`), for the
-//! tests, the benchmark example and the script that trains the embedded default model.
+//! detectors' tests, benchmarks and the examples that train their built-in models.
 
-use pomona_pipeline::{FrameSource, LabelledFrame, PipelineError};
+use crate::{FrameSource, LabelledFrame, PipelineError};
 use pomona_synth::{render, SceneSpec};
 
 /// Frames `first..first + count` of the synthetic dataset `(spec, seed)`, rendered on demand.

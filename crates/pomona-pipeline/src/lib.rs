@@ -19,6 +19,7 @@ mod frame_source;
 mod stage;
 mod synthetic_frames;
 mod timings;
+mod train_params;
 
 pub use detector::{Detector, Pipeline, TrainOptions};
 pub use error::PipelineError;
@@ -27,3 +28,4 @@ pub use pomona_learn::ModelFile;
 pub use stage::{run_stage, Stage};
 pub use synthetic_frames::SyntheticFrames;
 pub use timings::StageTimings;
+pub use train_params::{params_from_json, params_to_json};

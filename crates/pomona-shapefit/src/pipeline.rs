@@ -6,8 +6,8 @@ use pomona_consensus::{Cylinder, Shape};
 use pomona_core::{Detection, FrameTruth, PinholeCamera, PixelBox, RgbdFrame};
 use pomona_learn::{GridAxis, GridSearchParams, ModelFile, Samples, SvmParams, TrainingSet};
 use pomona_pipeline::{
-    run_stage, Detector, FrameSource, LabelledFrame, Pipeline, PipelineError, StageTimings,
-    TrainOptions,
+    params_from_json, params_to_json, run_stage, Detector, FrameSource, LabelledFrame, Pipeline,
+    PipelineError, StageTimings, TrainOptions,
 };
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -169,19 +169,16 @@ impl Pipeline for ShapeFitPipeline {
     }
 
     fn train_params(&self) -> serde_json::Value {
-        serde_json::to_value(&self.params).unwrap_or(serde_json::Value::Null)
+        params_to_json(&self.params)
     }
 
     fn with_train_params(
         &self,
         params: serde_json::Value,
     ) -> Result<Box<dyn Pipeline>, PipelineError> {
-        let params =
-            serde_json::from_value(params).map_err(|e| PipelineError::InvalidParameter {
-                name: "--set".into(),
-                reason: e.to_string(),
-            })?;
-        Ok(Box::new(Self { params }))
+        Ok(Box::new(Self {
+            params: params_from_json(params)?,
+        }))
     }
 
     fn default_model(&self) -> Option<&'static str> {

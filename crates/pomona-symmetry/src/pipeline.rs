@@ -24,7 +24,8 @@ use pomona_learn::{
     TrainingSet,
 };
 use pomona_pipeline::{
-    run_stage, Detector, FrameSource, Pipeline, PipelineError, Stage, StageTimings, TrainOptions,
+    params_from_json, params_to_json, run_stage, Detector, FrameSource, Pipeline, PipelineError,
+    Stage, StageTimings, TrainOptions,
 };
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -103,19 +104,16 @@ impl Pipeline for SymmetryPipeline {
     }
 
     fn train_params(&self) -> serde_json::Value {
-        serde_json::to_value(&self.params).unwrap_or(serde_json::Value::Null)
+        params_to_json(&self.params)
     }
 
     fn with_train_params(
         &self,
         params: serde_json::Value,
     ) -> Result<Box<dyn Pipeline>, PipelineError> {
-        let params =
-            serde_json::from_value(params).map_err(|e| PipelineError::InvalidParameter {
-                name: "--set".into(),
-                reason: e.to_string(),
-            })?;
-        Ok(Box::new(Self { params }))
+        Ok(Box::new(Self {
+            params: params_from_json(params)?,
+        }))
     }
 
     fn needs_color(&self) -> bool {
@@ -148,19 +146,16 @@ impl Pipeline for ViewerPosePipeline {
     }
 
     fn train_params(&self) -> serde_json::Value {
-        serde_json::to_value(&self.params).unwrap_or(serde_json::Value::Null)
+        params_to_json(&self.params)
     }
 
     fn with_train_params(
         &self,
         params: serde_json::Value,
     ) -> Result<Box<dyn Pipeline>, PipelineError> {
-        let params =
-            serde_json::from_value(params).map_err(|e| PipelineError::InvalidParameter {
-                name: "--set".into(),
-                reason: e.to_string(),
-            })?;
-        Ok(Box::new(Self { params }))
+        Ok(Box::new(Self {
+            params: params_from_json(params)?,
+        }))
     }
 
     fn needs_color(&self) -> bool {

@@ -45,6 +45,16 @@ pub fn view_of(dataset: &Dataset, frame: &str) -> Result<(ColorImage, Option<Fra
     Ok((image, dataset.load_truth(frame)?))
 }
 
+/// The detections an overlay shows: those scoring at least `threshold` (below it a detector
+/// has rejected them), in their order.
+pub fn shown(detections: &[Detection], threshold: f64) -> Vec<Detection> {
+    detections
+        .iter()
+        .filter(|d| d.score >= threshold)
+        .cloned()
+        .collect()
+}
+
 /// Depth as a grey image (near = bright, no reading = black), for frames without colour.
 pub fn depth_as_gray(depth: &DepthImage) -> ColorImage {
     let (lo, hi) = depth.range_m().unwrap_or((0.0, 1.0));

@@ -6,7 +6,7 @@
 //! <out>/data/                       the synthetic dataset (pomona synth layout)
 //! <out>/overlay/<frame>.png         the colour image with the truth (green)
 //! <out>/<pipeline>/detections/      one <frame>.json per frame (docs/formats.md)
-//! <out>/<pipeline>/overlay/<frame>.png   truth (green) and detections (red, score | diameter)
+//! <out>/<pipeline>/overlay/<frame>.png   truth (green) and detections scoring ≥ 0 (red, score | diameter)
 //! <out>/<pipeline>/pr.png           precision-recall curve
 //! <out>/report.json                 settings, and per pipeline the evaluation and ms/frame
 //! ```
@@ -29,7 +29,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::detection_run::{build_detector, detect_frames, read_model, thread_pool};
-use crate::overlay::{view_of, write_overlay};
+use crate::overlay::{shown, view_of, write_overlay};
 use crate::pipelines;
 use crate::progress::progress_bar;
 
@@ -243,14 +243,19 @@ pub fn run_with(pipelines: &[Box<dyn Pipeline>], args: &DemoArgs) -> Result<Demo
                 .zip(&frames)
                 .try_for_each(|(stem, (result, _))| -> Result<()> {
                     let (image, truth) = load_view(stem)?;
+                    let shown = shown(&result.detections, config.threshold);
                     write_overlay(
                         &ovl_dir.join(format!("{stem}.png")),
                         &image,
                         &camera,
                         truth.as_ref(),
-                        &result.detections,
+                        &shown,
                         config.min_visibility,
-                        &format!("{stem}: {name} ({} detections)", result.detections.len()),
+                        &format!(
+                            "{stem}: {name} ({} scoring ≥ {})",
+                            shown.len(),
+                            config.threshold
+                        ),
                     )
                 })
         })?;

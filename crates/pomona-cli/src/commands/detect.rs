@@ -8,14 +8,14 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{Context, Result};
-use pomona_core::{Detection, FrameDetections};
+use pomona_core::FrameDetections;
 use pomona_io::Dataset;
 use pomona_pipeline::{Pipeline, StageTimings};
 
 use crate::detection_run::{
     build_detector, check_color, detect_frames, read_model, thread_pool, ModelSource,
 };
-use crate::overlay::{view_of, write_overlay};
+use crate::overlay::{shown, view_of, write_overlay};
 use crate::params::{parse_override, ParamOverride};
 use crate::pipelines;
 use crate::progress::progress_bar;
@@ -141,12 +141,7 @@ pub fn run_with(pipelines: &[Box<dyn Pipeline>], args: &DetectArgs) -> Result<De
                 pomona_io::write_json(&args.out.join(format!("{}.json", frames[i])), &record)?;
                 if let Some(dir) = &args.overlay {
                     let (image, truth) = view_of(&dataset, &frames[i])?;
-                    let shown: Vec<Detection> = result
-                        .detections
-                        .iter()
-                        .filter(|d| d.score >= 0.0)
-                        .cloned()
-                        .collect();
+                    let shown = shown(&result.detections, 0.0);
                     write_overlay(
                         &dir.join(format!("{}.png", frames[i])),
                         &image,

@@ -208,6 +208,51 @@ fn eval_scores_hand_made_detections() {
     assert!((r["center_error_m"]["median"].as_f64().unwrap() - 0.01).abs() < 1e-9);
     assert!((r["diameter_error_m"]["mean_abs"].as_f64().unwrap() - 0.002).abs() < 1e-9);
     assert!(stdout(&out).contains("AP (VOC 11-point)"));
+
+    // --kind: fruit 2 becomes a reference ball; evaluating apples leaves it out (recall 1/1),
+    // and a kind nobody has is a clear error.
+    std::fs::write(
+        dir.path().join("truth/f0.json"),
+        truth.replacen(
+            r#""id": "2", "kind": "apple""#,
+            r#""id": "2", "kind": "reference_ball""#,
+            1,
+        ),
+    )
+    .unwrap();
+    let eval_kind = |kind: &str| {
+        pomona(&[
+            "eval",
+            "--data",
+            dir.path().to_str().unwrap(),
+            "--detections",
+            det_dir.to_str().unwrap(),
+            "--json",
+            report.to_str().unwrap(),
+            "--kind",
+            kind,
+        ])
+    };
+    let out = eval_kind("apple");
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("1 of other kinds left out"),
+        "{}",
+        stderr(&out)
+    );
+    let r: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+    assert_eq!(
+        (r["fruits"].as_u64(), r["recall"].as_f64()),
+        (Some(1), Some(1.0))
+    );
+    let out = eval_kind("pear");
+    assert!(!out.status.success());
+    assert!(
+        stderr(&out).contains("no truth object has kind pear"),
+        "{}",
+        stderr(&out)
+    );
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -38,6 +38,11 @@ pub struct EvalArgs {
     /// Write the precision-recall curve here as a PNG.
     #[arg(long, value_name = "PR.png")]
     pub plot: Option<PathBuf>,
+    /// Evaluate one kind of object (repeat for several): truth of other kinds is left out, as a
+    /// per-class VOC evaluation does, so e.g. `--kind apple` scores apples and not the reference
+    /// balls annotated beside them. Default: every kind.
+    #[arg(long, value_name = "KIND")]
+    pub kind: Vec<String>,
 }
 
 fn warn_frames(frames: &[String], what: &str) {
@@ -95,11 +100,18 @@ pub fn run(args: &EvalArgs) -> Result<()> {
 
     let mut frames = Vec::new();
     let mut without_truth = Vec::new();
+    let (mut kept, mut left_out) = (0usize, 0usize);
     for frame in dataset.frames() {
-        let Some(truth) = dataset.load_truth(frame)? else {
+        let Some(mut truth) = dataset.load_truth(frame)? else {
             without_truth.push(frame.clone());
             continue;
         };
+        if !args.kind.is_empty() {
+            let before = truth.fruits.len();
+            truth.fruits.retain(|f| args.kind.contains(&f.kind));
+            kept += truth.fruits.len();
+            left_out += before - truth.fruits.len();
+        }
         let detections = detections
             .by_frame
             .remove(frame)
@@ -112,6 +124,19 @@ pub fn run(args: &EvalArgs) -> Result<()> {
         });
     }
     warn_frames(&without_truth, "have no truth file and are not evaluated");
+    if !args.kind.is_empty() {
+        eprintln!(
+            "evaluating kind(s) {}: {kept} truth object(s) kept, {left_out} of other kinds left out",
+            args.kind.join(", ")
+        );
+        if kept == 0 {
+            bail!(
+                "{}: no truth object has kind {} (check `pomona info`)",
+                args.data.display(),
+                args.kind.join(" or ")
+            );
+        }
+    }
     if frames.is_empty() {
         bail!(
             "{}: no frame has a truth file (truth/<frame>.json), nothing to evaluate",

@@ -174,6 +174,14 @@ impl Shape {
             Shape::Cylinder(c) => c.radius_m,
         }
     }
+
+    /// Signed distance of `p` from the surface (positive outside), metres.
+    pub fn signed_distance(&self, p: &nalgebra::Point3<f64>) -> f64 {
+        match self {
+            Shape::Sphere(s) => s.signed_distance(p),
+            Shape::Cylinder(c) => c.signed_distance(p),
+        }
+    }
 }
 
 /// Parameters of [`ShapeExtractor`] (paper defaults inside); validate with

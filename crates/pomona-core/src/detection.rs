@@ -25,6 +25,13 @@ pub struct Detection {
     /// Fruit kind, when the method distinguishes kinds.
     #[serde(default)]
     pub kind: Option<String>,
+    /// For methods that fit a shape: the number of points supporting it (its inliers).
+    #[serde(default)]
+    pub support_points: Option<usize>,
+    /// For methods that fit a shape: RMS distance, metres, of the supporting points from the
+    /// fitted surface — a fit-quality signal (a grasp planner may distrust a loose fit).
+    #[serde(default)]
+    pub fit_rms_m: Option<f64>,
 }
 
 /// All detections of one frame (`<out>/<frame>.json`).
@@ -54,6 +61,8 @@ mod tests {
                 axis: Some(Vector3::y_axis()),
                 bbox_px: Some(PixelBox::new(1.0, 2.0, 3.0, 4.0).unwrap()),
                 kind: None,
+                support_points: None,
+                fit_rms_m: None,
             }],
         };
         let json = serde_json::to_string(&d).unwrap();

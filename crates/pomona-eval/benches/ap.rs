@@ -57,6 +57,8 @@ fn frames() -> Vec<FrameInput> {
                         axis: None,
                         bbox_px: None,
                         kind: None,
+                        support_points: None,
+                        fit_rms_m: None,
                     }
                 })
                 .collect();

@@ -41,6 +41,8 @@ fn det(center: [f64; 3], score: f64) -> Detection {
         axis: None,
         bbox_px: None,
         kind: None,
+        support_points: None,
+        fit_rms_m: None,
     }
 }
 

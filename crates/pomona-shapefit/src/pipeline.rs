@@ -414,7 +414,21 @@ fn detection(c: &Candidate, shape: &Shape, score: f64, camera: &PinholeCamera) -
         axis,
         bbox_px: PixelBox::new(lo.0, lo.1, hi.0, hi.1).ok(),
         kind: None,
+        support_points: Some(c.points.len()),
+        fit_rms_m: fit_rms_m(shape, &c.points),
     }
+}
+
+/// RMS distance of `points` from the surface of `shape`; `None` without points.
+fn fit_rms_m(shape: &Shape, points: &[Point3<f64>]) -> Option<f64> {
+    if points.is_empty() {
+        return None;
+    }
+    let sum: f64 = points
+        .iter()
+        .map(|p| shape.signed_distance(p).powi(2))
+        .sum();
+    Some((sum / points.len() as f64).sqrt())
 }
 
 /// Whether `p` lies inside the space `shape` claims: the sphere's ball, or the cylinder's

@@ -38,6 +38,12 @@ fn ap(detector: &dyn Detector, test: &dyn FrameSource) -> f64 {
         let detections = detector
             .detect(&lf.frame, &mut StageTimings::default())
             .unwrap();
+        // Every detection reports its fit: at least the minimum inliers, all within the 12 mm
+        // inlier threshold of the surface, so an RMS below it.
+        for d in &detections {
+            assert!(d.support_points.is_some_and(|n| n >= 30), "{d:?}");
+            assert!(d.fit_rms_m.is_some_and(|r| r > 0.0 && r <= 0.012), "{d:?}");
+        }
         inputs.push(FrameInput {
             frame: lf.name,
             truth: lf.truth,

@@ -503,6 +503,8 @@ impl BoxDetector {
                 axis: b.axis,
                 bbox_px: None,
                 kind: None,
+                support_points: None,
+                fit_rms_m: None,
             })
             .collect();
         Ok(FrameResult {

@@ -384,6 +384,8 @@ impl Detector for BlobDetector {
                     axis: None,
                     bbox_px: c.bbox,
                     kind: None,
+                    support_points: None,
+                    fit_rms_m: None,
                 });
             }
         }

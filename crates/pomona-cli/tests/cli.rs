@@ -185,15 +185,20 @@ fn eval_scores_hand_made_detections() {
         {"center_m": [-0.3, 0.0, 0.5], "score": 1.0}]}"#;
     std::fs::write(det_dir.join("f0.json"), dets).unwrap();
     let report = dir.path().join("report.json");
-    let out = pomona(&[
-        "eval",
-        "--data",
-        dir.path().to_str().unwrap(),
-        "--detections",
-        det_dir.to_str().unwrap(),
-        "--json",
-        report.to_str().unwrap(),
-    ]);
+    let eval = |extra: &[&str]| {
+        let mut args = vec![
+            "eval",
+            "--data",
+            dir.path().to_str().unwrap(),
+            "--detections",
+            det_dir.to_str().unwrap(),
+            "--json",
+            report.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        pomona(&args)
+    };
+    let out = eval(&[]);
     assert!(out.status.success(), "{}", stderr(&out));
     let r: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
@@ -220,20 +225,7 @@ fn eval_scores_hand_made_detections() {
         ),
     )
     .unwrap();
-    let eval_kind = |kind: &str| {
-        pomona(&[
-            "eval",
-            "--data",
-            dir.path().to_str().unwrap(),
-            "--detections",
-            det_dir.to_str().unwrap(),
-            "--json",
-            report.to_str().unwrap(),
-            "--kind",
-            kind,
-        ])
-    };
-    let out = eval_kind("apple");
+    let out = eval(&["--kind", "apple"]);
     assert!(out.status.success(), "{}", stderr(&out));
     assert!(
         stderr(&out).contains("1 of other kinds left out"),
@@ -246,7 +238,7 @@ fn eval_scores_hand_made_detections() {
         (r["fruits"].as_u64(), r["recall"].as_f64()),
         (Some(1), Some(1.0))
     );
-    let out = eval_kind("pear");
+    let out = eval(&["--kind", "pear"]);
     assert!(!out.status.success());
     assert!(
         stderr(&out).contains("no truth object has kind pear"),

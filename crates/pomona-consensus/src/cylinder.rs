@@ -202,8 +202,7 @@ impl Cylinder {
             let mut jtj = SMatrix::<f64, 5, 5>::zeros();
             let mut jtr = SVector::<f64, 5>::zeros();
             for p in points {
-                let j = current.residual_jacobian(p, &u, &v);
-                let r = current.signed_distance(p);
+                let (r, j) = current.residual_and_jacobian(p, &u, &v);
                 jtj += j * j.transpose();
                 jtr += j * r;
             }
@@ -228,29 +227,31 @@ impl Cylinder {
         }
         Some(current)
     }
-}
 
-impl Cylinder {
-    /// Gradient of `signed_distance(p)` with respect to the refinement's five parameters at
+    /// `signed_distance(p)` and its gradient with respect to the refinement's five parameters at
     /// zero (axis tilt towards `u` and `v`, axis shift along `u` and `v`, radius), for `u`, `v`
     /// orthonormal and perpendicular to the axis. With `q = p − axis_point`, `t = q·a` and the
     /// radial vector `w` of length `ρ`: tilting the axis by `δ u` moves `w` by `−δ (t u + (q·u) a)`,
     /// shifting it by `δ u` moves `w` by `−δ u`, so the derivatives are `−t (q·u)/ρ`,
     /// `−t (q·v)/ρ`, `−(q·u)/ρ`, `−(q·v)/ρ` and `−1` (only the radius term on the axis itself).
-    fn residual_jacobian(
+    fn residual_and_jacobian(
         &self,
         p: &Point3<f64>,
         u: &Vector3<f64>,
         v: &Vector3<f64>,
-    ) -> SVector<f64, 5> {
+    ) -> (f64, SVector<f64, 5>) {
         let q = p - self.axis_point;
         let rho = self.radial_vector(p).norm();
+        let residual = rho - self.radius_m;
         if rho.is_nan() || rho <= 0.0 {
-            return SVector::<f64, 5>::new(0.0, 0.0, 0.0, 0.0, -1.0);
+            return (residual, SVector::<f64, 5>::new(0.0, 0.0, 0.0, 0.0, -1.0));
         }
         let t = q.dot(&self.axis);
         let (qu, qv) = (q.dot(u) / rho, q.dot(v) / rho);
-        SVector::<f64, 5>::new(-t * qu, -t * qv, -qu, -qv, -1.0)
+        (
+            residual,
+            SVector::<f64, 5>::new(-t * qu, -t * qv, -qu, -qv, -1.0),
+        )
     }
 }
 
@@ -416,7 +417,8 @@ mod tests {
             Point3::new(-0.03, -0.1, 0.85),
             Point3::new(0.0, 0.2, 1.0),
         ] {
-            let j = c.residual_jacobian(&p, &u, &v);
+            let (r, j) = c.residual_and_jacobian(&p, &u, &v);
+            assert_eq!(r, c.signed_distance(&p));
             for k in 0..5 {
                 let h = 1e-6;
                 let mut d = SVector::<f64, 5>::zeros();

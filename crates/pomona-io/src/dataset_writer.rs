@@ -21,10 +21,32 @@ pub struct DatasetWriter {
 /// # Errors
 /// [`DatasetError::Io`] or [`DatasetError::Json`]; the destination is untouched on failure.
 pub fn write_json(path: &Path, value: &impl serde::Serialize) -> Result<(), DatasetError> {
+    write_json_with(path, value, true)
+}
+
+/// Writes any serialisable value as compact JSON (no indentation), atomically: for large
+/// machine-read files such as model files, where indentation would double the size.
+///
+/// # Errors
+/// As [`write_json`].
+pub fn write_json_compact(path: &Path, value: &impl serde::Serialize) -> Result<(), DatasetError> {
+    write_json_with(path, value, false)
+}
+
+fn write_json_with(
+    path: &Path,
+    value: &impl serde::Serialize,
+    pretty: bool,
+) -> Result<(), DatasetError> {
     write_atomically(
         path,
         |w| {
-            serde_json::to_writer_pretty(&mut *w, value).map_err(|source| DatasetError::Json {
+            let written = if pretty {
+                serde_json::to_writer_pretty(&mut *w, value)
+            } else {
+                serde_json::to_writer(&mut *w, value)
+            };
+            written.map_err(|source| DatasetError::Json {
                 path: path.to_owned(),
                 source,
             })?;

@@ -24,7 +24,7 @@ pub mod ply;
 pub use camera_file::CameraFile;
 pub use cloud_file::{read_cloud, write_cloud, CloudFileError, CloudFormat};
 pub use dataset::Dataset;
-pub use dataset_writer::{write_json, DatasetWriter};
+pub use dataset_writer::{write_json, write_json_compact, DatasetWriter};
 pub use error::DatasetError;
 pub use image_file::{
     read_color_image, read_depth_png, read_mask_png, write_color_png, write_depth_png,

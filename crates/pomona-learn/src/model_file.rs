@@ -66,12 +66,13 @@ impl ModelFile {
         }
     }
 
-    /// Writes the file atomically (temporary file, then rename).
+    /// Writes the file atomically (temporary file, then rename) as compact JSON: thousands of
+    /// support-vector numbers are read by programs, and indentation would double the file.
     ///
     /// # Errors
     /// [`ModelFileError::Write`] naming the file.
     pub fn save(&self, path: impl AsRef<Path>) -> Result<(), ModelFileError> {
-        pomona_io::write_json(path.as_ref(), self)?;
+        pomona_io::write_json_compact(path.as_ref(), self)?;
         Ok(())
     }
 

@@ -36,6 +36,43 @@ pub trait FrameSource: Sync {
     /// # Errors
     /// Dataset errors naming the file.
     fn load(&self, i: usize) -> Result<LabelledFrame, PipelineError>;
+
+    /// Loads every frame, in order (for sets rendered or read once and reused).
+    ///
+    /// # Errors
+    /// The first error of [`FrameSource::load`].
+    fn load_all(&self) -> Result<Vec<LabelledFrame>, PipelineError> {
+        (0..self.len()).map(|i| self.load(i)).collect()
+    }
+}
+
+/// Frames already in memory, e.g. a synthetic set rendered once and trained on several times.
+impl FrameSource for [LabelledFrame] {
+    fn len(&self) -> usize {
+        <[LabelledFrame]>::len(self)
+    }
+
+    fn load(&self, i: usize) -> Result<LabelledFrame, PipelineError> {
+        self.get(i)
+            .cloned()
+            .ok_or_else(|| PipelineError::InvalidParameter {
+                name: "frame index".into(),
+                reason: format!(
+                    "{i} is past the {} frames held",
+                    <[LabelledFrame]>::len(self)
+                ),
+            })
+    }
+}
+
+impl FrameSource for Vec<LabelledFrame> {
+    fn len(&self) -> usize {
+        self.as_slice().len()
+    }
+
+    fn load(&self, i: usize) -> Result<LabelledFrame, PipelineError> {
+        self.as_slice().load(i)
+    }
 }
 
 /// Frames drawn from one or more datasets; only frames that have truth are included.

@@ -59,9 +59,10 @@ fn color_histograms(lf: &LabelledFrame, bins: usize) -> ColorHistograms {
     h
 }
 
-/// Training label of a candidate under `rule` (see [`LabelRule`]).
-fn label(c: &Candidate, lf: &LabelledFrame, tolerance_m: f64, rule: LabelRule) -> bool {
-    match (&lf.mask, rule) {
+/// Training label of a candidate under `params.label_rule` (see [`LabelRule`]) with
+/// `params.positive_tolerance_m`.
+fn label(c: &Candidate, lf: &LabelledFrame, params: &ShapeFitParams) -> bool {
+    match (&lf.mask, params.label_rule) {
         (Some(mask), LabelRule::MaskMajority) => {
             let ids = mask.as_slice();
             let mut counts = std::collections::HashMap::<u16, usize>::new();
@@ -72,7 +73,12 @@ fn label(c: &Candidate, lf: &LabelledFrame, tolerance_m: f64, rule: LabelRule) -
             }
             counts.values().any(|&n| 2 * n > c.pixels.len())
         }
-        _ => is_positive(&c.shape.center(), &lf.truth, lf.frame.camera(), tolerance_m),
+        _ => is_positive(
+            &c.shape.center(),
+            &lf.truth,
+            lf.frame.camera(),
+            params.positive_tolerance_m,
+        ),
     }
 }
 
@@ -259,14 +265,7 @@ impl Pipeline for ShapeFitPipeline {
                 }
                 let labels = candidates
                     .iter()
-                    .map(|c| {
-                        label(
-                            c,
-                            &lf,
-                            stage_params.params.positive_tolerance_m,
-                            stage_params.params.label_rule,
-                        )
-                    })
+                    .map(|c| label(c, &lf, &stage_params.params))
                     .collect();
                 progress(
                     done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1,

@@ -11,48 +11,34 @@ use criterion::{criterion_group, criterion_main, Criterion};
 use pomona_consensus::{KnnNormalParams, WindowNormalParams};
 use pomona_core::nalgebra::Point3;
 use pomona_pipeline::{
-    FrameSource, LabelledFrame, Pipeline, PipelineError, StageTimings, TrainOptions,
+    FrameSource, LabelledFrame, Pipeline, StageTimings, SyntheticFrames, TrainOptions,
 };
 use pomona_symmetry::{
     BoxDetector, FrameKind, StageParams, SymmetryPipeline, SymmetryPlaneSearch, ViewerPosePipeline,
 };
-use pomona_synth::{render, CameraPreset, NoiseModel, SceneSpec};
+use pomona_synth::{CameraPreset, NoiseModel, SceneSpec};
 
-struct MemFrames(Vec<LabelledFrame>);
-
-impl FrameSource for MemFrames {
-    fn len(&self) -> usize {
-        self.0.len()
-    }
-    fn load(&self, i: usize) -> Result<LabelledFrame, PipelineError> {
-        Ok(self.0[i].clone())
-    }
-}
-
-fn frames(n: u64) -> Vec<LabelledFrame> {
+fn frames(n: usize) -> Vec<LabelledFrame> {
     let spec = SceneSpec {
         camera: CameraPreset::KinectV2.camera(),
         noise: NoiseModel::Tof,
         green_fraction: 0.5,
         ..SceneSpec::default()
     };
-    (0..n)
-        .map(|i| {
-            let out = render(&spec.sample_frame(11, i).unwrap(), &spec.camera).unwrap();
-            LabelledFrame {
-                name: format!("{i}"),
-                frame: out.frame,
-                truth: out.truth,
-                mask: Some(out.mask),
-            }
-        })
-        .collect()
+    SyntheticFrames {
+        spec,
+        seed: 11,
+        first: 0,
+        count: n,
+    }
+    .load_all()
+    .unwrap()
 }
 
 fn bench(c: &mut Criterion) {
     let mut all = frames(7);
     let test = all.pop().unwrap();
-    let train = MemFrames(all);
+    let train = all;
     let options = TrainOptions {
         seed: 1,
         folds: 3,

@@ -30,38 +30,24 @@ use std::time::Instant;
 use pomona_core::nalgebra::Point3;
 use pomona_eval::{evaluate, EvalConfig, FrameInput};
 use pomona_pipeline::{
-    FrameSource, LabelledFrame, Pipeline, PipelineError, StageTimings, TrainOptions,
+    FrameSource, LabelledFrame, Pipeline, StageTimings, SyntheticFrames, TrainOptions,
 };
 use pomona_symmetry::{
     BoxDetector, FrameKind, MergeKind, PruningState, SlidingBox, StageParams, SymmetryPipeline,
     SymmetryPlaneSearch, ViewerPosePipeline,
 };
-use pomona_synth::{render, CameraPreset, FruitChoice, NoiseModel, SceneSpec};
+use pomona_synth::{CameraPreset, FruitChoice, NoiseModel, SceneSpec};
 
-struct MemFrames(Vec<LabelledFrame>);
-
-impl FrameSource for MemFrames {
-    fn len(&self) -> usize {
-        self.0.len()
-    }
-    fn load(&self, i: usize) -> Result<LabelledFrame, PipelineError> {
-        Ok(self.0[i].clone())
-    }
-}
-
+/// Frames `range` of the synthetic dataset `(spec, seed)`, rendered once.
 fn frames(spec: &SceneSpec, seed: u64, range: std::ops::Range<u64>) -> Vec<LabelledFrame> {
-    range
-        .map(|i| {
-            let scene = spec.sample_frame(seed, i).unwrap();
-            let out = render(&scene, &spec.camera).unwrap();
-            LabelledFrame {
-                name: format!("{i:06}"),
-                frame: out.frame,
-                truth: out.truth,
-                mask: Some(out.mask),
-            }
-        })
-        .collect()
+    SyntheticFrames {
+        spec: spec.clone(),
+        seed,
+        first: range.start,
+        count: (range.end - range.start) as usize,
+    }
+    .load_all()
+    .unwrap()
 }
 
 fn arg<'a>(args: &'a [String], name: &str, default: &'a str) -> &'a str {
@@ -178,7 +164,7 @@ fn main() {
     for seed in base_seed..base_seed + splits {
         println!("\n#### split with dataset seed {seed}");
         let t0 = Instant::now();
-        let train = MemFrames(frames(&spec, seed, 0..n_train));
+        let train = frames(&spec, seed, 0..n_train);
         let test = frames(&spec, seed, n_train..n_train + n_test);
         println!("rendered in {:.1} s", t0.elapsed().as_secs_f64());
 

@@ -12,8 +12,7 @@
 //! Model size: each support vector is 168 numbers, and the `symmetry` model holds two SVMs (the
 //! main one and its cascade's fixed-frame one, see `CascadeParams`), so the training set is
 //! capped ([`FRAMES`] frames, the pipelines' 40 negatives per frame) to keep each file under
-//! 2 MB; the files are written as compact JSON (no indentation), which `ModelFile::from_json`
-//! reads like any other model file. Rerun after changing the pipeline:
+//! 2 MB (`ModelFile::save` writes compact JSON). Rerun after changing the pipeline:
 //!
 //! ```sh
 //! cargo run --release -p pomona-symmetry --example train_symmetry_defaults -- crates/pomona-symmetry/models
@@ -31,15 +30,6 @@ const FRAMES: usize = 32;
 const DATASET_SEED: u64 = 1000;
 /// Seed of the training (sampling of negatives and jitters, cross-validation folds).
 const TRAIN_SEED: u64 = 1;
-
-/// Writes `model` as compact JSON through a temporary file and a rename.
-fn save_compact(model: &ModelFile, path: &std::path::Path) -> std::io::Result<u64> {
-    let text = serde_json::to_string(model)?;
-    let tmp = path.with_extension("json.tmp");
-    std::fs::write(&tmp, text.as_bytes())?;
-    std::fs::rename(&tmp, path)?;
-    Ok(text.len() as u64)
-}
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let dir = std::path::PathBuf::from(
@@ -74,7 +64,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let model = pipeline.train(&frames, &options, &progress)?;
         eprintln!();
         let out = dir.join(name);
-        let bytes = save_compact(&model, &out)?;
+        model.save(&out)?;
+        let bytes = std::fs::metadata(&out)?.len();
         // The file must load back as this pipeline's model.
         ModelFile::load(&out, pipeline.name())?;
         let cascade = model.stage_params["cascade"]["classifier"]["svm"]["coef"]

@@ -7,40 +7,26 @@ use pomona_core::RgbdFrame;
 use pomona_eval::{evaluate, EvalConfig, FrameInput};
 use pomona_pipeline::{
     Detector, FrameSource, LabelledFrame, ModelFile, Pipeline, PipelineError, StageTimings,
-    TrainOptions,
+    SyntheticFrames, TrainOptions,
 };
 use pomona_symmetry::{BoxDetector, PruningState, SymmetryPipeline, ViewerPosePipeline};
-use pomona_synth::{render, CameraPreset, NoiseModel, SceneSpec};
+use pomona_synth::{CameraPreset, NoiseModel, SceneSpec};
 
-struct MemFrames(Vec<LabelledFrame>);
-
-impl FrameSource for MemFrames {
-    fn len(&self) -> usize {
-        self.0.len()
+/// Frames `0..n` of the synthetic dataset `(spec, seed)`, rendered once.
+fn rendered(spec: &SceneSpec, seed: u64, n: usize) -> Vec<LabelledFrame> {
+    SyntheticFrames {
+        spec: spec.clone(),
+        seed,
+        first: 0,
+        count: n,
     }
-    fn load(&self, i: usize) -> Result<LabelledFrame, PipelineError> {
-        Ok(self.0[i].clone())
-    }
-}
-
-/// Frames `0..n` of the synthetic dataset `(spec, seed)`.
-fn rendered(spec: &SceneSpec, seed: u64, n: u64) -> Vec<LabelledFrame> {
-    (0..n)
-        .map(|i| {
-            let out = render(&spec.sample_frame(seed, i).unwrap(), &spec.camera).unwrap();
-            LabelledFrame {
-                name: format!("{i:06}"),
-                frame: out.frame,
-                truth: out.truth,
-                mask: Some(out.mask),
-            }
-        })
-        .collect()
+    .load_all()
+    .unwrap()
 }
 
 /// 12 training and 4 test frames: SR4000, `tof` noise, half the peppers green.
-fn data() -> &'static (MemFrames, Vec<LabelledFrame>) {
-    static DATA: OnceLock<(MemFrames, Vec<LabelledFrame>)> = OnceLock::new();
+fn data() -> &'static (Vec<LabelledFrame>, Vec<LabelledFrame>) {
+    static DATA: OnceLock<(Vec<LabelledFrame>, Vec<LabelledFrame>)> = OnceLock::new();
     DATA.get_or_init(|| {
         let spec = SceneSpec {
             camera: CameraPreset::Sr4000.camera(),
@@ -50,7 +36,7 @@ fn data() -> &'static (MemFrames, Vec<LabelledFrame>) {
         };
         let mut frames = rendered(&spec, 7, 16);
         let test = frames.split_off(12);
-        (MemFrames(frames), test)
+        (frames, test)
     })
 }
 
@@ -159,7 +145,7 @@ fn detection_does_not_depend_on_thread_count() {
 #[test]
 fn training_without_frames_is_a_typed_error() {
     let err = SymmetryPipeline::default()
-        .train(&MemFrames(Vec::new()), &options(), &|_, _| {})
+        .train(&Vec::<LabelledFrame>::new(), &options(), &|_, _| {})
         .err()
         .unwrap();
     assert!(
@@ -201,7 +187,7 @@ fn fixed_frame_ablation_runs_and_gives_no_axis() {
 
 #[test]
 fn training_does_not_depend_on_thread_count() {
-    let frames = MemFrames(data().0 .0[..6].to_vec());
+    let frames = data().0[..6].to_vec();
     let train = |threads| {
         rayon::ThreadPoolBuilder::new()
             .num_threads(threads)

@@ -72,7 +72,8 @@ pub fn read_model(
     }
 }
 
-/// Builds the detector of `model`, after applying `--set` overrides to its stage parameters.
+/// Builds the detector of `model`, after applying `--set` overrides to its stage parameters; its
+/// detections carry a calibrated confidence when the model has a calibration.
 ///
 /// # Errors
 /// A bad override (unknown key, wrong type) or stage parameters the pipeline rejects.
@@ -84,12 +85,32 @@ pub fn build_detector(
 ) -> Result<Box<dyn Detector>> {
     let what = format!("the model of `{}` ({source})", pipeline.name());
     params::apply(&mut model.stage_params, overrides, &what)?;
-    pipeline.load(&model).with_context(|| {
+    pomona_pipeline::load_detector(pipeline, &model).with_context(|| {
         format!(
             "cannot build a `{}` detector from {source}",
             pipeline.name()
         )
     })
+}
+
+/// The confidence threshold of a detection run: `--min-confidence` when given (checked against
+/// the model: an uncalibrated model has no confidences to threshold), else the model's operating
+/// confidence, else none (every detection is kept, as for models trained before calibration).
+///
+/// # Errors
+/// `--min-confidence` outside `[0, 1]` or given for a model without calibration.
+pub fn min_confidence(detector: &dyn Detector, requested: Option<f64>) -> Result<Option<f64>> {
+    match (requested, detector.operating_confidence()) {
+        (Some(c), _) if !(0.0..=1.0).contains(&c) => {
+            bail!("--min-confidence must be in [0, 1], got {c}")
+        }
+        (Some(_), None) => bail!(
+            "--min-confidence needs a model with a confidence calibration; this model has none \
+             (retrain it with `pomona train`, which calibrates by default)"
+        ),
+        (Some(c), Some(_)) => Ok(Some(c)),
+        (None, operating) => Ok(operating),
+    }
 }
 
 /// Refuses a colour-less dataset for a pipeline that needs colour, with a message saying so.

@@ -222,6 +222,7 @@ mod tests {
             kind: None,
             support_points: None,
             fit_rms_m: None,
+            confidence: None,
         };
         let out = draw_overlay(&img, &cam, Some(&truth), &[det], 0.5, "test").unwrap();
         // Truth circle: centre (100, 75), radius 200 · 0.1 / 1 = 20 px → (120, 75) is on it.

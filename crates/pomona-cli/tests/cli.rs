@@ -256,7 +256,7 @@ mod blob;
 
 use blob::BlobPipeline;
 use pomona_cli::commands::{demo, detect, experiment, train};
-use pomona_core::FrameDetections;
+use pomona_core::{Detection, FrameDetections};
 use pomona_pipeline::{ModelFile, Pipeline};
 use pomona_synth::{
     generate_dataset, CameraPreset, DatasetSpec, FruitChoice, FruitKind, SceneSpec,
@@ -286,6 +286,8 @@ fn train_args(pipeline: &str, data: &[&Path], out: &Path) -> train::TrainArgs {
         full_grid: false,
         threads: None,
         set: Vec::new(),
+        calibration_folds: 3,
+        operating_precision: None,
     }
 }
 
@@ -304,13 +306,19 @@ fn detect_args(
         threads: None,
         set: Vec::new(),
         overlay: None,
+        min_confidence: None,
     }
 }
 
 fn experiment_args(data: &Path, seed: u64, json: &Path) -> experiment::ExperimentArgs {
     experiment::ExperimentArgs {
         pipeline: blob::NAME.into(),
-        data: data.to_path_buf(),
+        data: Some(data.to_path_buf()),
+        train: Vec::new(),
+        test: Vec::new(),
+        leave_one_out: false,
+        calibration_folds: 3,
+        kind: Vec::new(),
         splits: 2,
         train_fraction: 0.5,
         seed,
@@ -513,7 +521,9 @@ fn colour_pipelines_refuse_depth_only_datasets() {
     std::fs::remove_dir_all(ds.join("color")).unwrap();
     let depth_only = only(BlobPipeline::default());
     let model = dir.path().join("m.json");
-    train::run_with(&depth_only, &train_args("blob", &[&ds], &model)).unwrap();
+    let mut targs = train_args("blob", &[&ds], &model);
+    targs.calibration_folds = 0; // two frames: too few to calibrate the blob detector
+    train::run_with(&depth_only, &targs).unwrap();
     let det = dir.path().join("det");
     detect::run_with(&depth_only, &detect_args("blob", Some(&model), &ds, &det))
         .expect("depth-only pipelines run without colour");
@@ -571,6 +581,118 @@ fn experiment_splits_are_seeded_and_reported() {
         "same seed, same result"
     );
     assert_ne!(frames(&a), frames(&b), "another seed, other splits");
+}
+
+#[test]
+fn calibrated_model_round_trips_and_sets_the_default_operating_point() {
+    let dir = tempfile::tempdir().unwrap();
+    let (train_ds, test_ds) = (dir.path().join("train"), dir.path().join("test"));
+    synth_dataset(&train_ds, 8, 31);
+    synth_dataset(&test_ds, 3, 32);
+    let pipelines = only(BlobPipeline::colour());
+    let model = dir.path().join("m.json");
+    train::run_with(&pipelines, &train_args(blob::NAME, &[&train_ds], &model)).unwrap();
+    let saved = ModelFile::load(&model, blob::NAME).unwrap();
+    let calibration = saved
+        .calibration
+        .expect("trained with calibration by default");
+    assert!((0.0..=1.0).contains(&calibration.operating_confidence));
+    // The operating threshold and the sigmoid survive the file bit for bit.
+    let text = std::fs::read_to_string(&model).unwrap();
+    let again = ModelFile::from_json(&text, &model, blob::NAME).unwrap();
+    assert_eq!(again.calibration, Some(calibration));
+
+    // Default: only detections at or above the operating confidence are written.
+    let det = dir.path().join("det");
+    detect::run_with(
+        &pipelines,
+        &detect_args(blob::NAME, Some(&model), &test_ds, &det),
+    )
+    .unwrap();
+    let kept: Vec<Detection> = read_detections(&det)
+        .into_iter()
+        .flat_map(|f| {
+            assert_eq!(
+                f.operating_confidence,
+                Some(calibration.operating_confidence)
+            );
+            f.detections
+        })
+        .collect();
+    assert!(kept
+        .iter()
+        .all(|d| d.confidence.unwrap() >= calibration.operating_confidence));
+    // --min-confidence 0 keeps everything; confidences rise with scores.
+    let all_dir = dir.path().join("all");
+    let mut args = detect_args(blob::NAME, Some(&model), &test_ds, &all_dir);
+    args.min_confidence = Some(0.0);
+    detect::run_with(&pipelines, &args).unwrap();
+    let mut all: Vec<Detection> = read_detections(&all_dir)
+        .into_iter()
+        .flat_map(|f| f.detections)
+        .collect();
+    assert!(all.len() >= kept.len());
+    all.sort_by(|a, b| a.score.total_cmp(&b.score));
+    for w in all.windows(2) {
+        assert!(w[0].confidence.unwrap() <= w[1].confidence.unwrap());
+    }
+    // An uncalibrated model refuses --min-confidence.
+    let raw = dir.path().join("raw.json");
+    let mut targs = train_args(blob::NAME, &[&train_ds], &raw);
+    targs.calibration_folds = 0;
+    train::run_with(&pipelines, &targs).unwrap();
+    assert!(ModelFile::load(&raw, blob::NAME)
+        .unwrap()
+        .calibration
+        .is_none());
+    let mut args = detect_args(blob::NAME, Some(&raw), &test_ds, &dir.path().join("d2"));
+    args.min_confidence = Some(0.5);
+    let err = format!("{:#}", detect::run_with(&pipelines, &args).unwrap_err());
+    assert!(err.contains("calibration"), "{err}");
+}
+
+#[test]
+fn cross_domain_experiment_refuses_shared_sets_and_leave_one_out_tests_every_frame() {
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = (dir.path().join("a"), dir.path().join("b"));
+    synth_dataset(&a, 6, 41);
+    synth_dataset(&b, 3, 42);
+    let pipelines = only(BlobPipeline::colour());
+    let json = dir.path().join("x.json");
+    let mut args = experiment_args(&a, 1, &json);
+    args.data = None;
+    args.train = vec![a.clone()];
+    // The same folder by another spelling is still the same set.
+    args.test = vec![b.clone(), a.join("..").join("a")];
+    let err = format!("{:#}", experiment::run_with(&pipelines, &args).unwrap_err());
+    assert!(err.contains("both a training set"), "{err}");
+
+    args.test = vec![b.clone()];
+    let r = experiment::run_with(&pipelines, &args).unwrap();
+    assert_eq!(r.protocol, experiment::Protocol::CrossDomain);
+    assert_eq!(r.per_split.len(), 1);
+    assert_eq!(r.per_split[0].test_frames.len(), 3);
+    assert!(r.per_split[0].operating_confidence.is_some());
+    assert_eq!(r.pooled.as_ref().map(|p| p.frames), Some(3));
+
+    let mut loo = experiment_args(&b, 1, &json);
+    loo.leave_one_out = true;
+    loo.calibration_folds = 0;
+    let r = experiment::run_with(&pipelines, &loo).unwrap();
+    assert_eq!(r.protocol, experiment::Protocol::LeaveOneOut);
+    let mut tested: Vec<String> = r
+        .per_split
+        .iter()
+        .flat_map(|s| {
+            assert_eq!((s.train_frames.len(), s.test_frames.len()), (2, 1));
+            assert!(!s.train_frames.contains(&s.test_frames[0]));
+            s.test_frames.clone()
+        })
+        .collect();
+    tested.sort();
+    tested.dedup();
+    assert_eq!(tested.len(), 3, "every frame tested once");
+    assert_eq!(r.pooled.as_ref().map(|p| p.frames), Some(3));
 }
 
 #[test]

@@ -6,7 +6,8 @@ use serde::{Deserialize, Serialize};
 use crate::PixelBox;
 
 /// A detected fruit. Higher `score` means more confident; scores are comparable only within one
-/// pipeline (they are SVM decision values or similar, not probabilities, unless stated).
+/// model (they are SVM decision values or similar, not probabilities). `confidence`, when
+/// present, is the calibrated probability-like value to threshold on.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Detection {
     /// Estimated fruit centre in the camera frame, metres.
@@ -32,6 +33,11 @@ pub struct Detection {
     /// fitted surface — a fit-quality signal (a grasp planner may distrust a loose fit).
     #[serde(default)]
     pub fit_rms_m: Option<f64>,
+    /// Calibrated confidence in `[0, 1]` that this is a fruit, when the model carries a score
+    /// calibration (fitted on held-out frames; non-decreasing in `score`). Comparable across
+    /// pipelines and models, unlike `score`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub confidence: Option<f64>,
 }
 
 /// All detections of one frame (`<out>/<frame>.json`).
@@ -43,6 +49,13 @@ pub struct FrameDetections {
     pub pipeline: String,
     /// The detections, in any order.
     pub detections: Vec<Detection>,
+    /// The model's operating confidence, when it has one: `pomona detect` kept detections at or
+    /// above `min_confidence` (see below), and `pomona eval` reports its operating point here.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub operating_confidence: Option<f64>,
+    /// The lowest confidence kept in this file (`None`: every detection was kept).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub min_confidence: Option<f64>,
 }
 
 #[cfg(test)]
@@ -63,7 +76,10 @@ mod tests {
                 kind: None,
                 support_points: None,
                 fit_rms_m: None,
+                confidence: Some(0.75),
             }],
+            operating_confidence: Some(0.5),
+            min_confidence: None,
         };
         let json = serde_json::to_string(&d).unwrap();
         assert!(json.contains(r#""center_m":[0.1,-0.2,0.7]"#));

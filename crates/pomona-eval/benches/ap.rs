@@ -59,6 +59,7 @@ fn frames() -> Vec<FrameInput> {
                         kind: None,
                         support_points: None,
                         fit_rms_m: None,
+                        confidence: None,
                     }
                 })
                 .collect();

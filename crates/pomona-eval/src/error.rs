@@ -50,6 +50,16 @@ pub enum EvalError {
         /// Index of the detection in the file.
         index: usize,
     },
+    /// A confidence threshold was asked for detections that have no confidence.
+    #[error(
+        "frame `{frame}`: a detection has no calibrated confidence (its model has no score \
+         calibration), so the operating point cannot be a confidence threshold; use a score \
+         threshold instead"
+    )]
+    MissingConfidence {
+        /// Frame whose detections lack confidences.
+        frame: String,
+    },
     /// An evaluation parameter is out of range.
     #[error("invalid evaluation parameter `{name}` = {value}: {reason}")]
     InvalidParameter {

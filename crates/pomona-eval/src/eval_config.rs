@@ -1,5 +1,5 @@
 //! The knobs of an evaluation: match tolerance, visibility below which truth is ignored, and the
-//! score threshold of the reported operating point.
+//! operating point (a raw score threshold, or a calibrated confidence threshold).
 
 use serde::{Deserialize, Serialize};
 
@@ -13,8 +13,13 @@ pub struct EvalConfig {
     pub tolerance_m: f64,
     /// Truth with `visibility` below this is ignored; truth without a visibility is counted.
     pub min_visibility: f64,
-    /// Detections scoring at least this form the reported operating point.
+    /// Detections scoring at least this form the reported operating point (unless
+    /// `min_confidence` is set).
     pub threshold: f64,
+    /// When set, the operating point is the detections whose calibrated `confidence` is at
+    /// least this (a model's operating confidence), and `threshold` is not used.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub min_confidence: Option<f64>,
 }
 
 impl Default for EvalConfig {
@@ -23,6 +28,7 @@ impl Default for EvalConfig {
             tolerance_m: 0.05,
             min_visibility: 0.5,
             threshold: 0.0,
+            min_confidence: None,
         }
     }
 }
@@ -55,6 +61,33 @@ impl EvalConfig {
                 reason: "must not be NaN",
             });
         }
+        if let Some(c) = self.min_confidence {
+            if !(0.0..=1.0).contains(&c) {
+                return Err(EvalError::InvalidParameter {
+                    name: "min_confidence",
+                    value: c,
+                    reason: "must be in [0, 1]",
+                });
+            }
+        }
         Ok(())
+    }
+
+    /// Whether `detection` belongs to the operating point: its confidence reaches
+    /// `min_confidence` when that is set (a detection without a confidence never does), its
+    /// score reaches `threshold` otherwise.
+    pub fn keeps(&self, detection: &pomona_core::Detection) -> bool {
+        match self.min_confidence {
+            Some(c) => detection.confidence.is_some_and(|d| d >= c),
+            None => detection.score >= self.threshold,
+        }
+    }
+
+    /// The operating point in words, e.g. `score ≥ 0` or `confidence ≥ 0.42`.
+    pub fn operating_point(&self) -> String {
+        match self.min_confidence {
+            Some(c) => format!("confidence ≥ {c:.3}"),
+            None => format!("score ≥ {}", self.threshold),
+        }
     }
 }

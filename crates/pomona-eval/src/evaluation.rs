@@ -52,6 +52,16 @@ pub fn evaluate(
     config: &EvalConfig,
 ) -> Result<EvalReport, EvalError> {
     config.validate()?;
+    if config.min_confidence.is_some() {
+        if let Some(f) = frames
+            .iter()
+            .find(|f| f.detections.iter().any(|d| d.confidence.is_none()))
+        {
+            return Err(EvalError::MissingConfidence {
+                frame: f.frame.clone(),
+            });
+        }
+    }
     let mut per_frame = Vec::with_capacity(frames.len());
     let mut scored = Vec::new();
     let mut center_errors = Vec::new();
@@ -71,7 +81,7 @@ pub fn evaluate(
                     ..
                 } => {
                     scored.push((det.score, true));
-                    if det.score >= config.threshold {
+                    if config.keeps(det) {
                         tp += 1;
                         center_errors.extend(center_error_m);
                         diameter_errors.extend(diameter_error_m);
@@ -79,7 +89,7 @@ pub fn evaluate(
                 }
                 DetectionOutcome::FalsePositive => {
                     scored.push((det.score, false));
-                    fp += usize::from(det.score >= config.threshold);
+                    fp += usize::from(config.keeps(det));
                 }
                 DetectionOutcome::Ignored => {}
             }
@@ -132,8 +142,8 @@ pub fn evaluate(
                 null_reasons.insert(
                     "precision".into(),
                     format!(
-                        "no detection scores at least the threshold {}",
-                        config.threshold
+                        "no detection at the operating point ({})",
+                        config.operating_point()
                     ),
                 );
             }
@@ -180,6 +190,7 @@ pub fn evaluate(
         precision,
         recall,
         threshold: config.threshold,
+        min_confidence: config.min_confidence,
         center_error_m: CenterError {
             median: center_median,
             mean: center_mean,

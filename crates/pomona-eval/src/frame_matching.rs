@@ -107,6 +107,7 @@ fn reach(
 ///     kind: None,
 ///     support_points: None,
 ///     fit_rms_m: None,
+///     confidence: None,
 /// };
 /// let cam = PinholeCamera::new(640, 480, 500.0, 500.0, 319.5, 239.5).unwrap();
 /// let m = match_frame(&truth, &[det(1.03, 0.5), det(1.01, 2.0)], &cam, &EvalConfig::default());

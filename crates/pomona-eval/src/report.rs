@@ -11,7 +11,7 @@ use std::fmt::Write as _;
 
 use serde::{Deserialize, Serialize};
 
-use crate::PrCurve;
+use crate::{EvalConfig, PrCurve};
 
 /// Centre error of true positives, metres.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -71,8 +71,11 @@ pub struct EvalReport {
     pub precision: Option<f64>,
     /// Recall at the threshold.
     pub recall: Option<f64>,
-    /// Score threshold of the operating point.
+    /// Score threshold of the operating point (used when `min_confidence` is `None`).
     pub threshold: f64,
+    /// Confidence threshold of the operating point, when it is one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub min_confidence: Option<f64>,
     /// Centre error of true positives at the threshold.
     pub center_error_m: CenterError,
     /// Diameter error of true positives at the threshold.
@@ -100,6 +103,17 @@ fn fmt_mm(v: Option<f64>) -> String {
 }
 
 impl EvalReport {
+    /// The operating point of `precision` and `recall` in words.
+    pub fn operating_point(&self) -> String {
+        EvalConfig {
+            tolerance_m: self.tolerance_m,
+            min_visibility: self.min_visibility,
+            threshold: self.threshold,
+            min_confidence: self.min_confidence,
+        }
+        .operating_point()
+    }
+
     /// A short Markdown summary (a heading, a table, and the reasons for any `n/a`).
     pub fn to_markdown(&self) -> String {
         let mut s = String::new();
@@ -116,11 +130,11 @@ impl EvalReport {
             ("AP (VOC 11-point)", fmt_ratio(self.ap_voc11)),
             ("AP (all points)", fmt_ratio(self.ap)),
             (
-                &*format!("precision at score ≥ {}", self.threshold),
+                &*format!("precision at {}", self.operating_point()),
                 fmt_ratio(self.precision),
             ),
             (
-                &*format!("recall at score ≥ {}", self.threshold),
+                &*format!("recall at {}", self.operating_point()),
                 fmt_ratio(self.recall),
             ),
             (

@@ -43,6 +43,7 @@ fn det(center: [f64; 3], score: f64) -> Detection {
         kind: None,
         support_points: None,
         fit_rms_m: None,
+        confidence: None,
     }
 }
 

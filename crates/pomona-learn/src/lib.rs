@@ -17,6 +17,8 @@
 //! * [`GridSearchParams`] — stratified k-fold cross-validated search over `log2 C` × `log2 γ`
 //!   (LIBSVM's `grid.py` defaults, then a finer pass around the best cell), deterministic for a
 //!   seed and independent of the thread count;
+//! * [`ScoreCalibration`] — raw score → confidence in `[0, 1]` (Platt on held-out detections) and
+//!   the operating confidence a detector reports at by default;
 //! * [`ModelFile`] — one versioned JSON file per trained detector; loading a file made for another
 //!   pipeline or format version is a typed error, and floats round-trip bit-exactly.
 //!
@@ -39,6 +41,7 @@ mod model_file;
 mod platt;
 mod samples;
 mod scaler;
+mod score_calibration;
 mod smo;
 mod svm;
 
@@ -51,4 +54,5 @@ pub use model_file::{ModelFile, MODEL_FORMAT, MODEL_VERSION};
 pub use platt::PlattSigmoid;
 pub use samples::{Samples, TrainingSet};
 pub use scaler::MinMaxScaler;
+pub use score_calibration::{CalibrationEvidence, OperatingPoint, ScoreCalibration};
 pub use svm::{ClassWeights, RbfSvm, SvmClassifier, SvmParams, TrainingInfo, ValidSvmParams};

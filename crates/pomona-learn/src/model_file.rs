@@ -2,7 +2,8 @@
 //!
 //! ```json
 //! {"format": "pomona-model", "version": 1, "pipeline": "shape-fit",
-//!  "stage_params": {...}, "scaler": {...} | null, "svm": {...}}
+//!  "stage_params": {...}, "scaler": {...} | null, "svm": {...},
+//!  "calibration": {...}}            // optional: score → confidence, operating threshold
 //! ```
 //!
 //! `stage_params` holds whatever the pipeline's non-learnt stages need (thresholds, window sizes)
@@ -16,7 +17,7 @@ use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
-use crate::{MinMaxScaler, ModelFileError, RbfSvm, SvmClassifier};
+use crate::{MinMaxScaler, ModelFileError, RbfSvm, ScoreCalibration, SvmClassifier};
 
 /// Value of the `format` key.
 pub const MODEL_FORMAT: &str = "pomona-model";
@@ -38,6 +39,10 @@ pub struct ModelFile {
     pub scaler: Option<MinMaxScaler>,
     /// The SVM.
     pub svm: RbfSvm,
+    /// Score → confidence map and operating threshold fitted on held-out frames; `None` for a
+    /// model trained without calibration (older files, or `--calibration-folds 0`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub calibration: Option<ScoreCalibration>,
 }
 
 impl ModelFile {
@@ -54,6 +59,7 @@ impl ModelFile {
             stage_params,
             scaler: classifier.scaler.clone(),
             svm: classifier.svm.clone(),
+            calibration: None,
         }
     }
 

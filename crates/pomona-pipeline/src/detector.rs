@@ -23,6 +23,12 @@ pub trait Detector: Send + Sync {
         frame: &RgbdFrame,
         timings: &mut StageTimings,
     ) -> Result<Vec<Detection>, PipelineError>;
+
+    /// The calibrated confidence at or above which detections are reported by default, when the
+    /// model carries a score calibration (see [`crate::CalibratedDetector`]).
+    fn operating_confidence(&self) -> Option<f64> {
+        None
+    }
 }
 
 /// Options shared by every pipeline's training.

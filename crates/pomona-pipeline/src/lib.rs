@@ -10,9 +10,12 @@
 //! * [`Detector`]: a trained detector: frame in, detections out.
 //! * [`Pipeline`]: a method by name: trains a [`ModelFile`] from labelled frames and loads a
 //!   [`Detector`] from one.
+//! * [`train_calibrated`] / [`load_detector`]: any pipeline's training with a confidence
+//!   calibrated on held-out frames and an operating threshold, and the detector that reports it.
 //! * [`FrameSource`]: labelled frames for training, loaded lazily from datasets
 //!   ([`DatasetFrames`]) or rendered on demand ([`SyntheticFrames`]).
 
+mod calibration;
 mod detector;
 mod error;
 mod frame_source;
@@ -21,6 +24,7 @@ mod synthetic_frames;
 mod timings;
 mod train_params;
 
+pub use calibration::{load_detector, train_calibrated, CalibratedDetector, CalibrationParams};
 pub use detector::{Detector, Pipeline, TrainOptions};
 pub use error::PipelineError;
 pub use frame_source::{DatasetFrames, FrameSource, LabelledFrame};

@@ -415,6 +415,7 @@ fn detection(c: &Candidate, shape: &Shape, score: f64, camera: &PinholeCamera) -
         kind: None,
         support_points: Some(c.points.len()),
         fit_rms_m: fit_rms_m(shape, &c.points),
+        confidence: None,
     }
 }
 

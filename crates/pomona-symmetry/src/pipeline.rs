@@ -505,6 +505,7 @@ impl BoxDetector {
                 kind: None,
                 support_points: None,
                 fit_rms_m: None,
+                confidence: None,
             })
             .collect();
         Ok(FrameResult {

@@ -229,6 +229,8 @@ pub fn run_with(pipelines: &[Box<dyn Pipeline>], args: &DemoArgs) -> Result<Demo
                         frame: stems[i].clone(),
                         pipeline: name.to_owned(),
                         detections: result.detections.clone(),
+                        operating_confidence: None,
+                        min_confidence: None,
                     };
                     pomona_io::write_json(&det_dir.join(format!("{}.json", stems[i])), &record)?;
                     Ok(())

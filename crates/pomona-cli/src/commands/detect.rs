@@ -13,7 +13,8 @@ use pomona_io::Dataset;
 use pomona_pipeline::{Pipeline, StageTimings};
 
 use crate::detection_run::{
-    build_detector, check_color, detect_frames, read_model, thread_pool, ModelSource,
+    build_detector, check_color, detect_frames, min_confidence, read_model, thread_pool,
+    ModelSource,
 };
 use crate::overlay::{shown, view_of, write_overlay};
 use crate::params::{parse_override, ParamOverride};
@@ -48,6 +49,10 @@ pub struct DetectArgs {
     /// diameter) on its colour image, written as `<DIR>/<frame>.png`.
     #[arg(long, value_name = "DIR")]
     pub overlay: Option<PathBuf>,
+    /// Keep detections whose calibrated confidence is at least C (0 keeps all). Default: the
+    /// model's operating confidence; models without calibration keep every detection.
+    #[arg(long, value_name = "C")]
+    pub min_confidence: Option<f64>,
 }
 
 /// What a detection run did.
@@ -55,7 +60,7 @@ pub struct DetectArgs {
 pub struct DetectSummary {
     /// Frames processed (= files written).
     pub frames: usize,
-    /// Detections over all frames.
+    /// Detections written over all frames (those kept at the confidence threshold).
     pub detections: usize,
     /// Stage times merged over frames.
     pub timings: StageTimings,
@@ -111,6 +116,12 @@ pub fn run_with(pipelines: &[Box<dyn Pipeline>], args: &DetectArgs) -> Result<De
     check_color(pipeline, dataset.has_color(), &args.data)?;
     let (model, source) = read_model(pipeline, args.model.as_deref(), dataset.has_color())?;
     let detector = build_detector(pipeline, model, &source, &args.set)?;
+    let min_confidence = min_confidence(detector.as_ref(), args.min_confidence)?;
+    let operating_confidence = detector.operating_confidence();
+    let kept = |d: &pomona_core::Detection| match min_confidence {
+        Some(c) => d.confidence.is_some_and(|x| x >= c),
+        None => true,
+    };
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create output folder {}", args.out.display()))?;
     if let Some(dir) = &args.overlay {
@@ -123,6 +134,10 @@ pub fn run_with(pipelines: &[Box<dyn Pipeline>], args: &DetectArgs) -> Result<De
     let bar = progress_bar(frames.len(), "detecting");
     let started = Instant::now();
     let name = pipeline.name();
+    let kept_words = match min_confidence {
+        Some(c) => format!("with confidence ≥ {c:.2}"),
+        None => "scoring ≥ 0".to_owned(),
+    };
     let (results, totals) = pool.install(|| {
         detect_frames(
             detector.as_ref(),
@@ -136,12 +151,22 @@ pub fn run_with(pipelines: &[Box<dyn Pipeline>], args: &DetectArgs) -> Result<De
                 let record = FrameDetections {
                     frame: frames[i].clone(),
                     pipeline: name.to_owned(),
-                    detections: result.detections.clone(),
+                    detections: result
+                        .detections
+                        .iter()
+                        .filter(|d| kept(d))
+                        .cloned()
+                        .collect(),
+                    operating_confidence,
+                    min_confidence,
                 };
                 pomona_io::write_json(&args.out.join(format!("{}.json", frames[i])), &record)?;
                 if let Some(dir) = &args.overlay {
                     let (image, truth) = view_of(&dataset, &frames[i])?;
-                    let shown = shown(&result.detections, 0.0);
+                    let shown = match min_confidence {
+                        Some(_) => record.detections.clone(),
+                        None => shown(&result.detections, 0.0),
+                    };
                     write_overlay(
                         &dir.join(format!("{}.png", frames[i])),
                         &image,
@@ -149,7 +174,7 @@ pub fn run_with(pipelines: &[Box<dyn Pipeline>], args: &DetectArgs) -> Result<De
                         truth.as_ref(),
                         &shown,
                         0.5,
-                        &format!("{}: {name} ({} scoring ≥ 0)", frames[i], shown.len()),
+                        &format!("{}: {name} ({} {})", frames[i], shown.len(), kept_words),
                     )?;
                 }
                 Ok(())
@@ -159,23 +184,36 @@ pub fn run_with(pipelines: &[Box<dyn Pipeline>], args: &DetectArgs) -> Result<De
     })?;
     bar.finish_and_clear();
     let wall = started.elapsed().as_secs_f64();
+    let all: usize = results.iter().map(|(r, ())| r.detections.len()).sum();
+    let written: usize = results
+        .iter()
+        .map(|(r, ())| r.detections.iter().filter(|d| kept(d)).count())
+        .sum();
     let summary = DetectSummary {
         frames: totals.frames,
-        detections: totals.detections,
+        detections: written,
         ms_per_frame: totals.ms_per_frame(),
         timings: totals.timings,
         model: source,
     };
-    let above: usize = results
-        .iter()
-        .map(|(r, ())| r.detections.iter().filter(|d| d.score >= 0.0).count())
-        .sum();
+    let kept_note = match (min_confidence, operating_confidence) {
+        (Some(c), Some(op)) if c == op => {
+            format!("{written} kept at the model's operating confidence {c:.3}")
+        }
+        (Some(c), _) => format!("{written} kept at confidence ≥ {c:.3}"),
+        (None, _) => format!(
+            "all kept: the model has no confidence calibration; {} score ≥ 0",
+            results
+                .iter()
+                .map(|(r, ())| r.detections.iter().filter(|d| d.score >= 0.0).count())
+                .sum::<usize>()
+        ),
+    };
     warn_foreign_files(&args.out, frames);
     println!(
-        "`{name}` ({}) made {} detections ({above} scoring ≥ 0) in {} frame(s) of {} in {:.1} s; \
+        "`{name}` ({}) made {all} detections ({kept_note}) in {} frame(s) of {} in {:.1} s; \
          detection files in {}",
         summary.model,
-        summary.detections,
         summary.frames,
         args.data.display(),
         wall,

@@ -8,7 +8,7 @@
 use std::path::PathBuf;
 
 use anyhow::{bail, Context, Result};
-use pomona_eval::{evaluate, load_detections, write_pr_plot, EvalConfig, FrameInput};
+use pomona_eval::{evaluate, load_detections, write_pr_plot, DetectionSet, EvalConfig, FrameInput};
 use pomona_io::Dataset;
 
 /// Frames listed by name in a warning before the rest are only counted.
@@ -29,9 +29,14 @@ pub struct EvalArgs {
     /// Truth fruit less visible than this (0–1) are ignored: neither found nor missed.
     #[arg(long, default_value_t = 0.5)]
     pub min_visibility: f64,
-    /// Score threshold of the reported precision/recall (default 0, an SVM's decision boundary).
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
-    pub threshold: f64,
+    /// Score threshold of the reported precision/recall. Default: the operating confidence the
+    /// detection files record (calibrated models), otherwise score 0 (an SVM's boundary).
+    #[arg(long, allow_negative_numbers = true, conflicts_with = "min_confidence")]
+    pub threshold: Option<f64>,
+    /// Confidence threshold (0–1) of the reported precision/recall; needs detections with a
+    /// calibrated confidence.
+    #[arg(long, value_name = "C")]
+    pub min_confidence: Option<f64>,
     /// Write the full JSON report here.
     #[arg(long, value_name = "REPORT")]
     pub json: Option<PathBuf>,
@@ -43,6 +48,13 @@ pub struct EvalArgs {
     /// balls annotated beside them. Default: every kind.
     #[arg(long, value_name = "KIND")]
     pub kind: Vec<String>,
+}
+
+/// The operating confidence every detection file records, when they all record the same one.
+fn recorded_operating_confidence(detections: &DetectionSet) -> Option<f64> {
+    let mut values = detections.by_frame.values().map(|d| d.operating_confidence);
+    let first = values.next()??;
+    values.all(|v| v == Some(first)).then_some(first)
 }
 
 fn warn_frames(frames: &[String], what: &str) {
@@ -68,15 +80,25 @@ fn warn_frames(frames: &[String], what: &str) {
 /// Unreadable dataset, truth or detection files (naming the file), a detection file for a frame
 /// the dataset does not have, a dataset without any truth, invalid parameters, unwritable outputs.
 pub fn run(args: &EvalArgs) -> Result<()> {
-    let config = EvalConfig {
-        tolerance_m: args.tolerance_mm / 1000.0,
-        min_visibility: args.min_visibility,
-        threshold: args.threshold,
-    };
-    config.validate()?;
     let dataset = Dataset::open(&args.data)
         .with_context(|| format!("cannot open dataset {}", args.data.display()))?;
     let mut detections = load_detections(&args.detections, &dataset)?;
+    let config = EvalConfig {
+        tolerance_m: args.tolerance_mm / 1000.0,
+        min_visibility: args.min_visibility,
+        threshold: args.threshold.unwrap_or(0.0),
+        min_confidence: match (args.min_confidence, args.threshold) {
+            (Some(c), _) => Some(c),
+            (None, Some(_)) => None,
+            (None, None) => recorded_operating_confidence(&detections),
+        },
+    };
+    config.validate()?;
+    if args.min_confidence.is_none() && args.threshold.is_none() {
+        if let Some(c) = config.min_confidence {
+            eprintln!("operating point: the model's operating confidence {c:.3}, as the detection files record");
+        }
+    }
     warn_frames(
         &detections.missing,
         &format!(
@@ -160,7 +182,19 @@ pub fn run(args: &EvalArgs) -> Result<()> {
                     },
                     report.frames
                 );
-                write_pr_plot(path, curve, &title, config.threshold)?;
+                // The curve is over scores; a confidence threshold is marked at the lowest score
+                // it keeps (confidence is non-decreasing in score).
+                let marked = match config.min_confidence {
+                    Some(_) => frames
+                        .iter()
+                        .flat_map(|f| &f.detections)
+                        .filter(|d| config.keeps(d))
+                        .map(|d| d.score)
+                        .reduce(f64::min)
+                        .unwrap_or(config.threshold),
+                    None => config.threshold,
+                };
+                write_pr_plot(path, curve, &title, marked)?;
             }
             None => eprintln!(
                 "warning: no precision-recall curve, {} not written: {}",

@@ -1,6 +1,17 @@
-//! `pomona experiment`: seed 000's protocol for any pipeline — several random image-level
-//! train/test splits of one labelled dataset; for each, train on one part, detect on the other
-//! and evaluate; then mean ± sd over the splits.
+//! `pomona experiment`: train, detect and evaluate in one command, for any pipeline, in three
+//! protocols:
+//!
+//! * **random splits** (`--data DIR --splits K`, seed 000's protocol): several random
+//!   image-level train/test splits of one labelled dataset; mean ± sd over the splits;
+//! * **cross-domain** (`--train DIR... --test DIR...`): train on some datasets, evaluate on
+//!   others — a test dataset that is also a training dataset is refused;
+//! * **leave-one-out** (`--data DIR --leave-one-out`): each labelled frame is tested once by a
+//!   model trained on all the others (small real sets such as the three `ak-apples` frames).
+//!
+//! Every model is trained with a calibrated confidence (`--calibration-folds`, 0 for none), and
+//! precision/recall are reported at its operating confidence (or at `--threshold` on the score
+//! for uncalibrated models). When no frame is tested twice (cross-domain, leave-one-out) the
+//! report also pools all test frames into one evaluation.
 //!
 //! Split `k` shuffles the frame indices with ChaCha8 keyed by `--seed` on stream `k`, takes the
 //! first `round(fraction · n)` as training frames and the rest as test frames (both sorted), so
@@ -12,8 +23,12 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::{bail, Context, Result};
+use pomona_core::{Detection, PinholeCamera};
 use pomona_eval::{evaluate, EvalConfig, EvalReport, FrameInput, MeanSd, SplitSummary};
-use pomona_pipeline::{FrameSource, ModelFile, Pipeline, StageTimings, TrainOptions};
+use pomona_pipeline::{
+    train_calibrated, CalibrationParams, DatasetFrames, FrameSource, ModelFile, Pipeline,
+    StageTimings, TrainOptions,
+};
 use rand::seq::SliceRandom;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -31,9 +46,19 @@ pub struct ExperimentArgs {
     /// Pipeline (detection method), e.g. `symmetry`.
     #[arg(long, value_name = "NAME")]
     pub pipeline: String,
-    /// Labelled dataset folder (frames with truth are used).
-    #[arg(long, value_name = "DIR")]
-    pub data: PathBuf,
+    /// Labelled dataset folder (frames with truth are used), split randomly or leave-one-out.
+    #[arg(long, value_name = "DIR", required_unless_present = "train",
+          conflicts_with_all = ["train", "test"])]
+    pub data: Option<PathBuf>,
+    /// Training dataset(s) of a cross-domain experiment (repeat); needs `--test`.
+    #[arg(long, value_name = "DIR", requires = "test")]
+    pub train: Vec<PathBuf>,
+    /// Test dataset(s) of a cross-domain experiment (repeat); none may be a training dataset.
+    #[arg(long, value_name = "DIR", requires = "train")]
+    pub test: Vec<PathBuf>,
+    /// Test each labelled frame of `--data` once with a model trained on all the others.
+    #[arg(long, requires = "data", conflicts_with = "splits")]
+    pub leave_one_out: bool,
     /// Number of random train/test splits.
     #[arg(long, value_name = "K", default_value_t = 4,
           value_parser = clap::value_parser!(u64).range(1..=1000))]
@@ -50,9 +75,17 @@ pub struct ExperimentArgs {
     /// Truth fruit less visible than this (0–1) are ignored: neither found nor missed.
     #[arg(long, default_value_t = 0.5)]
     pub min_visibility: f64,
-    /// Score threshold of the reported precision/recall (default 0, an SVM's decision boundary).
+    /// Score threshold of the reported precision/recall for models without calibration (default
+    /// 0, an SVM's decision boundary); calibrated models report at their operating confidence.
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
     pub threshold: f64,
+    /// Folds of the confidence calibration of every trained model (0: no calibration).
+    #[arg(long, value_name = "K", default_value_t = 3,
+          value_parser = clap::value_parser!(u64).range(0..=100))]
+    pub calibration_folds: u64,
+    /// Evaluate only truth objects of this kind (repeat for several), e.g. `apple`.
+    #[arg(long, value_name = "KIND")]
+    pub kind: Vec<String>,
     /// Cross-validation folds of the classifier's grid search.
     #[arg(long, value_name = "K", default_value_t = 5,
           value_parser = clap::value_parser!(u64).range(2..=100))]
@@ -117,17 +150,31 @@ pub fn split_indices(
     Ok((train, test))
 }
 
+/// Which protocol an experiment ran.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Protocol {
+    /// Random image-level splits of one dataset.
+    RandomSplits,
+    /// Train on some datasets, test on others.
+    CrossDomain,
+    /// Each frame tested once by a model trained on all the others.
+    LeaveOneOut,
+}
+
 /// One split of an experiment.
 #[derive(Debug, Clone, Serialize)]
 pub struct SplitRecord {
     /// Split number, from 0.
     pub split: u64,
-    /// Training frames (`<dataset>/<stem>`).
+    /// Training frames (`<stem>`, or `<dataset>/<stem>` with several datasets).
     pub train_frames: Vec<String>,
     /// Test frames.
     pub test_frames: Vec<String>,
-    /// Training wall time per training frame, milliseconds.
+    /// Training wall time per training frame, milliseconds (calibration included).
     pub train_ms_per_frame: f64,
+    /// The trained model's operating confidence (`None` without calibration).
+    pub operating_confidence: Option<f64>,
     /// Detection time per test frame, milliseconds (single-frame cost).
     pub detect_ms_per_frame: Option<f64>,
     /// Mean milliseconds per run of each detection stage.
@@ -141,20 +188,29 @@ pub struct SplitRecord {
 pub struct ExperimentReport {
     /// Pipeline name.
     pub pipeline: String,
-    /// Dataset folder.
-    pub data: PathBuf,
-    /// Labelled frames in the dataset.
+    /// Protocol run.
+    pub protocol: Protocol,
+    /// Training dataset folders (the one `--data` folder for splits and leave-one-out).
+    pub train_data: Vec<PathBuf>,
+    /// Test dataset folders (the same folder for splits and leave-one-out).
+    pub test_data: Vec<PathBuf>,
+    /// Labelled frames in the training datasets.
     pub frames: usize,
     /// Seed of splits and training.
     pub seed: u64,
-    /// Fraction of frames trained on.
-    pub train_fraction: f64,
-    /// Evaluation parameters.
+    /// Fraction of frames trained on (random splits only).
+    pub train_fraction: Option<f64>,
+    /// Evaluation parameters (the threshold applies to uncalibrated models).
     pub eval: EvalConfig,
+    /// Truth kinds evaluated (empty: all).
+    pub kinds: Vec<String>,
     /// `--set` overrides applied before detection.
     pub set: serde_json::Value,
     /// Mean ± sd over splits of AP, precision, recall, centre error, and the mean PR curve.
     pub summary: SplitSummary,
+    /// Every test frame of every split in one evaluation, when no frame was tested twice
+    /// (cross-domain, leave-one-out); each frame at its own model's operating point.
+    pub pooled: Option<EvalReport>,
     /// Mean ± sd of training time per training frame, milliseconds.
     pub train_ms_per_frame: Option<MeanSd>,
     /// Mean ± sd of detection time per test frame, milliseconds.
@@ -185,50 +241,209 @@ fn fmt_mean_sd(m: Option<MeanSd>, scale: f64, digits: usize, unit: &str) -> Stri
     )
 }
 
+fn dirs(d: &[PathBuf]) -> String {
+    d.iter()
+        .map(|p| p.display().to_string())
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
 /// The summary as a Markdown table.
 pub fn summary_markdown(r: &ExperimentReport) -> String {
     let s = &r.summary;
+    let fmt = |v: Option<f64>, scale: f64, digits: usize, unit: &str| {
+        v.map_or_else(
+            || "n/a".to_owned(),
+            |v| format!("{:.digits$}{unit}", v * scale),
+        )
+    };
+    let pooled = |f: &dyn Fn(&EvalReport) -> String| r.pooled.as_ref().map_or("".into(), f);
     let rows = [
-        ("AP (VOC 11-point)", fmt_mean_sd(s.ap_voc11, 1.0, 3, "")),
-        ("AP (all points)", fmt_mean_sd(s.ap, 1.0, 3, "")),
-        ("precision", fmt_mean_sd(s.precision, 1.0, 3, "")),
-        ("recall", fmt_mean_sd(s.recall, 1.0, 3, "")),
+        (
+            "AP (VOC 11-point)",
+            fmt_mean_sd(s.ap_voc11, 1.0, 3, ""),
+            pooled(&|p| fmt(p.ap_voc11, 1.0, 3, "")),
+        ),
+        (
+            "AP (all points)",
+            fmt_mean_sd(s.ap, 1.0, 3, ""),
+            pooled(&|p| fmt(p.ap, 1.0, 3, "")),
+        ),
+        (
+            "precision",
+            fmt_mean_sd(s.precision, 1.0, 3, ""),
+            pooled(&|p| fmt(p.precision, 1.0, 3, "")),
+        ),
+        (
+            "recall",
+            fmt_mean_sd(s.recall, 1.0, 3, ""),
+            pooled(&|p| fmt(p.recall, 1.0, 3, "")),
+        ),
         (
             "centre error (median)",
             fmt_mean_sd(s.center_error_median_m, 1e3, 1, " mm"),
+            pooled(&|p| fmt(p.center_error_m.median, 1e3, 1, " mm")),
+        ),
+        (
+            "diameter error (mean abs)",
+            "".into(),
+            pooled(&|p| fmt(p.diameter_error_m.mean_abs, 1e3, 1, " mm")),
         ),
         (
             "train time / frame",
             fmt_mean_sd(r.train_ms_per_frame, 1.0, 1, " ms"),
+            String::new(),
         ),
         (
             "detect time / frame",
             fmt_mean_sd(r.detect_ms_per_frame, 1.0, 1, " ms"),
+            String::new(),
         ),
     ];
+    let what = match r.protocol {
+        Protocol::RandomSplits => format!(
+            "{} ({} labelled frames), {} random splits, train fraction {}",
+            dirs(&r.train_data),
+            r.frames,
+            s.splits,
+            r.train_fraction.unwrap_or(0.5)
+        ),
+        Protocol::CrossDomain => format!(
+            "trained on {} ({} labelled frames), tested on {}",
+            dirs(&r.train_data),
+            r.frames,
+            dirs(&r.test_data)
+        ),
+        Protocol::LeaveOneOut => format!(
+            "{} ({} labelled frames), leave-one-out",
+            dirs(&r.train_data),
+            r.frames
+        ),
+    };
+    let operating = if r.per_split.iter().all(|p| p.operating_confidence.is_some()) {
+        "each model's operating confidence".to_owned()
+    } else {
+        format!("score ≥ {}", r.eval.threshold)
+    };
+    let kinds = if r.kinds.is_empty() {
+        String::new()
+    } else {
+        format!(", kind {}", r.kinds.join("/"))
+    };
     let mut out = format!(
-        "## Experiment: `{}` on {} ({} labelled frames), {} splits, train fraction {}, seed {}, \
-         tolerance {:.0} mm, threshold {}\n\n| metric | mean ± sd |\n|---|---|\n",
+        "## Experiment: `{}` {what}, seed {}, tolerance {:.0} mm, operating point: {operating}{kinds}\n\n\
+         | metric | mean ± sd over splits | pooled test frames |\n|---|---|---|\n",
         r.pipeline,
-        r.data.display(),
-        r.frames,
-        s.splits,
-        r.train_fraction,
         r.seed,
         r.eval.tolerance_m * 1e3,
-        r.eval.threshold
     );
-    for (k, v) in rows {
-        out.push_str(&format!("| {k} | {v} |\n"));
+    for (k, v, p) in rows {
+        out.push_str(&format!("| {k} | {v} | {p} |\n"));
     }
     out
+}
+
+/// Opens `dirs` as one frame source, refusing folders that do not exist.
+fn open_sets(pipeline: &dyn Pipeline, dirs: &[PathBuf]) -> Result<DatasetFrames> {
+    open_frames(pipeline, dirs)
+}
+
+/// Refuses a cross-domain experiment whose test folders include a training folder (compared
+/// after resolving links and `..`).
+///
+/// # Errors
+/// A folder that cannot be resolved, or one that is both a training and a test set.
+pub fn check_disjoint(train: &[PathBuf], test: &[PathBuf]) -> Result<()> {
+    let resolve = |p: &PathBuf| {
+        std::fs::canonicalize(p).with_context(|| format!("cannot open dataset {}", p.display()))
+    };
+    let train_resolved: Vec<PathBuf> = train.iter().map(resolve).collect::<Result<_>>()?;
+    for t in test {
+        let r = resolve(t)?;
+        if let Some(i) = train_resolved.iter().position(|x| *x == r) {
+            bail!(
+                "{} is both a training set (--train {}) and a test set: a cross-domain \
+                 experiment must test on data it did not train on",
+                t.display(),
+                train[i].display()
+            );
+        }
+    }
+    Ok(())
+}
+
+/// The (training, test) frame indices of every split of the protocol, with the training and
+/// test sources they index.
+struct Plan {
+    protocol: Protocol,
+    train: DatasetFrames,
+    test: DatasetFrames,
+    splits: Vec<(Vec<usize>, Vec<usize>)>,
+    train_data: Vec<PathBuf>,
+    test_data: Vec<PathBuf>,
+}
+
+fn plan(pipeline: &dyn Pipeline, args: &ExperimentArgs) -> Result<Plan> {
+    if let Some(data) = &args.data {
+        let frames = open_sets(pipeline, std::slice::from_ref(data))?;
+        let n = frames.len();
+        let (protocol, splits) = if args.leave_one_out {
+            if n < 2 {
+                bail!(
+                    "leave-one-out needs at least 2 labelled frames, {} has {n}",
+                    data.display()
+                );
+            }
+            let splits = (0..n)
+                .map(|k| ((0..n).filter(|&i| i != k).collect(), vec![k]))
+                .collect();
+            (Protocol::LeaveOneOut, splits)
+        } else {
+            let splits = (0..args.splits)
+                .map(|k| split_indices(n, args.train_fraction, args.seed, k))
+                .collect::<Result<_>>()?;
+            (Protocol::RandomSplits, splits)
+        };
+        return Ok(Plan {
+            protocol,
+            test: frames.clone(),
+            train: frames,
+            splits,
+            train_data: vec![data.clone()],
+            test_data: vec![data.clone()],
+        });
+    }
+    if args.train.is_empty() || args.test.is_empty() {
+        bail!("give either --data DIR, or --train DIR... and --test DIR...");
+    }
+    check_disjoint(&args.train, &args.test)?;
+    let train = open_sets(pipeline, &args.train)?;
+    let test = open_sets(pipeline, &args.test)?;
+    let splits = vec![((0..train.len()).collect(), (0..test.len()).collect())];
+    Ok(Plan {
+        protocol: Protocol::CrossDomain,
+        train,
+        test,
+        splits,
+        train_data: args.train.clone(),
+        test_data: args.test.clone(),
+    })
+}
+
+/// Name of frame `i` of `frames`: its stem, prefixed with its dataset folder when `several`.
+fn frame_name(frames: &DatasetFrames, i: usize, several: bool) -> String {
+    match frames.frame_ref(i) {
+        Some((ds, stem)) if several => format!("{}/{stem}", ds.root().display()),
+        Some((_, stem)) => stem.to_owned(),
+        None => format!("#{i}"),
+    }
 }
 
 /// Runs `pomona experiment` choosing the pipeline from `pipelines` (tests pass their own).
 ///
 /// # Errors
-/// Unknown pipeline, unreadable data, too few labelled frames, training or detection failures,
-/// bad `--set` keys, an unwritable report.
+/// Unknown pipeline, unreadable data, too few labelled frames, a test set that is also a
+/// training set, training or detection failures, bad `--set` keys, an unwritable report.
 pub fn run_with(
     pipelines: &[Box<dyn Pipeline>],
     args: &ExperimentArgs,
@@ -240,28 +455,32 @@ pub fn run_with(
         tolerance_m: args.tolerance_mm / 1000.0,
         min_visibility: args.min_visibility,
         threshold: args.threshold,
+        min_confidence: None,
     };
     config.validate()?;
-    let frames = open_frames(pipeline, std::slice::from_ref(&args.data))?;
-    let camera = match frames.frame_ref(0) {
+    let calibration = CalibrationParams {
+        folds: args.calibration_folds as usize,
+        tolerance_m: config.tolerance_m,
+        min_visibility: config.min_visibility,
+        ..CalibrationParams::default()
+    };
+    let plan = plan(pipeline, args)?;
+    let camera = match plan.test.frame_ref(0) {
         Some((ds, _)) => *ds.camera(),
-        None => bail!("{}: no labelled frames", args.data.display()),
+        None => bail!("{}: no labelled frames", dirs(&plan.test_data)),
     };
-    // Fail on a bad split fraction before training anything.
-    split_indices(frames.len(), args.train_fraction, args.seed, 0)?;
+    let several_train = plan.train_data.len() > 1;
+    let several_test = plan.test_data.len() > 1;
     let pool = thread_pool(args.threads.map(|n| n as usize))?;
-    let name_of = |i: usize| {
-        frames
-            .frame_ref(i)
-            .map_or_else(|| format!("#{i}"), |(_, stem)| stem.to_owned())
-    };
+    let n_splits = plan.splits.len();
 
     let mut per_split = Vec::new();
+    let mut pooled_inputs = Vec::new();
     let mut all_timings = StageTimings::default();
-    for k in 0..args.splits {
-        let (train_idx, test_idx) = split_indices(frames.len(), args.train_fraction, args.seed, k)?;
-        let train_set = frames.subset(&train_idx);
-        let test_set = frames.subset(&test_idx);
+    for (k, (train_idx, test_idx)) in plan.splits.iter().enumerate() {
+        let k = k as u64;
+        let train_set = plan.train.subset(train_idx);
+        let test_set = plan.test.subset(test_idx);
         let options = TrainOptions {
             seed: args.seed.wrapping_add(k),
             folds: args.folds as usize,
@@ -274,10 +493,11 @@ pub fn run_with(
         };
         let started = Instant::now();
         let model: ModelFile = pool
-            .install(|| pipeline.train(&train_set, &options, &progress))
+            .install(|| train_calibrated(pipeline, &train_set, &options, &calibration, &progress))
             .with_context(|| format!("training `{}` on split {}", pipeline.name(), k + 1))?;
         let train_s = started.elapsed().as_secs_f64();
         bar.finish_and_clear();
+        let operating_confidence = model.calibration.map(|c| c.operating_confidence);
         let source = ModelSource::File(PathBuf::from(format!("<model of split {}>", k + 1)));
         let detector = build_detector(pipeline, model, &source, &args.set)?;
 
@@ -297,21 +517,31 @@ pub fn run_with(
         bar.finish_and_clear();
         all_timings.merge(&totals.timings);
         let mut inputs = Vec::with_capacity(results.len());
-        for (i, (r, truth)) in results.into_iter().enumerate() {
+        for (i, (r, mut truth)) in results.into_iter().enumerate() {
+            if !args.kind.is_empty() {
+                truth.fruits.retain(|f| args.kind.contains(&f.kind));
+            }
             inputs.push(FrameInput {
-                frame: name_of(test_idx[i]),
+                frame: frame_name(&plan.test, test_idx[i], several_test),
                 truth,
                 detections: r.detections,
             });
         }
-        let report = evaluate(&inputs, &camera, &config)?;
+        let split_config = EvalConfig {
+            min_confidence: operating_confidence,
+            ..config
+        };
+        let report = evaluate(&inputs, &camera, &split_config)?;
+        if plan.protocol != Protocol::RandomSplits {
+            pooled_inputs.extend(inputs.into_iter().map(|f| (f, operating_confidence)));
+        }
         let fmt = |v: Option<f64>| v.map_or_else(|| "n/a".into(), |v| format!("{v:.3}"));
         eprintln!(
-            "split {}/{}: trained on {} frames in {:.1} s, tested on {}: AP {} (VOC11 {}), P {}, R {}",
+            "split {}/{n_splits}: trained on {} frames in {:.1} s{}, tested on {}: AP {} (VOC11 {}), P {}, R {}",
             k + 1,
-            args.splits,
             train_idx.len(),
             train_s,
+            operating_confidence.map_or(String::new(), |c| format!(" (operating confidence {c:.3})")),
             test_idx.len(),
             fmt(report.ap),
             fmt(report.ap_voc11),
@@ -320,9 +550,16 @@ pub fn run_with(
         );
         per_split.push(SplitRecord {
             split: k,
-            train_frames: train_idx.iter().map(|&i| name_of(i)).collect(),
-            test_frames: test_idx.iter().map(|&i| name_of(i)).collect(),
+            train_frames: train_idx
+                .iter()
+                .map(|&i| frame_name(&plan.train, i, several_train))
+                .collect(),
+            test_frames: test_idx
+                .iter()
+                .map(|&i| frame_name(&plan.test, i, several_test))
+                .collect(),
             train_ms_per_frame: 1e3 * train_s / train_idx.len().max(1) as f64,
+            operating_confidence,
             detect_ms_per_frame: totals.ms_per_frame(),
             stage_ms: totals
                 .timings
@@ -334,16 +571,21 @@ pub fn run_with(
         });
     }
 
+    let pooled = pooled_report(pooled_inputs, &camera, &config)?;
     let reports: Vec<EvalReport> = per_split.iter().map(|s| s.report.clone()).collect();
     let report = ExperimentReport {
         pipeline: pipeline.name().to_owned(),
-        data: args.data.clone(),
-        frames: frames.len(),
+        protocol: plan.protocol,
+        train_data: plan.train_data,
+        test_data: plan.test_data,
+        frames: plan.train.len(),
         seed: args.seed,
-        train_fraction: args.train_fraction,
+        train_fraction: (plan.protocol == Protocol::RandomSplits).then_some(args.train_fraction),
         eval: config,
+        kinds: args.kind.clone(),
         set: params::to_json(&args.set),
         summary: SplitSummary::new(&reports),
+        pooled,
         train_ms_per_frame: MeanSd::of(per_split.iter().map(|s| Some(s.train_ms_per_frame))),
         detect_ms_per_frame: MeanSd::of(per_split.iter().map(|s| s.detect_ms_per_frame)),
         per_split,
@@ -358,6 +600,54 @@ pub fn run_with(
         println!("```");
     }
     Ok(report)
+}
+
+/// One evaluation of every split's test frames (`None` for random splits, which test frames
+/// more than once). With calibrated models, detections are ranked by confidence (comparable
+/// across the split models) and the operating point keeps, in each frame, the detections at or
+/// above its own model's operating confidence; otherwise raw scores and `config.threshold`.
+fn pooled_report(
+    inputs: Vec<(FrameInput, Option<f64>)>,
+    camera: &PinholeCamera,
+    config: &EvalConfig,
+) -> Result<Option<EvalReport>> {
+    if inputs.is_empty() {
+        return Ok(None);
+    }
+    if inputs.iter().any(|(_, op)| op.is_none()) {
+        let frames: Vec<FrameInput> = inputs.into_iter().map(|(f, _)| f).collect();
+        return Ok(Some(evaluate(&frames, camera, config)?));
+    }
+    let rescored = |shift: bool| -> Vec<FrameInput> {
+        inputs
+            .iter()
+            .map(|(f, op)| FrameInput {
+                detections: f
+                    .detections
+                    .iter()
+                    .map(|d| Detection {
+                        score: d.confidence.unwrap_or(0.0)
+                            - if shift { op.unwrap_or(0.0) } else { 0.0 },
+                        ..d.clone()
+                    })
+                    .collect(),
+                ..f.clone()
+            })
+            .collect()
+    };
+    let at_zero = EvalConfig {
+        threshold: 0.0,
+        min_confidence: None,
+        ..*config
+    };
+    let ranked = evaluate(&rescored(false), camera, &at_zero)?;
+    let operating = evaluate(&rescored(true), camera, &at_zero)?;
+    Ok(Some(EvalReport {
+        ap: ranked.ap,
+        ap_voc11: ranked.ap_voc11,
+        pr_curve: ranked.pr_curve,
+        ..operating
+    }))
 }
 
 #[cfg(test)]

@@ -386,6 +386,7 @@ impl Detector for BlobDetector {
                     kind: None,
                     support_points: None,
                     fit_rms_m: None,
+                    confidence: None,
                 });
             }
         }

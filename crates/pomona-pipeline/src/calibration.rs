@@ -1,0 +1,271 @@
+//! Training with a calibrated confidence and an operating threshold, for any pipeline.
+//!
+//! A detector's raw score is only meaningful relative to the data it was trained on. To give
+//! every model a confidence whose threshold means the same everywhere, [`train_calibrated`]
+//! cross-fits: the labelled frames are split into `folds` parts (seeded shuffle); for each part a
+//! model is trained on the other parts and run on it, and every held-out detection is labelled
+//! true or false by matching it to the truth with the evaluation's rules
+//! ([`pomona_eval::match_frame`]: 50 mm centre tolerance, fruit under 50 % visible ignored). A
+//! [`ScoreCalibration`] (Platt sigmoid + operating confidence) is fitted to the pooled held-out
+//! detections, and the model trained on *all* frames carries it. Held-out, because a model's
+//! scores on its own training frames are over-confident.
+//!
+//! Frames whose truth is incomplete (`"complete": false`) contribute their true detections and
+//! their findable fruit, but not their unmatched detections: those may be unannotated fruit.
+//!
+//! Caveat, written down: the final model is retrained on all frames, and its classifier's grid
+//! search may settle on slightly different hyperparameters than the fold models; the calibration
+//! assumes their score scales agree (as LIBSVM's own Platt scaling does with its internal
+//! cross-validation).
+//!
+//! [`CalibratedDetector`] wraps a loaded detector and fills each detection's `confidence`;
+//! [`load_detector`] is what every caller should use to turn a model file into a detector.
+
+use pomona_core::{Detection, RgbdFrame};
+use pomona_eval::{match_frame, DetectionOutcome, EvalConfig};
+use pomona_learn::{ModelFile, OperatingPoint, ScoreCalibration};
+use rand::seq::SliceRandom;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use crate::{
+    Detector, FrameSource, LabelledFrame, Pipeline, PipelineError, StageTimings, TrainOptions,
+};
+
+/// How the confidence calibration is fitted.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct CalibrationParams {
+    /// Cross-fitting folds (0 = no calibration: the model reports raw scores only).
+    pub folds: usize,
+    /// Largest centre distance, metres, at which a held-out detection counts as true.
+    pub tolerance_m: f64,
+    /// Truth fruit less visible than this are neither findable nor false when detected.
+    pub min_visibility: f64,
+    /// How the operating confidence is chosen.
+    pub operating_point: OperatingPoint,
+}
+
+impl Default for CalibrationParams {
+    fn default() -> Self {
+        let eval = EvalConfig::default();
+        Self {
+            folds: 3,
+            tolerance_m: eval.tolerance_m,
+            min_visibility: eval.min_visibility,
+            operating_point: OperatingPoint::MaxF1,
+        }
+    }
+}
+
+/// A detector whose detections carry the calibrated `confidence` of their score.
+pub struct CalibratedDetector {
+    inner: Box<dyn Detector>,
+    calibration: ScoreCalibration,
+}
+
+impl CalibratedDetector {
+    /// Wraps `inner` with `calibration`.
+    pub fn new(inner: Box<dyn Detector>, calibration: ScoreCalibration) -> Self {
+        Self { inner, calibration }
+    }
+}
+
+impl Detector for CalibratedDetector {
+    fn pipeline(&self) -> &'static str {
+        self.inner.pipeline()
+    }
+
+    fn detect(
+        &self,
+        frame: &RgbdFrame,
+        timings: &mut StageTimings,
+    ) -> Result<Vec<Detection>, PipelineError> {
+        let mut detections = self.inner.detect(frame, timings)?;
+        for d in &mut detections {
+            d.confidence = Some(self.calibration.confidence(d.score));
+        }
+        Ok(detections)
+    }
+
+    fn operating_confidence(&self) -> Option<f64> {
+        Some(self.calibration.operating_confidence)
+    }
+}
+
+/// The detector of `model`, with confidences when the model carries a calibration.
+///
+/// # Errors
+/// As [`Pipeline::load`].
+pub fn load_detector(
+    pipeline: &dyn Pipeline,
+    model: &ModelFile,
+) -> Result<Box<dyn Detector>, PipelineError> {
+    let inner = pipeline.load(model)?;
+    Ok(match model.calibration {
+        Some(c) => Box::new(CalibratedDetector::new(inner, c)),
+        None => inner,
+    })
+}
+
+/// A view of some frames of another source, by index.
+struct FrameSubset<'a> {
+    source: &'a dyn FrameSource,
+    indices: Vec<usize>,
+}
+
+impl FrameSource for FrameSubset<'_> {
+    fn len(&self) -> usize {
+        self.indices.len()
+    }
+
+    fn load(&self, i: usize) -> Result<LabelledFrame, PipelineError> {
+        match self.indices.get(i) {
+            Some(&j) => self.source.load(j),
+            None => Err(PipelineError::InvalidParameter {
+                name: "frame index".into(),
+                reason: format!(
+                    "{i} is past the {} frames of the subset",
+                    self.indices.len()
+                ),
+            }),
+        }
+    }
+}
+
+/// Fold (0-based) of each of `n` frames: a seeded shuffle dealt round-robin, so fold sizes
+/// differ by at most one.
+fn fold_of_frames(n: usize, folds: usize, seed: u64) -> Vec<usize> {
+    let mut order: Vec<usize> = (0..n).collect();
+    let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0xCA11_B4A7_E000_0000);
+    order.shuffle(&mut rng);
+    let mut fold = vec![0; n];
+    for (rank, &i) in order.iter().enumerate() {
+        fold[i] = rank % folds;
+    }
+    fold
+}
+
+/// Held-out evidence of one frame: `(score, is_true)` per usable detection and the number of
+/// findable fruit.
+fn held_out_labels(
+    frame: &LabelledFrame,
+    detections: &[Detection],
+    params: &CalibrationParams,
+) -> (Vec<(f64, bool)>, usize) {
+    let config = EvalConfig {
+        tolerance_m: params.tolerance_m,
+        min_visibility: params.min_visibility,
+        ..EvalConfig::default()
+    };
+    let m = match_frame(&frame.truth, detections, frame.frame.camera(), &config);
+    let labelled = detections
+        .iter()
+        .zip(&m.detections)
+        .filter_map(|(d, outcome)| match outcome {
+            DetectionOutcome::TruePositive { .. } => Some((d.score, true)),
+            DetectionOutcome::FalsePositive if frame.truth.complete => Some((d.score, false)),
+            _ => None,
+        })
+        .collect();
+    (labelled, m.counted_truth())
+}
+
+/// Trains `pipeline` on `frames` and, unless `params.folds` is 0, attaches a
+/// [`ScoreCalibration`] fitted on cross-fitted held-out detections (see the module docs).
+/// `progress` receives (training frames processed, total) over all the training passes.
+///
+/// # Errors
+/// Training or detection errors of the pipeline; [`PipelineError::NotEnoughTrainingData`] when
+/// there are fewer than two frames or the held-out detections cannot be calibrated (no true
+/// or no false detection, or scores that do not rank true above false).
+pub fn train_calibrated(
+    pipeline: &dyn Pipeline,
+    frames: &dyn FrameSource,
+    options: &TrainOptions,
+    params: &CalibrationParams,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<ModelFile, PipelineError> {
+    if params.folds == 0 {
+        return pipeline.train(frames, options, progress);
+    }
+    let n = frames.len();
+    let not_enough = |reason: String| PipelineError::NotEnoughTrainingData {
+        pipeline: pipeline.name(),
+        reason,
+    };
+    // Fewer frames than folds: one frame per fold (leave-one-frame-out).
+    let folds = params.folds.min(n);
+    if folds < 2 {
+        return Err(not_enough(format!(
+            "confidence calibration needs at least 2 folds of labelled frames, got {n} frame(s) \
+             and {} fold(s); set 0 calibration folds for none",
+            params.folds
+        )));
+    }
+    let fold = fold_of_frames(n, folds, options.seed);
+    // Training passes: each fold model sees n − |fold| frames, the final one n.
+    let total = (folds - 1) * n + n;
+    let mut done = 0;
+    let mut labelled = Vec::new();
+    let mut truth_fruit = 0;
+    for k in 0..folds {
+        let (held, train): (Vec<usize>, Vec<usize>) = (0..n).partition(|&i| fold[i] == k);
+        let train_set = FrameSubset {
+            source: frames,
+            indices: train,
+        };
+        let offset = done;
+        let fold_options = TrainOptions {
+            seed: options.seed.wrapping_add(1 + k as u64),
+            ..*options
+        };
+        let model = pipeline.train(&train_set, &fold_options, &|d, _| {
+            progress(offset + d, total);
+        })?;
+        done += train_set.len();
+        let detector = pipeline.load(&model)?;
+        let per_frame: Vec<(Vec<(f64, bool)>, usize)> = held
+            .par_iter()
+            .map(|&i| {
+                let frame = frames.load(i)?;
+                let detections = detector.detect(&frame.frame, &mut StageTimings::default())?;
+                Ok(held_out_labels(&frame, &detections, params))
+            })
+            .collect::<Result<_, PipelineError>>()?;
+        for (l, t) in per_frame {
+            labelled.extend(l);
+            truth_fruit += t;
+        }
+    }
+    let (scores, is_true): (Vec<f64>, Vec<bool>) = labelled.into_iter().unzip();
+    let calibration = ScoreCalibration::fit(&scores, &is_true, truth_fruit, params.operating_point)
+        .map_err(|e| {
+            not_enough(format!(
+                "cannot calibrate confidences on the held-out detections of {folds} folds: {e}"
+            ))
+        })?;
+    let offset = done;
+    let mut model = pipeline.train(frames, options, &|d, _| progress(offset + d, total))?;
+    model.calibration = Some(calibration);
+    Ok(model)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn folds_are_balanced_deterministic_and_seeded() {
+        let f = fold_of_frames(10, 3, 7);
+        assert_eq!(f, fold_of_frames(10, 3, 7));
+        assert_ne!(f, fold_of_frames(10, 3, 8));
+        let mut sizes = [0; 3];
+        for &k in &f {
+            sizes[k] += 1;
+        }
+        assert_eq!(sizes.iter().sum::<usize>(), 10);
+        assert!(sizes.iter().all(|&s| (3..=4).contains(&s)), "{sizes:?}");
+    }
+}

@@ -7,7 +7,7 @@
 
 use nalgebra::{Point3, Rotation3, Unit, Vector3};
 
-use crate::{FruitKind, FruitShape, Material};
+use crate::{Blush, FruitKind, FruitShape, Material};
 
 /// Samples per bounding-sphere chord when marching a ray (2–5 mm steps for real fruit sizes).
 const MARCH_STEPS: usize = 48;
@@ -27,6 +27,8 @@ pub struct FruitBody {
     pub shape: FruitShape,
     /// Surface appearance.
     pub material: Material,
+    /// A differently coloured cheek, if any (see [`FruitBody::material_at`]).
+    pub blush: Option<Blush>,
     bounding_radius: f64,
     max_radius: f64,
     diameter: f64,
@@ -49,9 +51,31 @@ impl FruitBody {
             orientation,
             shape,
             material,
+            blush: None,
             bounding_radius,
             max_radius: max_radius * 1.01,
             diameter,
+        }
+    }
+
+    /// The same body with a blush (or none).
+    pub fn with_blush(mut self, blush: Option<Blush>) -> Self {
+        self.blush = blush;
+        self
+    }
+
+    /// The surface material at a scene-frame point of the body: [`FruitBody::material`], with
+    /// the blush blended in where there is one.
+    pub fn material_at(&self, p: &Point3<f64>) -> Material {
+        match &self.blush {
+            None => self.material,
+            Some(blush) => {
+                let from_center = (p - self.center).normalize();
+                Material {
+                    albedo: blush.albedo_at(&self.material.albedo, &from_center),
+                    ..self.material
+                }
+            }
         }
     }
 

@@ -1,13 +1,14 @@
-//! A leaf blade: a thin curved patch with an egg-shaped (ovate) outline.
+//! A leaf blade: a thin curved patch cut by the outline of its [`LeafFamily`].
 //!
 //! In the leaf frame x runs along the blade (petiole at `x = -a`, tip at `x = +a`), y across it
 //! and z along the normal. The surface is the paraboloid `z = kx·x² + ky·y²` (droop along the
-//! blade, cupping across it), cut by the outline `|y| <= b·sqrt(1 - s²)·(1 - 0.3·s)` with
-//! `s = x / a`. A ray meets a paraboloid in a quadratic, so intersection is exact and cheap.
+//! blade, cupping or curling across it), cut by the family's outline (the narrow domain's
+//! elliptic outline is `|y| <= b·sqrt(1 - s²)·(1 - 0.3·s)` with `s = x / a`). A ray meets a
+//! paraboloid in a quadratic, so intersection is exact and cheap.
 
 use nalgebra::{Point3, Rotation3, Vector3};
 
-use crate::Material;
+use crate::{LeafFamily, Material};
 
 /// One leaf in the scene frame.
 #[derive(Debug, Clone, PartialEq)]
@@ -26,6 +27,8 @@ pub struct Leaf {
     pub bend_across: f64,
     /// Surface appearance.
     pub material: Material,
+    /// Outline of the blade.
+    pub family: LeafFamily,
 }
 
 /// Hit record of a leaf: ray parameter and blade coordinates (for the midrib shading).
@@ -105,12 +108,8 @@ impl Leaf {
 
     /// Relative across-blade position if `(x, y)` lies inside the outline.
     fn across_at(&self, x: f64, y: f64) -> Option<f64> {
-        let s = x / self.half_length_m;
-        if s.abs() >= 1.0 {
-            return None;
-        }
-        let half = self.half_width_m * (1.0 - s * s).sqrt() * (1.0 - 0.3 * s);
-        (y.abs() <= half).then(|| y / half)
+        self.family
+            .across_at(x, y, self.half_length_m, self.half_width_m)
     }
 
     /// Unit normal at a scene-frame point of the blade, on the leaf frame's +z side.
@@ -143,6 +142,7 @@ mod tests {
                 specular: 0.1,
                 shininess: 10.0,
             },
+            family: LeafFamily::Elliptic,
         }
     }
 
@@ -168,5 +168,50 @@ mod tests {
         let q = l.orientation.inverse() * (Point3::origin() + d * hit.t - l.center);
         assert!((q.z - 6.0 * q.x * q.x).abs() < 1e-12);
         assert!(l.bounding_radius_m() >= (q.norm() - 1e-12));
+    }
+
+    /// Whether the ray through the leaf-frame point `(x, y)` of a flat leaf hits the blade.
+    fn hits_at(family: LeafFamily, x: f64, y: f64) -> bool {
+        let mut l = leaf(0.0);
+        l.family = family;
+        l.half_width_m = 0.05 * family.width_ratio_range().1;
+        let p = l.center + l.orientation * Vector3::new(x, y, 0.0);
+        l.intersect(&Point3::origin(), &(p - Point3::origin()))
+            .is_some()
+    }
+
+    #[test]
+    fn every_family_is_hit_on_its_blade_and_missed_in_its_notches() {
+        let a = 0.05;
+        // Elliptic: centre hits, beyond the tip misses.
+        assert!(hits_at(LeafFamily::Elliptic, 0.0, 0.01));
+        assert!(!hits_at(LeafFamily::Elliptic, 0.0, 0.03));
+        // Lanceolate: widest below the middle, pointed: near the tip a narrow strip only.
+        let b = 0.05 * LeafFamily::Lanceolate.width_ratio_range().1;
+        assert!(hits_at(LeafFamily::Lanceolate, -0.5 * a, 0.9 * b));
+        assert!(!hits_at(LeafFamily::Lanceolate, 0.8 * a, 0.3 * b));
+        // Lobed: inside the tip lobe and a side lobe; the notch between them misses.
+        assert!(hits_at(LeafFamily::Lobed, 0.85 * a, 0.0));
+        let side = 72f64.to_radians();
+        assert!(hits_at(
+            LeafFamily::Lobed,
+            0.8 * a * side.cos(),
+            0.8 * a * side.sin()
+        ));
+        let notch = 36f64.to_radians();
+        assert!(!hits_at(
+            LeafFamily::Lobed,
+            0.7 * a * notch.cos(),
+            0.7 * a * notch.sin()
+        ));
+        assert!(!hits_at(LeafFamily::Lobed, -0.7 * a, 0.0), "petiole notch");
+        // Compound: inside a lateral leaflet and on the rachis; between leaflets misses.
+        let b = 0.05 * LeafFamily::Compound.width_ratio_range().1;
+        assert!(hits_at(LeafFamily::Compound, -0.55 * a, 0.5 * b));
+        assert!(hits_at(LeafFamily::Compound, -0.05 * a, -0.6 * b));
+        assert!(hits_at(LeafFamily::Compound, -0.3 * a, 0.0));
+        assert!(hits_at(LeafFamily::Compound, 0.8 * a, 0.1 * b));
+        assert!(!hits_at(LeafFamily::Compound, -0.3 * a, 0.5 * b));
+        assert!(!hits_at(LeafFamily::Compound, 0.3 * a, -0.6 * b));
     }
 }

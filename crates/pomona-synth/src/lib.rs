@@ -33,35 +33,48 @@
 //! * Stereo: see [`StereoRig`] for the rig convention and `rig.json`.
 
 mod backdrop;
+mod background;
+mod blush;
 mod camera_preset;
 mod dataset;
 mod depth_noise;
+mod domain;
 mod error;
 mod fruit_body;
 mod fruit_kind;
 mod fruit_shape;
+mod image_effects;
 mod leaf;
+mod leaf_family;
 mod lighting;
 mod material;
 mod render;
 mod rng;
 mod scene;
 mod scene_spec;
+mod shadow;
 mod stem;
 mod stereo;
+mod wide_scene;
 
-pub use backdrop::Backdrop;
+pub use backdrop::{Backdrop, BackdropKind};
+pub use background::Background;
+pub use blush::Blush;
 pub use camera_preset::CameraPreset;
 pub use dataset::{generate_dataset, DatasetSpec, DatasetSummary, DEPTH_UNIT_M};
 pub use depth_noise::{
-    NoiseModel, LOW_SIGMA_AT_1M, TOF_DARK_AMPLITUDE, TOF_EDGE_JUMP, TOF_GRAZING_COS, TOF_SIGMA_MAX,
-    TOF_SIGMA_MIN,
+    NoiseModel, LOW_SIGMA_AT_1M, STEREO_BASELINE_M, STEREO_MIN_Z_M, STEREO_SUBPIXEL_SIGMA_PX,
+    TOF_DARK_AMPLITUDE, TOF_EDGE_JUMP, TOF_GRAZING_COS, TOF_MULTIPATH_MAX_M,
+    TOF_MULTIPATH_RADIUS_PX, TOF_SIGMA_MAX, TOF_SIGMA_MIN,
 };
+pub use domain::Domain;
 pub use error::SynthError;
 pub use fruit_body::FruitBody;
 pub use fruit_kind::{FruitChoice, FruitKind, PeduncleRange};
 pub use fruit_shape::FruitShape;
+pub use image_effects::ImageEffects;
 pub use leaf::{Leaf, LeafHit};
+pub use leaf_family::LeafFamily;
 pub use lighting::{Light, LightPreset};
 pub use material::Material;
 pub use render::{render, render_view, RenderedFrame};
@@ -70,3 +83,4 @@ pub use scene::Scene;
 pub use scene_spec::SceneSpec;
 pub use stem::Stem;
 pub use stereo::{RigFile, StereoRig};
+pub use wide_scene::*;

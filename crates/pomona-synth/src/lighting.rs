@@ -100,6 +100,30 @@ impl Light {
     }
 }
 
+impl Light {
+    /// [`Light::shade`] with the directional light scaled by `sun` in `[0, 1]` (0 = the point
+    /// is in a cast shadow and gets only the ambient sky light).
+    pub fn shade_lit(
+        &self,
+        material: &Material,
+        normal: &Vector3<f64>,
+        towards_viewer: &Vector3<f64>,
+        sun: f64,
+    ) -> [f64; 3] {
+        let l = self.towards_light.as_ref();
+        let diffuse = normal.dot(l).max(0.0) * sun;
+        let mut specular = 0.0;
+        if diffuse > 0.0 && material.specular > 0.0 {
+            let half = (l + towards_viewer).normalize();
+            specular = material.specular * normal.dot(&half).max(0.0).powf(material.shininess);
+        }
+        let lit = self.ambient + self.intensity * diffuse;
+        std::array::from_fn(|c| {
+            self.color[c] * (material.albedo[c] * lit + self.intensity * specular)
+        })
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -27,6 +27,7 @@ use pomona_core::{
 
 use crate::depth_noise::SurfaceSample;
 use crate::rng::{sub_rng, NormalSampler};
+use crate::shadow::{Occluder, ShadowGrid};
 use crate::{Material, Scene, SynthError};
 
 /// One rendered view: the RGB-D frame, its truth and its instance mask.
@@ -129,9 +130,11 @@ pub fn render_view(
             z: f64::NAN,
             amplitude: 0.0,
             cos_incidence: 0.0,
+            no_return: false,
         };
         n
     ];
+    let shadows = scene.shadows.then(|| ShadowGrid::new(scene));
     view.each_pixel(full, |i, o, d| {
         let t = depth[i];
         let p = o + d * t;
@@ -141,7 +144,12 @@ pub fn render_view(
         // its visible luminance.
         let plant = !matches!(hits[i], Hit::Backdrop | Hit::Nothing);
         let (normal, material) = match hits[i] {
-            Hit::Nothing => return,
+            Hit::Nothing => {
+                if let Some(sky) = scene.backdrop.sky_radiance(d) {
+                    rgb_linear[i] = sky;
+                }
+                return;
+            }
             Hit::Backdrop => (
                 scene.backdrop.normal.into_inner(),
                 scene.backdrop.material_at(&p),
@@ -156,7 +164,7 @@ pub fn render_view(
             }
             Hit::Fruit(k) => {
                 let f = &scene.fruits[k as usize];
-                (f.normal_at(&p), f.material)
+                (f.normal_at(&p), f.material_at(&p))
             }
         };
         let to_viewer = (-d).normalize();
@@ -164,13 +172,35 @@ pub fn render_view(
         // Thin surfaces are seen from either side; closed ones face the viewer anyway.
         let normal = if cos_raw < 0.0 { -normal } else { normal };
         let cos_incidence = cos_raw.abs();
-        rgb_linear[i] = scene.light.shade(&material, &normal, &to_viewer);
+        rgb_linear[i] = match &shadows {
+            None => scene.light.shade(&material, &normal, &to_viewer),
+            Some(grid) => {
+                let skip = match hits[i] {
+                    Hit::Leaf(k, _) => Some(Occluder::Leaf(k)),
+                    Hit::Stem(k) => Some(Occluder::Stem(k)),
+                    Hit::Fruit(k) => Some(Occluder::Fruit(k)),
+                    Hit::Nothing | Hit::Backdrop => None,
+                };
+                // Only surfaces facing the sun can be shadowed.
+                let facing = normal.dot(scene.light.towards_light.as_ref()) > 0.0;
+                let sun = if facing && !grid.sun_visible(&p, skip) {
+                    0.0
+                } else {
+                    1.0
+                };
+                scene.light.shade_lit(&material, &normal, &to_viewer, sun)
+            }
+        };
         surfaces[i] = SurfaceSample {
             z: t,
             amplitude: nir_reflectance(&material, plant) * cos_incidence,
             cos_incidence,
+            no_return: matches!(hits[i], Hit::Backdrop) && !scene.backdrop.returns_depth(),
         };
     });
+    if let Some(effects) = &scene.image_effects {
+        effects.apply(&mut rgb_linear, w, h);
+    }
     let mut noise_rng = sub_rng(scene.noise_seed, 2 * noise_stream);
     let gamma = GammaTable::new();
     let sigma = scene.light.image_noise_sigma;
@@ -186,7 +216,14 @@ pub fn render_view(
 
     // 3. depth noise.
     let mut depth_rng = sub_rng(scene.noise_seed, 2 * noise_stream + 1);
-    let depth_m = scene.noise.apply(&surfaces, w, &mut depth_rng);
+    let mut depth_m = scene.noise.apply(&surfaces, w, camera.fx, &mut depth_rng);
+    if scene.max_depth_m.is_finite() {
+        for z in &mut depth_m {
+            if f64::from(*z) > scene.max_depth_m {
+                *z = f32::NAN;
+            }
+        }
+    }
     let depth_image = DepthImage::from_meters(camera.width, camera.height, depth_m)?;
 
     // 4. truth and mask.
@@ -236,7 +273,7 @@ pub fn render_view(
         truth: FrameTruth {
             complete: true,
             fruits,
-            extra: serde_json::Map::new(),
+            extra: scene.truth_extra.clone(),
         },
         mask,
     })

@@ -14,9 +14,10 @@ use rand::Rng;
 use serde::{Deserialize, Serialize};
 
 use crate::rng::{frame_rng, uniform, SynthRng};
+use crate::wide_scene::{sample_wide, WIDE_DISTANCE_LIMITS_M, WIDE_DISTANCE_M};
 use crate::{
-    Backdrop, CameraPreset, FruitBody, FruitChoice, FruitKind, Leaf, LightPreset, Material,
-    NoiseModel, Scene, Stem, SynthError,
+    Backdrop, BackdropKind, Background, CameraPreset, Domain, FruitBody, FruitChoice, FruitKind,
+    Leaf, LeafFamily, LightPreset, Material, NoiseModel, Scene, Stem, SynthError,
 };
 
 /// Leaves per square metre of the canopy's cross-section in view.
@@ -44,8 +45,34 @@ pub struct SceneSpec {
     pub green_fraction: f64,
     /// Inclusive range of fruit per frame.
     pub fruit_count: (u32, u32),
-    /// Range of the distance from the camera to the front of the fruit layer, metres.
+    /// Range of the distance from the camera to the front of the fruit layer, metres (narrow
+    /// domain; the wide domain uses `wide_distance_m`).
     pub distance_m: (f64, f64),
+    /// Which family of worlds to draw (`Narrow` by default; the CLI defaults to `Wide`).
+    #[serde(default)]
+    pub domain: Domain,
+    /// Wide only: the leaf families frames draw from (`--leaf-families`; default all).
+    #[serde(default = "all_leaf_families")]
+    pub leaf_families: Vec<LeafFamily>,
+    /// Wide only: the backgrounds frames draw from (`--backgrounds`; default all).
+    #[serde(default = "all_backgrounds")]
+    pub backgrounds: Vec<Background>,
+    /// Wide only: band of camera-to-fruit-centre distances, metres (`--distance-m`; default
+    /// [`WIDE_DISTANCE_M`]).
+    #[serde(default = "wide_distance")]
+    pub wide_distance_m: (f64, f64),
+}
+
+fn all_leaf_families() -> Vec<LeafFamily> {
+    LeafFamily::ALL.to_vec()
+}
+
+fn all_backgrounds() -> Vec<Background> {
+    Background::ALL.to_vec()
+}
+
+fn wide_distance() -> (f64, f64) {
+    WIDE_DISTANCE_M
 }
 
 impl Default for SceneSpec {
@@ -58,6 +85,10 @@ impl Default for SceneSpec {
             green_fraction: 0.0,
             fruit_count: (3, 10),
             distance_m: (0.4, 0.9),
+            domain: Domain::Narrow,
+            leaf_families: all_leaf_families(),
+            backgrounds: all_backgrounds(),
+            wide_distance_m: WIDE_DISTANCE_M,
         }
     }
 }
@@ -93,6 +124,64 @@ impl SceneSpec {
         if let Err(e) = self.camera.validate() {
             return bad("camera", e.to_string());
         }
+        self.validate_wide_knobs()
+    }
+
+    /// Checks the wide-only hold-out knobs: non-empty, no repeats, a distance band within
+    /// [`WIDE_DISTANCE_LIMITS_M`], and left at their defaults in the narrow domain.
+    fn validate_wide_knobs(&self) -> Result<(), SynthError> {
+        let bad = |name, reason: String| Err(SynthError::InvalidParameter { name, reason });
+        if self.domain == Domain::Narrow {
+            if self.leaf_families != all_leaf_families() {
+                return bad(
+                    "leaf-families",
+                    "only applies to the wide domain".to_string(),
+                );
+            }
+            if self.backgrounds != all_backgrounds() {
+                return bad("backgrounds", "only applies to the wide domain".to_string());
+            }
+            if self.wide_distance_m != WIDE_DISTANCE_M {
+                return bad("distance-m", "only applies to the wide domain".to_string());
+            }
+            return Ok(());
+        }
+        let names = |v: Vec<&str>| v.join(",");
+        if self.leaf_families.is_empty() {
+            return bad(
+                "leaf-families",
+                format!(
+                    "need at least one of {}",
+                    names(LeafFamily::ALL.iter().map(|f| f.name()).collect())
+                ),
+            );
+        }
+        if (1..self.leaf_families.len())
+            .any(|i| self.leaf_families[..i].contains(&self.leaf_families[i]))
+        {
+            return bad("leaf-families", "a family is listed twice".to_string());
+        }
+        if self.backgrounds.is_empty() {
+            return bad(
+                "backgrounds",
+                format!(
+                    "need at least one of {}",
+                    names(Background::ALL.iter().map(|b| b.name()).collect())
+                ),
+            );
+        }
+        if (1..self.backgrounds.len()).any(|i| self.backgrounds[..i].contains(&self.backgrounds[i]))
+        {
+            return bad("backgrounds", "a background is listed twice".to_string());
+        }
+        let (lo, hi) = self.wide_distance_m;
+        let (min, max) = WIDE_DISTANCE_LIMITS_M;
+        if !(lo.is_finite() && hi.is_finite() && lo >= min && lo <= hi && hi <= max) {
+            return bad(
+                "distance-m",
+                format!("need {min} <= MIN <= MAX <= {max} m, got {lo},{hi}"),
+            );
+        }
         Ok(())
     }
 
@@ -116,6 +205,14 @@ impl SceneSpec {
 
     /// Draws a scene from an explicit generator (the spec must be valid).
     pub fn sample_with(&self, rng: &mut SynthRng) -> Scene {
+        match self.domain {
+            Domain::Narrow => self.sample_narrow(rng),
+            Domain::Wide => sample_wide(self, rng),
+        }
+    }
+
+    /// The narrow crop row (see the module docs); unchanged since before the wide domain.
+    fn sample_narrow(&self, rng: &mut SynthRng) -> Scene {
         let kind = self.fruit.pick(rng);
         let front = uniform(rng, self.distance_m.0, self.distance_m.1);
         let light = self.light.sample(rng);
@@ -135,6 +232,7 @@ impl SceneSpec {
             point: Point3::new(0.0, 0.0, front + uniform(rng, 0.45, 0.9)),
             normal: Unit::new_normalize(tilt),
             texture_seed: rng.gen(),
+            kind: BackdropKind::Foliage,
         };
         Scene {
             fruits,
@@ -144,6 +242,10 @@ impl SceneSpec {
             light,
             noise: self.noise,
             noise_seed: rng.gen(),
+            shadows: false,
+            image_effects: None,
+            max_depth_m: f64::INFINITY,
+            truth_extra: serde_json::Map::new(),
         }
     }
 
@@ -323,6 +425,7 @@ fn sample_leaf(rng: &mut SynthRng, center: Point3<f64>, length_m: (f64, f64)) ->
             specular: uniform(rng, 0.02, 0.06),
             shininess: uniform(rng, 8.0, 20.0),
         },
+        family: LeafFamily::Elliptic,
     }
 }
 
@@ -356,7 +459,7 @@ fn sample_occluding_leaves(
 
 /// Whether any probe point of the blade lies inside (or within 3 mm of) a fruit body: leaves
 /// and fruit must not interpenetrate.
-fn cuts_fruit(leaf: &Leaf, fruits: &[FruitBody]) -> bool {
+pub(crate) fn cuts_fruit(leaf: &Leaf, fruits: &[FruitBody]) -> bool {
     let reach = leaf.bounding_radius_m();
     let probes = leaf.probe_points();
     fruits.iter().any(|f| {
@@ -368,7 +471,7 @@ fn cuts_fruit(leaf: &Leaf, fruits: &[FruitBody]) -> bool {
 }
 
 /// Distance from `p` to the segment `a`–`b`.
-fn segment_distance(p: &Point3<f64>, a: &Point3<f64>, b: &Point3<f64>) -> f64 {
+pub(crate) fn segment_distance(p: &Point3<f64>, a: &Point3<f64>, b: &Point3<f64>) -> f64 {
     let ab = b - a;
     let len2 = ab.norm_squared();
     let t = if len2 > 0.0 {

@@ -7,9 +7,9 @@
 use nalgebra::{Point3, Rotation3, Unit, Vector3};
 use pomona_core::PinholeCamera;
 use pomona_synth::{
-    render, render_view, Backdrop, CameraPreset, FruitBody, FruitChoice, FruitKind, FruitShape,
-    Leaf, LightPreset, Material, NoiseModel, RenderedFrame, Scene, SceneSpec, StereoRig,
-    TOF_EDGE_JUMP, TOF_SIGMA_MAX,
+    render, render_view, Backdrop, BackdropKind, CameraPreset, FruitBody, FruitChoice, FruitKind,
+    FruitShape, Leaf, LeafFamily, LightPreset, Material, NoiseModel, RenderedFrame, Scene,
+    SceneSpec, StereoRig, TOF_EDGE_JUMP, TOF_SIGMA_MAX,
 };
 
 fn spec(kind: FruitChoice, noise: NoiseModel) -> SceneSpec {
@@ -220,10 +220,15 @@ fn lone_scene(fruit: FruitBody, leaves: Vec<Leaf>) -> Scene {
             point: Point3::new(0.0, 0.0, 1.5),
             normal: Unit::new_normalize(Vector3::new(0.0, 0.0, -1.0)),
             texture_seed: 1,
+            kind: BackdropKind::Foliage,
         },
         light: LightPreset::Day.sample(&mut rng),
         noise: NoiseModel::None,
         noise_seed: 7,
+        shadows: false,
+        image_effects: None,
+        max_depth_m: f64::INFINITY,
+        truth_extra: serde_json::Map::new(),
     }
 }
 
@@ -240,6 +245,7 @@ fn leaf_at(center: Point3<f64>) -> Leaf {
             specular: 0.03,
             shininess: 10.0,
         },
+        family: LeafFamily::Elliptic,
     }
 }
 

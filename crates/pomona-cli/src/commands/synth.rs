@@ -10,8 +10,8 @@ use std::time::Instant;
 use anyhow::{bail, Context, Result};
 use clap::ValueEnum;
 use pomona_synth::{
-    generate_dataset, CameraPreset, DatasetSpec, FruitChoice, FruitKind, LightPreset, NoiseModel,
-    SceneSpec, StereoRig,
+    generate_dataset, Background, CameraPreset, DatasetSpec, Domain, FruitChoice, FruitKind,
+    LeafFamily, LightPreset, NoiseModel, SceneSpec, StereoRig, WIDE_DISTANCE_LIMITS_M,
 };
 
 use crate::progress::progress_bar;
@@ -34,9 +34,25 @@ pub struct SynthArgs {
     /// Camera model (image size and field of view).
     #[arg(long, value_enum, default_value_t = CameraArg::KinectV2)]
     pub camera: CameraArg,
-    /// Depth noise: exact, structured-light-like, or time-of-flight-like.
-    #[arg(long, value_enum, default_value_t = NoiseArg::None)]
-    pub noise: NoiseArg,
+    /// Scene family: `wide` draws domain-randomised worlds (distance, camera tilt, canopy, leaf
+    /// shapes, backgrounds, shadows, exposure, fruit shape and colour, sensor artefacts);
+    /// `narrow` the original crop row (byte-identical to earlier versions per seed).
+    #[arg(long, value_enum, default_value_t = DomainArg::Wide)]
+    pub domain: DomainArg,
+    /// Depth noise. Default: `none` for the narrow domain; for the wide domain the camera's
+    /// own model (`stereo` for d435, `tof-multipath` for the time-of-flight cameras).
+    #[arg(long, value_enum)]
+    pub noise: Option<NoiseArg>,
+    /// Wide only: leaf families to draw from, comma-separated (default: all).
+    #[arg(long, value_enum, value_delimiter = ',', value_name = "LIST")]
+    pub leaf_families: Option<Vec<LeafFamilyArg>>,
+    /// Wide only: band of camera-to-fruit-centre distances in metres, `MIN,MAX`
+    /// (default 0.3,1.6; allowed 0.25 to 3).
+    #[arg(long, value_name = "MIN,MAX", value_parser = parse_distance_band)]
+    pub distance_m: Option<(f64, f64)>,
+    /// Wide only: backgrounds to draw from, comma-separated (default: all).
+    #[arg(long, value_enum, value_delimiter = ',', value_name = "LIST")]
+    pub backgrounds: Option<Vec<BackgroundArg>>,
     /// Illumination.
     #[arg(long, value_enum, default_value_t = LightArg::Day)]
     pub light: LightArg,
@@ -94,6 +110,66 @@ pub enum NoiseArg {
     Low,
     /// Time-of-flight-like: 4–8 mm, flying pixels, dropouts, 1 mm steps.
     Tof,
+    /// `tof` plus multipath interference (dim pixels among bright ones read too far).
+    TofMultipath,
+    /// Active stereo (D435): holes beside foreground edges, σ growing with z².
+    Stereo,
+}
+
+/// `--domain` values.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum DomainArg {
+    /// The original crop row.
+    Narrow,
+    /// Domain-randomised worlds.
+    Wide,
+}
+
+/// `--leaf-families` values.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum LeafFamilyArg {
+    /// Ovate blades.
+    Elliptic,
+    /// Long, narrow, pointed blades.
+    Lanceolate,
+    /// Palmate, maple-like blades.
+    Lobed,
+    /// Leaflets on a rachis.
+    Compound,
+}
+
+/// `--backgrounds` values.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum BackgroundArg {
+    /// Bare soil.
+    Soil,
+    /// Black ground cloth (no depth).
+    Cloth,
+    /// The next crop row, 1.5–3 m away.
+    SecondRow,
+    /// Open sky (no depth).
+    Sky,
+    /// Greenhouse plastic, posts and pipes.
+    Greenhouse,
+}
+
+fn parse_distance_band(s: &str) -> Result<(f64, f64), String> {
+    let (lo, hi) = s
+        .split_once(',')
+        .ok_or_else(|| format!("expected MIN,MAX in metres (e.g. 0.3,0.8), got `{s}`"))?;
+    let num = |t: &str| {
+        t.trim()
+            .parse::<f64>()
+            .map_err(|e| format!("`{t}` is not a number: {e}"))
+    };
+    let (lo, hi) = (num(lo)?, num(hi)?);
+    let (min, max) = WIDE_DISTANCE_LIMITS_M;
+    if !(lo.is_finite() && hi.is_finite() && lo >= min && lo <= hi && hi <= max) {
+        return Err(format!(
+            "need {min} <= MIN <= MAX <= {max} metres, got {lo},{hi}"
+        ));
+    }
+    Ok((lo, hi))
 }
 
 /// `--light` values.
@@ -133,11 +209,43 @@ impl SynthArgs {
             CameraArg::D435 => CameraPreset::D435,
             CameraArg::AzureKinect => CameraPreset::AzureKinect,
         };
-        let noise = match self.noise {
-            NoiseArg::None => NoiseModel::None,
-            NoiseArg::Low => NoiseModel::Low,
-            NoiseArg::Tof => NoiseModel::Tof,
+        let domain = match self.domain {
+            DomainArg::Narrow => Domain::Narrow,
+            DomainArg::Wide => Domain::Wide,
         };
+        let noise = match (self.noise, domain) {
+            (Some(NoiseArg::None), _) | (None, Domain::Narrow) => NoiseModel::None,
+            (Some(NoiseArg::Low), _) => NoiseModel::Low,
+            (Some(NoiseArg::Tof), _) => NoiseModel::Tof,
+            (Some(NoiseArg::TofMultipath), _) => NoiseModel::TofMultipath,
+            (Some(NoiseArg::Stereo), _) => NoiseModel::Stereo,
+            (None, Domain::Wide) => NoiseModel::for_camera(camera),
+        };
+        let defaults = SceneSpec::default();
+        let leaf_families = self
+            .leaf_families
+            .as_ref()
+            .map_or(defaults.leaf_families, |v| {
+                v.iter()
+                    .map(|f| match f {
+                        LeafFamilyArg::Elliptic => LeafFamily::Elliptic,
+                        LeafFamilyArg::Lanceolate => LeafFamily::Lanceolate,
+                        LeafFamilyArg::Lobed => LeafFamily::Lobed,
+                        LeafFamilyArg::Compound => LeafFamily::Compound,
+                    })
+                    .collect()
+            });
+        let backgrounds = self.backgrounds.as_ref().map_or(defaults.backgrounds, |v| {
+            v.iter()
+                .map(|b| match b {
+                    BackgroundArg::Soil => Background::Soil,
+                    BackgroundArg::Cloth => Background::Cloth,
+                    BackgroundArg::SecondRow => Background::SecondRow,
+                    BackgroundArg::Sky => Background::Sky,
+                    BackgroundArg::Greenhouse => Background::Greenhouse,
+                })
+                .collect()
+        });
         let light = match self.light {
             LightArg::Day => LightPreset::Day,
             LightArg::Dim => LightPreset::Dim,
@@ -149,12 +257,43 @@ impl SynthArgs {
             noise,
             light,
             green_fraction: self.green_fraction,
+            domain,
+            leaf_families,
+            backgrounds,
+            wide_distance_m: self.distance_m.unwrap_or(defaults.wide_distance_m),
             ..SceneSpec::default()
         };
         let mut spec = DatasetSpec::new(scene, self.frames, self.seed);
         spec.stereo = self.stereo.then(StereoRig::default);
         spec.threads = self.threads.map(|n| n as usize);
         spec
+    }
+}
+
+impl SynthArgs {
+    /// Refuses wide-only options with `--domain narrow`, and repeated list entries.
+    ///
+    /// # Errors
+    /// Names the offending option.
+    pub fn check(&self) -> Result<()> {
+        if self.domain == DomainArg::Narrow {
+            for (given, flag) in [
+                (self.leaf_families.is_some(), "--leaf-families"),
+                (self.distance_m.is_some(), "--distance-m"),
+                (self.backgrounds.is_some(), "--backgrounds"),
+            ] {
+                if given {
+                    bail!(
+                        "{flag} only applies to --domain wide (hold-out knobs of the wide domain)"
+                    );
+                }
+            }
+        }
+        self.to_spec()
+            .scene
+            .validate()
+            .context("invalid synth options")?;
+        Ok(())
     }
 }
 
@@ -209,6 +348,7 @@ fn prepare_output(out: &Path, force: bool) -> Result<()> {
 /// A non-empty output folder without `--force`, an invalid option, or a file that could not be
 /// written (the message names it).
 pub fn run(args: &SynthArgs) -> Result<()> {
+    args.check()?;
     let spec = args.to_spec();
     prepare_output(&args.out, args.force)?;
     let bar = progress_bar(args.frames as usize, "rendering");
@@ -258,7 +398,18 @@ mod tests {
         assert_eq!((a.frames, a.seed), (3, 9));
         assert_eq!(a.fruit, FruitArg::Pepper);
         assert_eq!(a.camera, CameraArg::KinectV2);
-        assert_eq!(a.noise, NoiseArg::None);
+        assert_eq!(a.noise, None);
+        assert_eq!(a.domain, DomainArg::Wide);
+        let spec = a.to_spec();
+        assert_eq!(spec.scene.domain, Domain::Wide);
+        assert_eq!(spec.scene.noise, NoiseModel::TofMultipath);
+        assert_eq!(spec.scene.leaf_families, LeafFamily::ALL.to_vec());
+        assert_eq!(spec.scene.backgrounds, Background::ALL.to_vec());
+        let narrow = parse(&["--domain", "narrow"]).unwrap().to_spec();
+        assert_eq!(narrow.scene.noise, NoiseModel::None);
+        assert_eq!(narrow.scene.domain, Domain::Narrow);
+        let d435 = parse(&["--camera", "d435"]).unwrap().to_spec();
+        assert_eq!(d435.scene.noise, NoiseModel::Stereo);
         assert_eq!(a.light, LightArg::Day);
         assert_eq!(a.green_fraction, 0.0);
         assert!(!a.stereo && !a.force && a.threads.is_none());
@@ -321,10 +472,52 @@ mod tests {
             &["--green-fraction", "-0.1"],
             &["--green-fraction", "x"],
             &["--threads", "0"],
+            &["--domain", "medium"],
+            &["--leaf-families", "ovate"],
+            &["--backgrounds", "sea"],
+            &["--distance-m", "0.8"],
+            &["--distance-m", "0.8,0.3"],
+            &["--distance-m", "0.1,0.5"],
+            &["--distance-m", "0.3,x"],
         ] {
             assert!(parse(bad).is_err(), "{bad:?} accepted");
         }
         assert!(Cli::try_parse_from(["p", "--out", "d", "--frames", "0", "--seed", "1"]).is_err());
+    }
+
+    #[test]
+    fn hold_out_knobs_parse_and_are_refused_in_the_narrow_domain() {
+        let a = parse(&[
+            "--leaf-families",
+            "lobed,compound",
+            "--distance-m",
+            "0.8,1.6",
+            "--backgrounds",
+            "sky,second-row",
+            "--noise",
+            "tof",
+        ])
+        .unwrap();
+        a.check().unwrap();
+        let s = a.to_spec().scene;
+        assert_eq!(
+            s.leaf_families,
+            vec![LeafFamily::Lobed, LeafFamily::Compound]
+        );
+        assert_eq!(s.backgrounds, vec![Background::Sky, Background::SecondRow]);
+        assert_eq!(s.wide_distance_m, (0.8, 1.6));
+        assert_eq!(s.noise, NoiseModel::Tof);
+        for flag in [
+            &["--leaf-families", "lobed"][..],
+            &["--distance-m", "0.3,0.8"],
+            &["--backgrounds", "soil"],
+        ] {
+            let a = parse(&[&["--domain", "narrow"][..], flag].concat()).unwrap();
+            let err = format!("{:#}", a.check().unwrap_err());
+            assert!(err.contains(flag[0]) && err.contains("wide"), "{err}");
+        }
+        let twice = parse(&["--leaf-families", "lobed,lobed"]).unwrap();
+        assert!(format!("{:#}", twice.check().unwrap_err()).contains("leaf-families"));
     }
 
     #[test]

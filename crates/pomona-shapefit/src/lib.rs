@@ -18,6 +18,7 @@ mod hsv;
 mod params;
 mod pipeline;
 mod region_growing;
+mod size_prior;
 pub mod stages;
 
 pub use candidate::Candidate;
@@ -26,4 +27,7 @@ pub use gpcd::{gpcd, GpcdParams, GPCD_LEN};
 pub use hsv::rgb_to_hsv;
 pub use params::{LabelRule, ShapeFitParams};
 pub use pipeline::{ShapeFitDetector, ShapeFitPipeline, ShapeFitStageParams, PIPELINE_NAME};
-pub use region_growing::{grow_regions, RegionGrowingParams};
+pub use region_growing::{grow_regions, MinFruitArea, RegionGrowingParams};
+pub use size_prior::{
+    SizePrior, SizePriorMode, DEPTH_MARGIN, ELONGATED_RATIO, MIN_VISIBLE_FRACTION, RADIUS_MARGIN,
+};

@@ -9,7 +9,7 @@ use pomona_consensus::{
 use pomona_learn::{ClassWeights, CvMetric};
 use serde::{Deserialize, Serialize};
 
-use crate::{ColorBayesParams, GpcdParams, RegionGrowingParams};
+use crate::{ColorBayesParams, GpcdParams, RegionGrowingParams, SizePrior, SizePriorMode};
 
 /// Parameters of every stage.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -45,6 +45,21 @@ pub struct ShapeFitParams {
     /// candidate's shape, or centres closer than this (metres). Not in the paper, which reports
     /// split fruit as false positives (its Discussion); 0 switches merging off.
     pub merge_radius_m: f64,
+    /// Training only: whether the size-dependent parameters (radius ranges, shapes, depth
+    /// limit, minimum cluster) are measured on the training truth (`from-truth`, default) or
+    /// used as configured (`fixed`); see [`SizePrior`]. The values training settles on are the
+    /// ones stored above, so a model file alone reproduces its detector.
+    #[serde(default)]
+    pub size_prior: SizePriorMode,
+    /// Kinds of annotated objects that are references, not crop (default `reference_ball`):
+    /// left out of the size prior and of the colour model's fruit pixels, and candidates on them
+    /// are neither positives nor negatives in training.
+    #[serde(default = "reference_kinds")]
+    pub reference_kinds: Vec<String>,
+    /// What training measured (`None` with `size_prior: fixed`, or in older files); for the
+    /// record, the stage parameters above already hold what it implies.
+    #[serde(default)]
+    pub learnt_size_prior: Option<SizePrior>,
 }
 
 impl Default for ShapeFitParams {
@@ -62,8 +77,15 @@ impl Default for ShapeFitParams {
             cv_metric: balanced_accuracy(),
             max_negatives_per_positive: 5.0,
             merge_radius_m: 0.03,
+            size_prior: SizePriorMode::default(),
+            reference_kinds: reference_kinds(),
+            learnt_size_prior: None,
         }
     }
+}
+
+fn reference_kinds() -> Vec<String> {
+    vec!["reference_ball".to_string()]
 }
 
 fn balanced() -> ClassWeights {

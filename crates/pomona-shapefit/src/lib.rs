@@ -17,6 +17,7 @@ mod gpcd;
 mod hsv;
 mod params;
 mod pipeline;
+mod radius_calibration;
 mod region_growing;
 mod size_prior;
 pub mod stages;
@@ -27,6 +28,7 @@ pub use gpcd::{gpcd, GpcdParams, GPCD_LEN};
 pub use hsv::rgb_to_hsv;
 pub use params::{LabelRule, ShapeFitParams};
 pub use pipeline::{ShapeFitDetector, ShapeFitPipeline, ShapeFitStageParams, PIPELINE_NAME};
+pub use radius_calibration::{fit_center_fixed_radius, RadiusCalibration, MIN_CALIBRATION_SAMPLES};
 pub use region_growing::{grow_regions, MinFruitArea, RegionGrowingParams};
 pub use size_prior::{
     SizePrior, SizePriorMode, DEPTH_MARGIN, ELONGATED_RATIO, MIN_VISIBLE_FRACTION, RADIUS_MARGIN,

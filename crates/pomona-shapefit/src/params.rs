@@ -9,7 +9,9 @@ use pomona_consensus::{
 use pomona_learn::{ClassWeights, CvMetric};
 use serde::{Deserialize, Serialize};
 
-use crate::{ColorBayesParams, GpcdParams, RegionGrowingParams, SizePrior, SizePriorMode};
+use crate::{
+    ColorBayesParams, GpcdParams, RadiusCalibration, RegionGrowingParams, SizePrior, SizePriorMode,
+};
 
 /// Parameters of every stage.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -60,6 +62,11 @@ pub struct ShapeFitParams {
     /// record, the stage parameters above already hold what it implies.
     #[serde(default)]
     pub learnt_size_prior: Option<SizePrior>,
+    /// Sphere radius calibration learnt in training (`size_prior: from-truth` only), applied to
+    /// every sphere before merging and output ([`RadiusCalibration`]); `None` (older files,
+    /// `fixed`) keeps the fitted spheres.
+    #[serde(default)]
+    pub radius_calibration: Option<RadiusCalibration>,
 }
 
 impl Default for ShapeFitParams {
@@ -80,6 +87,7 @@ impl Default for ShapeFitParams {
             size_prior: SizePriorMode::default(),
             reference_kinds: reference_kinds(),
             learnt_size_prior: None,
+            radius_calibration: None,
         }
     }
 }

@@ -16,8 +16,8 @@ use crate::stages::{
     ClassifierStage, ColorMaskStage, DescriptorStage, RegionGrowingStage, ShapeStage,
 };
 use crate::{
-    Candidate, ColorBayes, ColorHistograms, ColorLut, LabelRule, ShapeFitParams, SizePrior,
-    SizePriorMode,
+    Candidate, ColorBayes, ColorHistograms, ColorLut, LabelRule, RadiusCalibration, ShapeFitParams,
+    SizePrior, SizePriorMode,
 };
 
 /// Name of the pipeline on the command line and in model files.
@@ -421,25 +421,36 @@ impl Pipeline for ShapeFitPipeline {
                     features.extend(f);
                 }
                 let lut = stages.mask.lut.as_ref();
+                let p = &stage_params.params;
+                let mut pairs = Vec::new();
                 let (features, labels) = candidates
                     .iter()
                     .zip(features)
                     .filter_map(|(c, f)| {
                         let color = mean_posterior(c, lut, &lf.frame);
-                        label(c, &lf, &stage_params.params, color).map(|l| (f, l))
+                        let l = label(c, &lf, p, color)?;
+                        if l {
+                            pairs.extend(radius_pair(c, &lf.truth, p));
+                        }
+                        Some((f, l))
                     })
                     .unzip();
                 progress(
                     done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1,
                     n,
                 );
-                Ok((features, labels))
+                Ok((features, labels, pairs))
             })
             .collect();
-        let (mut values, mut labels) = (Vec::new(), Vec::new());
-        for (f, l) in per_frame? {
+        let (mut values, mut labels, mut pairs) = (Vec::new(), Vec::new(), Vec::new());
+        for (f, l, r) in per_frame? {
             values.extend(f.into_iter().flatten());
             labels.extend(l);
+            pairs.extend(r);
+        }
+        let mut stage_params = stage_params;
+        if from_truth {
+            stage_params.params.radius_calibration = RadiusCalibration::fit(&pairs);
         }
         let (values, labels) = cap_negatives(
             values,
@@ -501,6 +512,8 @@ impl Pipeline for ShapeFitPipeline {
                 svm: model.classifier(),
             },
             merge_radius_m: stage_params.params.merge_radius_m,
+            calibration: stage_params.params.radius_calibration,
+            sphere_range_m: stage_params.params.shapes.sphere.radius_range_m,
         }))
     }
 }
@@ -550,14 +563,33 @@ fn cap_negatives(
 /// size prior.
 type FramePrior = (Option<ColorHistograms>, Vec<FruitTruth>);
 
-/// Descriptors of one frame's candidates and their training labels.
-type LabelledFeatures = (Vec<Vec<f64>>, Vec<bool>);
+/// Descriptors of one frame's candidates, their training labels, and the (fitted, true) radius
+/// pairs of its positive spheres.
+type LabelledFeatures = (Vec<Vec<f64>>, Vec<bool>, Vec<(f64, f64)>);
+
+/// `(fitted radius, caliper radius)` of a sphere candidate and the nearest annotated crop fruit
+/// with a centre within the positive tolerance and a diameter.
+fn radius_pair(c: &Candidate, truth: &FrameTruth, params: &ShapeFitParams) -> Option<(f64, f64)> {
+    let Shape::Sphere(s) = &c.shape else {
+        return None;
+    };
+    truth
+        .fruits
+        .iter()
+        .filter(|f| !params.reference_kinds.contains(&f.kind))
+        .filter_map(|f| Some(((f.center_m? - s.center).norm(), f.diameter_m?)))
+        .filter(|(d, _)| *d <= params.positive_tolerance_m)
+        .min_by(|a, b| a.0.total_cmp(&b.0))
+        .map(|(_, diameter)| (s.radius_m, diameter / 2.0))
+}
 
 /// A trained shape-fit detector.
 pub struct ShapeFitDetector {
     stages: Stages,
     classifier: ClassifierStage,
     merge_radius_m: f64,
+    calibration: Option<RadiusCalibration>,
+    sphere_range_m: (f64, f64),
 }
 
 fn detection(c: &Candidate, shape: &Shape, score: f64, camera: &PinholeCamera) -> Detection {
@@ -685,8 +717,13 @@ impl Detector for ShapeFitDetector {
         frame: &RgbdFrame,
         timings: &mut StageTimings,
     ) -> Result<Vec<Detection>, PipelineError> {
-        let (candidates, features) = self.stages.candidates(frame, timings)?;
+        let (mut candidates, features) = self.stages.candidates(frame, timings)?;
         let scores = run_stage(&self.classifier, features.as_slice(), timings)?;
+        if let Some(cal) = &self.calibration {
+            for c in &mut candidates {
+                c.shape = cal.apply(&c.shape, &c.points, self.sphere_range_m);
+            }
+        }
         let kept = merge_overlapping(&candidates, &scores, self.merge_radius_m);
         Ok(kept
             .into_iter()

@@ -10,6 +10,14 @@
 //! [`ShapeFitPipeline`] trains a [`pomona_learn::ModelFile`] and loads a detector from one.
 //! Parameters default to the paper's values; where we depart from it, [`ShapeFitParams`] and the
 //! stage docs say why.
+//!
+//! Training measures the size-dependent parameters on the annotated fruit instead of taking
+//! them from the configuration ([`SizePrior`], `size_prior: from-truth`, the default; `fixed`
+//! keeps the configured values): radius ranges, which shapes to fit, the depth limit and a
+//! depth-scaled minimum cluster size; it also learns a [`RadiusCalibration`] that replaces each
+//! fitted sphere's poorly observed radius and refits its centre. Truth marked incomplete
+//! (`"complete": false`) does not turn every unmatched candidate into a negative: candidates
+//! that could be unannotated fruit are left out of training (see `docs/learning-and-evaluation.md`).
 
 mod candidate;
 mod color_model;

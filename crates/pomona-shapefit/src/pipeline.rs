@@ -795,6 +795,82 @@ mod tests {
         assert!((joined.midpoint().y - 0.075).abs() < 1e-12);
     }
 
+    fn frame(truth_json: &str) -> LabelledFrame {
+        let cam = PinholeCamera::new(100, 100, 100.0, 100.0, 50.0, 50.0).unwrap();
+        let depth = pomona_core::DepthImage::from_u16(100, 100, &[1000; 10_000], 0.001).unwrap();
+        LabelledFrame {
+            name: "f".into(),
+            frame: RgbdFrame::new(cam, depth, None).unwrap(),
+            truth: serde_json::from_str(truth_json).unwrap(),
+            mask: None,
+        }
+    }
+
+    fn at(x: f64, y: f64, r: f64) -> Candidate {
+        let mut c = ball(x, r);
+        if let Shape::Sphere(s) = &mut c.shape {
+            s.center.y = y;
+        }
+        c
+    }
+
+    const INCOMPLETE: &str = r#"{"complete": false, "fruits": [
+        {"id": "a", "kind": "apple", "diameter_m": 0.07, "center_m": [0, 0, 1]},
+        {"id": "n", "kind": "apple", "diameter_m": 0.07, "center_m": null,
+         "bbox_px": [70, 70, 90, 90]},
+        {"id": "b", "kind": "reference_ball", "diameter_m": 0.12, "center_m": [-0.3, 0, 1]}]}"#;
+
+    #[test]
+    fn incomplete_truth_never_makes_a_plausible_fruit_a_negative() {
+        let lf = frame(INCOMPLETE);
+        let p = ShapeFitParams::default();
+        let (red, green, unsure) = (Some(0.9), Some(0.01), Some(0.3));
+        // On the annotated apple: positive.
+        assert_eq!(label(&at(0.02, 0.0, 0.035), &lf, &p, red), Some(true));
+        // An unannotated apple touching the annotated one (80 mm away, apple-sized, red):
+        // left out, never a negative; without colour (depth-only model) likewise.
+        assert_eq!(label(&at(0.08, 0.0, 0.035), &lf, &p, red), None);
+        assert_eq!(label(&at(0.08, 0.0, 0.035), &lf, &p, None), None);
+        // A leaf at the same place (green): a negative.
+        assert_eq!(label(&at(0.08, 0.0, 0.035), &lf, &p, green), Some(false));
+        // Far from any annotation: a red apple-sized candidate and an uncertain colour are left
+        // out; green, or a size outside the prior, is clearly not a fruit.
+        assert_eq!(label(&at(0.0, -0.4, 0.035), &lf, &p, red), None);
+        assert_eq!(label(&at(0.0, -0.4, 0.035), &lf, &p, unsure), None);
+        assert_eq!(label(&at(0.0, -0.4, 0.035), &lf, &p, green), Some(false));
+        assert_eq!(label(&at(0.0, -0.4, 0.2), &lf, &p, red), Some(false));
+        // Under a fruit without centre (`center_m: null`, box 70–90 px, i.e. x, y in 0.2–0.4 m
+        // at 1 m): never matched, never a negative, even green.
+        assert_eq!(label(&at(0.3, 0.3, 0.035), &lf, &p, red), None);
+        assert_eq!(label(&at(0.3, 0.3, 0.035), &lf, &p, green), None);
+        // On the reference ball: neither positive nor negative.
+        assert_eq!(label(&at(-0.29, 0.0, 0.035), &lf, &p, green), None);
+        // Complete truth keeps the old rule: everything off the fruit is a negative.
+        let complete = frame(&INCOMPLETE.replace("false", "true"));
+        assert_eq!(
+            label(&at(0.08, 0.0, 0.035), &complete, &p, red),
+            Some(false)
+        );
+        assert_eq!(label(&at(0.02, 0.0, 0.035), &complete, &p, red), Some(true));
+    }
+
+    #[test]
+    fn null_centres_and_references_do_not_enter_the_size_prior() {
+        let lf = frame(INCOMPLETE);
+        let p = ShapeFitParams::default();
+        let prior = SizePrior::from_truth(&lf.truth.fruits, &p.reference_kinds).unwrap();
+        assert_eq!(prior.fruits, 1);
+        assert_eq!(prior.sphere_radius_m, Some((0.035, 0.035)));
+        assert_eq!(prior.max_center_depth_m, 1.0);
+        // A calibration pair only comes from a fruit with a centre and a diameter.
+        assert_eq!(
+            radius_pair(&at(0.01, 0.0, 0.04), &lf.truth, &p),
+            Some((0.04, 0.035))
+        );
+        assert_eq!(radius_pair(&at(0.3, 0.3, 0.04), &lf.truth, &p), None);
+        assert_eq!(radius_pair(&at(-0.3, 0.0, 0.04), &lf.truth, &p), None);
+    }
+
     #[test]
     fn positives_by_centre_or_box() {
         let cam = PinholeCamera::new(100, 100, 100.0, 100.0, 50.0, 50.0).unwrap();

@@ -276,7 +276,7 @@ mod tests {
     #[test]
     fn depth_scaled_minimum_keeps_far_fruit_and_drops_near_specks() {
         // Two 12×12 blocks (144 px): one at 2 m, one at 0.5 m. A 30 mm fruit at fx 365 covers
-        // π·5.5² ≈ 94 px at 2 m and π·21.9² ≈ 1505 px at 0.5 m; a quarter of that is the limit.
+        // π·5.5² ≈ 94 px at 2 m and π·21.9² ≈ 1507 px at 0.5 m; a quarter of that is the limit.
         let (w, h) = (40, 20);
         let mut depth = vec![f32::NAN; w * h];
         for v in 2..14 {
@@ -296,8 +296,8 @@ mod tests {
         assert_eq!(clusters.len(), 1);
         assert_eq!(depth[clusters[0][0]], 2.0);
         let area = params.min_fruit_area.unwrap();
-        assert_eq!(area.min_pixels_at(365.0, 2.0), 23);
-        assert_eq!(area.min_pixels_at(365.0, 0.5), 376);
+        assert_eq!(area.min_pixels_at(365.0, 2.0), 24);
+        assert_eq!(area.min_pixels_at(365.0, 0.5), 377);
         assert_eq!(area.min_pixels_at(365.0, 0.0), usize::MAX);
     }
 

@@ -10,6 +10,14 @@
 //! [`ShapeFitPipeline`] trains a [`pomona_learn::ModelFile`] and loads a detector from one.
 //! Parameters default to the paper's values; where we depart from it, [`ShapeFitParams`] and the
 //! stage docs say why.
+//!
+//! Training measures the size-dependent parameters on the annotated fruit instead of taking
+//! them from the configuration ([`SizePrior`], `size_prior: from-truth`, the default; `fixed`
+//! keeps the configured values): radius ranges, which shapes to fit, the depth limit and a
+//! depth-scaled minimum cluster size; it also learns a [`RadiusCalibration`] that replaces each
+//! fitted sphere's poorly observed radius and refits its centre. Truth marked incomplete
+//! (`"complete": false`) does not turn every unmatched candidate into a negative: candidates
+//! that could be unannotated fruit are left out of training (see `docs/learning-and-evaluation.md`).
 
 mod candidate;
 mod color_model;
@@ -17,7 +25,9 @@ mod gpcd;
 mod hsv;
 mod params;
 mod pipeline;
+mod radius_calibration;
 mod region_growing;
+mod size_prior;
 pub mod stages;
 
 pub use candidate::Candidate;
@@ -26,4 +36,8 @@ pub use gpcd::{gpcd, GpcdParams, GPCD_LEN};
 pub use hsv::rgb_to_hsv;
 pub use params::{LabelRule, ShapeFitParams};
 pub use pipeline::{ShapeFitDetector, ShapeFitPipeline, ShapeFitStageParams, PIPELINE_NAME};
-pub use region_growing::{grow_regions, RegionGrowingParams};
+pub use radius_calibration::{fit_center_fixed_radius, RadiusCalibration, MIN_CALIBRATION_SAMPLES};
+pub use region_growing::{grow_regions, MinFruitArea, RegionGrowingParams};
+pub use size_prior::{
+    SizePrior, SizePriorMode, DEPTH_MARGIN, ELONGATED_RATIO, MIN_VISIBLE_FRACTION, RADIUS_MARGIN,
+};

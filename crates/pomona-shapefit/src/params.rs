@@ -9,7 +9,9 @@ use pomona_consensus::{
 use pomona_learn::{ClassWeights, CvMetric};
 use serde::{Deserialize, Serialize};
 
-use crate::{ColorBayesParams, GpcdParams, RegionGrowingParams};
+use crate::{
+    ColorBayesParams, GpcdParams, RadiusCalibration, RegionGrowingParams, SizePrior, SizePriorMode,
+};
 
 /// Parameters of every stage.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -45,6 +47,26 @@ pub struct ShapeFitParams {
     /// candidate's shape, or centres closer than this (metres). Not in the paper, which reports
     /// split fruit as false positives (its Discussion); 0 switches merging off.
     pub merge_radius_m: f64,
+    /// Training only: whether the size-dependent parameters (radius ranges, shapes, depth
+    /// limit, minimum cluster) are measured on the training truth (`from-truth`, default) or
+    /// used as configured (`fixed`); see [`SizePrior`]. The values training settles on are the
+    /// ones stored above, so a model file alone reproduces its detector.
+    #[serde(default)]
+    pub size_prior: SizePriorMode,
+    /// Kinds of annotated objects that are references, not crop (default `reference_ball`):
+    /// left out of the size prior and of the colour model's fruit pixels, and candidates on them
+    /// are neither positives nor negatives in training.
+    #[serde(default = "reference_kinds")]
+    pub reference_kinds: Vec<String>,
+    /// What training measured (`None` with `size_prior: fixed`, or in older files); for the
+    /// record, the stage parameters above already hold what it implies.
+    #[serde(default)]
+    pub learnt_size_prior: Option<SizePrior>,
+    /// Sphere radius calibration learnt in training (`size_prior: from-truth` only), applied to
+    /// every sphere before merging and output ([`RadiusCalibration`]); `None` (older files,
+    /// `fixed`) keeps the fitted spheres.
+    #[serde(default)]
+    pub radius_calibration: Option<RadiusCalibration>,
 }
 
 impl Default for ShapeFitParams {
@@ -62,8 +84,16 @@ impl Default for ShapeFitParams {
             cv_metric: balanced_accuracy(),
             max_negatives_per_positive: 5.0,
             merge_radius_m: 0.03,
+            size_prior: SizePriorMode::default(),
+            reference_kinds: reference_kinds(),
+            learnt_size_prior: None,
+            radius_calibration: None,
         }
     }
+}
+
+fn reference_kinds() -> Vec<String> {
+    vec!["reference_ball".to_string()]
 }
 
 fn balanced() -> ClassWeights {

@@ -3,7 +3,7 @@
 
 use pomona_consensus::nalgebra::{Point2, Point3};
 use pomona_consensus::{Cylinder, Shape};
-use pomona_core::{Detection, FrameTruth, PinholeCamera, PixelBox, RgbdFrame};
+use pomona_core::{Detection, FrameTruth, FruitTruth, PinholeCamera, PixelBox, RgbdFrame};
 use pomona_learn::{GridAxis, GridSearchParams, ModelFile, Samples, SvmParams, TrainingSet};
 use pomona_pipeline::{
     params_from_json, params_to_json, run_stage, Detector, FrameSource, LabelledFrame, Pipeline,
@@ -15,7 +15,10 @@ use serde::{Deserialize, Serialize};
 use crate::stages::{
     ClassifierStage, ColorMaskStage, DescriptorStage, RegionGrowingStage, ShapeStage,
 };
-use crate::{Candidate, ColorBayes, ColorHistograms, LabelRule, ShapeFitParams};
+use crate::{
+    Candidate, ColorBayes, ColorHistograms, ColorLut, LabelRule, RadiusCalibration, ShapeFitParams,
+    SizePrior, SizePriorMode,
+};
 
 /// Name of the pipeline on the command line and in model files.
 pub const PIPELINE_NAME: &str = "shape-fit";
@@ -38,31 +41,70 @@ pub struct ShapeFitPipeline {
 }
 
 /// Counts training pixels: fruit pixels from the instance mask when present, otherwise from the
-/// truth boxes; all other pixels with depth are background.
-fn color_histograms(lf: &LabelledFrame, bins: usize) -> ColorHistograms {
+/// truth boxes; all other pixels with depth are background. Pixels in the boxes of reference
+/// objects (`reference_kinds`) are neither.
+fn color_histograms(
+    lf: &LabelledFrame,
+    bins: usize,
+    reference_kinds: &[String],
+) -> ColorHistograms {
     let mut h = ColorHistograms::new(bins);
     let Some(color) = lf.frame.color() else {
         return h;
     };
     let w = color.width();
-    let boxes: Vec<PixelBox> = lf.truth.fruits.iter().filter_map(|f| f.bbox_px).collect();
+    let (references, fruits): (Vec<_>, Vec<_>) = lf
+        .truth
+        .fruits
+        .iter()
+        .partition(|f| reference_kinds.contains(&f.kind));
+    let boxes: Vec<PixelBox> = fruits.iter().filter_map(|f| f.bbox_px).collect();
+    let reference_boxes: Vec<PixelBox> = references.iter().filter_map(|f| f.bbox_px).collect();
     for (i, rgb) in color.pixels().enumerate() {
         let (u, v) = ((i as u32) % w, (i as u32) / w);
+        let p = Point2::new(u as f64, v as f64);
+        if reference_boxes.iter().any(|b| b.contains(&p)) {
+            continue;
+        }
         let fruit = match &lf.mask {
             Some(m) => m.get(u, v).is_some_and(|id| id > 0),
-            None => boxes
-                .iter()
-                .any(|b| b.contains(&Point2::new(u as f64, v as f64))),
+            None => boxes.iter().any(|b| b.contains(&p)),
         };
         h.add(rgb, fruit);
     }
     h
 }
 
-/// Training label of a candidate under `params.label_rule` (see [`LabelRule`]) with
-/// `params.positive_tolerance_m`.
-fn label(c: &Candidate, lf: &LabelledFrame, params: &ShapeFitParams) -> bool {
-    match (&lf.mask, params.label_rule) {
+/// Training label of a candidate: `Some(true)` positive, `Some(false)` negative, `None` left
+/// out of training.
+///
+/// * Candidates within `positive_tolerance_m` of a reference object (`reference_kinds`) are
+///   left out: round like fruit but not crop.
+/// * Complete truth: the label of `params.label_rule` (see [`LabelRule`]) with
+///   `params.positive_tolerance_m` — every candidate that is not a fruit is a negative.
+/// * Incomplete truth (`"complete": false`): see [`incomplete_label`].
+fn label(
+    c: &Candidate,
+    lf: &LabelledFrame,
+    params: &ShapeFitParams,
+    fruit_color: Option<f64>,
+) -> Option<bool> {
+    let center = c.shape.center();
+    let camera = lf.frame.camera();
+    let is_reference = |f: &&FruitTruth| params.reference_kinds.contains(&f.kind);
+    if lf
+        .truth
+        .fruits
+        .iter()
+        .filter(is_reference)
+        .any(|f| near(&center, f, camera, params.positive_tolerance_m))
+    {
+        return None;
+    }
+    if !lf.truth.complete {
+        return incomplete_label(c, lf, params, fruit_color);
+    }
+    Some(match (&lf.mask, params.label_rule) {
         (Some(mask), LabelRule::MaskMajority) => {
             let ids = mask.as_slice();
             let mut counts = std::collections::HashMap::<u16, usize>::new();
@@ -73,13 +115,110 @@ fn label(c: &Candidate, lf: &LabelledFrame, params: &ShapeFitParams) -> bool {
             }
             counts.values().any(|&n| 2 * n > c.pixels.len())
         }
-        _ => is_positive(
-            &c.shape.center(),
-            &lf.truth,
-            lf.frame.camera(),
-            params.positive_tolerance_m,
-        ),
+        _ => is_positive(&center, &lf.truth, camera, params.positive_tolerance_m),
+    })
+}
+
+/// Whether `center` is within `tolerance_m` of the fruit's centre or, for a fruit without a
+/// centre, projects into its box.
+fn near(center: &Point3<f64>, f: &FruitTruth, camera: &PinholeCamera, tolerance_m: f64) -> bool {
+    match (f.center_m, f.bbox_px) {
+        (Some(c), _) => (c - center).norm() <= tolerance_m,
+        (None, Some(b)) => camera.project(center).is_some_and(|p| b.contains(&p)),
+        (None, None) => false,
     }
+}
+
+/// An incomplete frame's truth names only some of the fruit in view, so "matches no annotated
+/// fruit" does not mean "is not a fruit". The rule:
+///
+/// 1. positive: the centre is within `positive_tolerance_m` of an annotated fruit's 3D centre
+///    (fruit without `center_m` are never matched: their box cannot say where in depth the
+///    fruit is, so candidates projecting into such a box are left out);
+/// 2. a *plausible fruit* ([`plausible_fruit`]: size inside the prior and, with a colour
+///    model, the colour of the annotated fruit) is left out — it may well be an unannotated
+///    fruit;
+/// 3. any other candidate is a negative when it lies in an annotated object's neighbourhood
+///    (centre within [`NEIGHBOURHOOD_TOLERANCES`] × `positive_tolerance_m` of its centre: the
+///    leaves and branches the annotator saw next to the fruit), or is clearly not a fruit
+///    anywhere (size outside the prior, or the colour model rejects its pixels: mean posterior
+///    below the mask threshold);
+/// 4. everything else is left out.
+fn incomplete_label(
+    c: &Candidate,
+    lf: &LabelledFrame,
+    params: &ShapeFitParams,
+    fruit_color: Option<f64>,
+) -> Option<bool> {
+    let center = c.shape.center();
+    let camera = lf.frame.camera();
+    let crop = || {
+        lf.truth
+            .fruits
+            .iter()
+            .filter(|f| !params.reference_kinds.contains(&f.kind))
+    };
+    if crop().any(|f| {
+        f.center_m
+            .is_some_and(|t| (t - center).norm() <= params.positive_tolerance_m)
+    }) {
+        return Some(true);
+    }
+    if crop().any(|f| f.center_m.is_none() && near(&center, f, camera, 0.0)) {
+        return None;
+    }
+    let size_ok = size_in_prior(&c.shape, params);
+    let color_ok = fruit_color.is_none_or(|p| p >= PLAUSIBLE_POSTERIOR);
+    if size_ok && color_ok {
+        return None;
+    }
+    let neighbourhood = NEIGHBOURHOOD_TOLERANCES * params.positive_tolerance_m;
+    let in_neighbourhood = lf
+        .truth
+        .fruits
+        .iter()
+        .filter_map(|f| f.center_m)
+        .any(|t| (t - center).norm() <= neighbourhood);
+    let clearly_not = !size_ok || fruit_color.is_some_and(|p| p < params.color.threshold);
+    (in_neighbourhood || clearly_not).then_some(false)
+}
+
+/// An annotated object's neighbourhood in incomplete truth, in positive tolerances (2 × 50 mm:
+/// an apple's own diameter and a leaf's length around its centre).
+const NEIGHBOURHOOD_TOLERANCES: f64 = 2.0;
+
+/// Mean colour posterior at which a candidate of plausible size counts as a possible fruit in
+/// incomplete truth (the model finds its pixels at least as likely fruit as background).
+const PLAUSIBLE_POSTERIOR: f64 = 0.5;
+
+/// Whether the candidate's shape and radius fit the stage's size prior: a sphere (cylinder)
+/// when spheres (cylinders) are fitted at all, with a radius inside their range.
+fn size_in_prior(shape: &Shape, params: &ShapeFitParams) -> bool {
+    use pomona_consensus::ShapeChoice;
+    let inside = |r: f64, (lo, hi): (f64, f64)| r >= lo && r <= hi;
+    match shape {
+        Shape::Sphere(s) => {
+            params.shapes.shapes != ShapeChoice::Cylinder
+                && inside(s.radius_m, params.shapes.sphere.radius_range_m)
+        }
+        Shape::Cylinder(cy) => {
+            params.shapes.shapes != ShapeChoice::Sphere
+                && inside(cy.radius_m, params.shapes.cylinder.radius_range_m)
+        }
+    }
+}
+
+/// Mean colour posterior of the candidate's pixels, `None` without a colour model or image.
+fn mean_posterior(c: &Candidate, lut: Option<&ColorLut>, frame: &RgbdFrame) -> Option<f64> {
+    let (lut, color) = (lut?, frame.color()?);
+    let w = color.width() as usize;
+    let values: Vec<f64> = c
+        .pixels
+        .iter()
+        .filter_map(|&i| color.get((i % w) as u32, (i / w) as u32))
+        .map(|rgb| f64::from(lut.posterior(rgb)))
+        .collect();
+    (!values.is_empty()).then(|| values.iter().sum::<f64>() / values.len() as f64)
 }
 
 /// Whether a candidate centre is a fruit of the truth: within the tolerance of a truth centre,
@@ -209,29 +348,47 @@ impl Pipeline for ShapeFitPipeline {
         if n == 0 {
             return Err(not_enough("no frames with truth".into()));
         }
-        // Pass 1: colour statistics (only if every frame has colour).
+        // Pass 1: colour statistics (only if every frame has colour) and the size prior.
         let first = frames.load(0)?;
         let use_color = first.frame.color().is_some();
+        let from_truth = self.params.size_prior == SizePriorMode::FromTruth;
         let mut color_model = None;
-        if use_color {
-            let hists: Result<Vec<ColorHistograms>, PipelineError> = (0..n)
+        let mut prior = None;
+        if use_color || from_truth {
+            let refs = &self.params.reference_kinds;
+            let per_frame: Result<Vec<FramePrior>, PipelineError> = (0..n)
                 .into_par_iter()
                 .map(|i| {
-                    frames
-                        .load(i)
-                        .map(|lf| color_histograms(&lf, self.params.color.bins))
+                    frames.load(i).map(|lf| {
+                        let h =
+                            use_color.then(|| color_histograms(&lf, self.params.color.bins, refs));
+                        (h, lf.truth.fruits)
+                    })
                 })
                 .collect();
             let mut total = ColorHistograms::new(self.params.color.bins);
-            for h in hists? {
-                total.merge(&h);
+            let mut fruits = Vec::new();
+            for (h, f) in per_frame? {
+                if let Some(h) = h {
+                    total.merge(&h);
+                }
+                fruits.extend(f);
             }
-            color_model = Some(ColorBayes::fit(&total, &self.params.color).ok_or_else(|| {
-                not_enough("colour training needs fruit and background pixels".into())
-            })?);
+            if use_color {
+                color_model =
+                    Some(ColorBayes::fit(&total, &self.params.color).ok_or_else(|| {
+                        not_enough("colour training needs fruit and background pixels".into())
+                    })?);
+            }
+            if from_truth {
+                prior = SizePrior::from_truth(&fruits, refs);
+            }
         }
         let mut params = self.params.clone();
         params.shapes.seed = options.seed;
+        if let Some(prior) = &prior {
+            prior.apply(&mut params);
+        }
         let stage_params = ShapeFitStageParams {
             params,
             color_model,
@@ -263,21 +420,37 @@ impl Pipeline for ShapeFitPipeline {
                     candidates.extend(c);
                     features.extend(f);
                 }
-                let labels = candidates
+                let lut = stages.mask.lut.as_ref();
+                let p = &stage_params.params;
+                let mut pairs = Vec::new();
+                let (features, labels) = candidates
                     .iter()
-                    .map(|c| label(c, &lf, &stage_params.params))
-                    .collect();
+                    .zip(features)
+                    .filter_map(|(c, f)| {
+                        let color = mean_posterior(c, lut, &lf.frame);
+                        let l = label(c, &lf, p, color)?;
+                        if l {
+                            pairs.extend(radius_pair(c, &lf.truth, p));
+                        }
+                        Some((f, l))
+                    })
+                    .unzip();
                 progress(
                     done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1,
                     n,
                 );
-                Ok((features, labels))
+                Ok((features, labels, pairs))
             })
             .collect();
-        let (mut values, mut labels) = (Vec::new(), Vec::new());
-        for (f, l) in per_frame? {
+        let (mut values, mut labels, mut pairs) = (Vec::new(), Vec::new(), Vec::new());
+        for (f, l, r) in per_frame? {
             values.extend(f.into_iter().flatten());
             labels.extend(l);
+            pairs.extend(r);
+        }
+        let mut stage_params = stage_params;
+        if from_truth {
+            stage_params.params.radius_calibration = RadiusCalibration::fit(&pairs);
         }
         let (values, labels) = cap_negatives(
             values,
@@ -339,6 +512,8 @@ impl Pipeline for ShapeFitPipeline {
                 svm: model.classifier(),
             },
             merge_radius_m: stage_params.params.merge_radius_m,
+            calibration: stage_params.params.radius_calibration,
+            sphere_range_m: stage_params.params.shapes.sphere.radius_range_m,
         }))
     }
 }
@@ -384,14 +559,37 @@ fn cap_negatives(
     (kept_values, kept_labels)
 }
 
-/// Descriptors of one frame's candidates and their training labels.
-type LabelledFeatures = (Vec<Vec<f64>>, Vec<bool>);
+/// One frame's colour counts (with colour) and annotated fruit, for the colour model and the
+/// size prior.
+type FramePrior = (Option<ColorHistograms>, Vec<FruitTruth>);
+
+/// Descriptors of one frame's candidates, their training labels, and the (fitted, true) radius
+/// pairs of its positive spheres.
+type LabelledFeatures = (Vec<Vec<f64>>, Vec<bool>, Vec<(f64, f64)>);
+
+/// `(fitted radius, caliper radius)` of a sphere candidate and the nearest annotated crop fruit
+/// with a centre within the positive tolerance and a diameter.
+fn radius_pair(c: &Candidate, truth: &FrameTruth, params: &ShapeFitParams) -> Option<(f64, f64)> {
+    let Shape::Sphere(s) = &c.shape else {
+        return None;
+    };
+    truth
+        .fruits
+        .iter()
+        .filter(|f| !params.reference_kinds.contains(&f.kind))
+        .filter_map(|f| Some(((f.center_m? - s.center).norm(), f.diameter_m?)))
+        .filter(|(d, _)| *d <= params.positive_tolerance_m)
+        .min_by(|a, b| a.0.total_cmp(&b.0))
+        .map(|(_, diameter)| (s.radius_m, diameter / 2.0))
+}
 
 /// A trained shape-fit detector.
 pub struct ShapeFitDetector {
     stages: Stages,
     classifier: ClassifierStage,
     merge_radius_m: f64,
+    calibration: Option<RadiusCalibration>,
+    sphere_range_m: (f64, f64),
 }
 
 fn detection(c: &Candidate, shape: &Shape, score: f64, camera: &PinholeCamera) -> Detection {
@@ -520,8 +718,13 @@ impl Detector for ShapeFitDetector {
         frame: &RgbdFrame,
         timings: &mut StageTimings,
     ) -> Result<Vec<Detection>, PipelineError> {
-        let (candidates, features) = self.stages.candidates(frame, timings)?;
+        let (mut candidates, features) = self.stages.candidates(frame, timings)?;
         let scores = run_stage(&self.classifier, features.as_slice(), timings)?;
+        if let Some(cal) = &self.calibration {
+            for c in &mut candidates {
+                c.shape = cal.apply(&c.shape, &c.points, self.sphere_range_m);
+            }
+        }
         let kept = merge_overlapping(&candidates, &scores, self.merge_radius_m);
         Ok(kept
             .into_iter()
@@ -591,6 +794,82 @@ mod tests {
         };
         assert_eq!(joined.extent_m, Some((0.0, 0.15)));
         assert!((joined.midpoint().y - 0.075).abs() < 1e-12);
+    }
+
+    fn frame(truth_json: &str) -> LabelledFrame {
+        let cam = PinholeCamera::new(100, 100, 100.0, 100.0, 50.0, 50.0).unwrap();
+        let depth = pomona_core::DepthImage::from_u16(100, 100, &[1000; 10_000], 0.001).unwrap();
+        LabelledFrame {
+            name: "f".into(),
+            frame: RgbdFrame::new(cam, depth, None).unwrap(),
+            truth: serde_json::from_str(truth_json).unwrap(),
+            mask: None,
+        }
+    }
+
+    fn at(x: f64, y: f64, r: f64) -> Candidate {
+        let mut c = ball(x, r);
+        if let Shape::Sphere(s) = &mut c.shape {
+            s.center.y = y;
+        }
+        c
+    }
+
+    const INCOMPLETE: &str = r#"{"complete": false, "fruits": [
+        {"id": "a", "kind": "apple", "diameter_m": 0.07, "center_m": [0, 0, 1]},
+        {"id": "n", "kind": "apple", "diameter_m": 0.07, "center_m": null,
+         "bbox_px": [70, 70, 90, 90]},
+        {"id": "b", "kind": "reference_ball", "diameter_m": 0.12, "center_m": [-0.3, 0, 1]}]}"#;
+
+    #[test]
+    fn incomplete_truth_never_makes_a_plausible_fruit_a_negative() {
+        let lf = frame(INCOMPLETE);
+        let p = ShapeFitParams::default();
+        let (red, green, unsure) = (Some(0.9), Some(0.01), Some(0.3));
+        // On the annotated apple: positive.
+        assert_eq!(label(&at(0.02, 0.0, 0.035), &lf, &p, red), Some(true));
+        // An unannotated apple touching the annotated one (80 mm away, apple-sized, red):
+        // left out, never a negative; without colour (depth-only model) likewise.
+        assert_eq!(label(&at(0.08, 0.0, 0.035), &lf, &p, red), None);
+        assert_eq!(label(&at(0.08, 0.0, 0.035), &lf, &p, None), None);
+        // A leaf at the same place (green): a negative.
+        assert_eq!(label(&at(0.08, 0.0, 0.035), &lf, &p, green), Some(false));
+        // Far from any annotation: a red apple-sized candidate and an uncertain colour are left
+        // out; green, or a size outside the prior, is clearly not a fruit.
+        assert_eq!(label(&at(0.0, -0.4, 0.035), &lf, &p, red), None);
+        assert_eq!(label(&at(0.0, -0.4, 0.035), &lf, &p, unsure), None);
+        assert_eq!(label(&at(0.0, -0.4, 0.035), &lf, &p, green), Some(false));
+        assert_eq!(label(&at(0.0, -0.4, 0.2), &lf, &p, red), Some(false));
+        // Under a fruit without centre (`center_m: null`, box 70–90 px, i.e. x, y in 0.2–0.4 m
+        // at 1 m): never matched, never a negative, even green.
+        assert_eq!(label(&at(0.3, 0.3, 0.035), &lf, &p, red), None);
+        assert_eq!(label(&at(0.3, 0.3, 0.035), &lf, &p, green), None);
+        // On the reference ball: neither positive nor negative.
+        assert_eq!(label(&at(-0.29, 0.0, 0.035), &lf, &p, green), None);
+        // Complete truth keeps the old rule: everything off the fruit is a negative.
+        let complete = frame(&INCOMPLETE.replace("false", "true"));
+        assert_eq!(
+            label(&at(0.08, 0.0, 0.035), &complete, &p, red),
+            Some(false)
+        );
+        assert_eq!(label(&at(0.02, 0.0, 0.035), &complete, &p, red), Some(true));
+    }
+
+    #[test]
+    fn null_centres_and_references_do_not_enter_the_size_prior() {
+        let lf = frame(INCOMPLETE);
+        let p = ShapeFitParams::default();
+        let prior = SizePrior::from_truth(&lf.truth.fruits, &p.reference_kinds).unwrap();
+        assert_eq!(prior.fruits, 1);
+        assert_eq!(prior.sphere_radius_m, Some((0.035, 0.035)));
+        assert_eq!(prior.max_center_depth_m, 1.0);
+        // A calibration pair only comes from a fruit with a centre and a diameter.
+        assert_eq!(
+            radius_pair(&at(0.01, 0.0, 0.04), &lf.truth, &p),
+            Some((0.04, 0.035))
+        );
+        assert_eq!(radius_pair(&at(0.3, 0.3, 0.04), &lf.truth, &p), None);
+        assert_eq!(radius_pair(&at(-0.3, 0.0, 0.04), &lf.truth, &p), None);
     }
 
     #[test]

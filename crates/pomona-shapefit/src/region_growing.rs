@@ -26,6 +26,34 @@ pub struct RegionGrowingParams {
     /// spheres; the rim is where that happens. Absent in older model files (then 0).
     #[serde(default)]
     pub rim_px: usize,
+    /// Depth-scaled minimum (set by training's size prior, see `crate::SizePrior`): when
+    /// present it replaces `min_pixels`, and a cluster is kept when it covers at least
+    /// `fraction` of the image area of a sphere of `radius_m` at the cluster's median depth,
+    /// `π (radius_m · fx / z)²` (at least 10 px). A fixed pixel count cannot serve a scene
+    /// whose fruit stand 1–2 m from the camera: a limit that rejects leaf specks at 1 m
+    /// rejects whole apples at 1.9 m. Absent in older model files (then `None`).
+    #[serde(default)]
+    pub min_fruit_area: Option<MinFruitArea>,
+}
+
+/// The smallest cluster as a fraction of the image area of the smallest expected fruit.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct MinFruitArea {
+    /// Radius of the smallest expected fruit, metres.
+    pub radius_m: f64,
+    /// Fraction of its projected disc a cluster must cover, in `(0, 1]`.
+    pub fraction: f64,
+}
+
+impl MinFruitArea {
+    /// The minimum cluster size, pixels, at depth `z_m` for focal length `fx_px` (at least 10).
+    pub fn min_pixels_at(&self, fx_px: f64, z_m: f64) -> usize {
+        if z_m.is_nan() || z_m <= 0.0 {
+            return usize::MAX;
+        }
+        let r_px = self.radius_m * fx_px / z_m;
+        ((self.fraction * std::f64::consts::PI * r_px * r_px).round() as usize).max(10)
+    }
 }
 
 impl Default for RegionGrowingParams {
@@ -35,6 +63,7 @@ impl Default for RegionGrowingParams {
             min_pixels: 150,
             reference_focal_px: 365.0,
             rim_px: 0,
+            min_fruit_area: None,
         }
     }
 }
@@ -99,7 +128,14 @@ pub fn grow_regions(
                 }
             }
         }
-        if cluster.len() >= min_pixels {
+        let big_enough = match &params.min_fruit_area {
+            None => cluster.len() >= min_pixels,
+            Some(area) => {
+                cluster.len() >= 10
+                    && cluster.len() >= area.min_pixels_at(fx_px, median_depth(depth_m, &cluster))
+            }
+        };
+        if big_enough {
             cluster.sort_unstable();
             clusters.push(cluster);
         }
@@ -111,6 +147,17 @@ pub fn grow_regions(
         clusters.retain(|c| !c.is_empty());
     }
     clusters
+}
+
+/// Median depth of the pixels of `cluster` (all finite).
+fn median_depth(depth_m: &[f32], cluster: &[usize]) -> f64 {
+    let mut z: Vec<f32> = cluster.iter().map(|&i| depth_m[i]).collect();
+    let mid = z.len() / 2;
+    if z.is_empty() {
+        return f64::NAN;
+    }
+    let (_, m, _) = z.select_nth_unstable_by(mid, f32::total_cmp);
+    f64::from(*m)
 }
 
 /// The pixels of a sorted `cluster` whose every pixel within `rim_px` 8-neighbour steps (a
@@ -224,6 +271,34 @@ mod tests {
             24
         );
         assert!(grow_regions(w, h, 365.0, &depth, &keep, &with_rim(4)).is_empty());
+    }
+
+    #[test]
+    fn depth_scaled_minimum_keeps_far_fruit_and_drops_near_specks() {
+        // Two 12×12 blocks (144 px): one at 2 m, one at 0.5 m. A 30 mm fruit at fx 365 covers
+        // π·5.5² ≈ 94 px at 2 m and π·21.9² ≈ 1507 px at 0.5 m; a quarter of that is the limit.
+        let (w, h) = (40, 20);
+        let mut depth = vec![f32::NAN; w * h];
+        for v in 2..14 {
+            for u in 2..14 {
+                depth[v * w + u] = 2.0;
+                depth[v * w + u + 20] = 0.5;
+            }
+        }
+        let params = RegionGrowingParams {
+            min_fruit_area: Some(MinFruitArea {
+                radius_m: 0.03,
+                fraction: 0.25,
+            }),
+            ..Default::default()
+        };
+        let clusters = grow_regions(w, h, 365.0, &depth, &vec![true; w * h], &params);
+        assert_eq!(clusters.len(), 1);
+        assert_eq!(depth[clusters[0][0]], 2.0);
+        let area = params.min_fruit_area.unwrap();
+        assert_eq!(area.min_pixels_at(365.0, 2.0), 24);
+        assert_eq!(area.min_pixels_at(365.0, 0.5), 377);
+        assert_eq!(area.min_pixels_at(365.0, 0.0), usize::MAX);
     }
 
     #[test]

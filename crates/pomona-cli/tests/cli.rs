@@ -652,6 +652,29 @@ fn calibrated_model_round_trips_and_sets_the_default_operating_point() {
 }
 
 #[test]
+fn incomplete_truth_leaves_the_model_uncalibrated_instead_of_failing() {
+    let dir = tempfile::tempdir().unwrap();
+    let ds = dir.path().join("ds");
+    synth_dataset(&ds, 6, 51);
+    // Annotate only the first fruit of each frame and say the truth is incomplete.
+    for entry in std::fs::read_dir(ds.join("truth")).unwrap() {
+        let path = entry.unwrap().path();
+        let mut truth: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+        truth["complete"] = serde_json::Value::Bool(false);
+        truth["fruits"].as_array_mut().unwrap().truncate(1);
+        std::fs::write(&path, truth.to_string()).unwrap();
+    }
+    let pipelines = only(BlobPipeline::colour());
+    let model = dir.path().join("m.json");
+    train::run_with(&pipelines, &train_args(blob::NAME, &[&ds], &model)).unwrap();
+    assert!(ModelFile::load(&model, blob::NAME)
+        .unwrap()
+        .calibration
+        .is_none());
+}
+
+#[test]
 fn cross_domain_experiment_refuses_shared_sets_and_leave_one_out_tests_every_frame() {
     let dir = tempfile::tempdir().unwrap();
     let (a, b) = (dir.path().join("a"), dir.path().join("b"));

@@ -35,7 +35,6 @@ pub enum OperatingPoint {
     Precision(f64),
 }
 
-
 /// What the calibration was fitted on, and how it performed there (held-out figures).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct CalibrationEvidence {

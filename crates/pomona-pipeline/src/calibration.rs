@@ -147,13 +147,22 @@ fn fold_of_frames(n: usize, folds: usize, seed: u64) -> Vec<usize> {
     fold
 }
 
-/// Held-out evidence of one frame: `(score, is_true)` per usable detection and the number of
-/// findable fruit.
+/// Held-out evidence of one frame.
+struct HeldOut {
+    /// `(score, is_true)` per detection whose truth status is known.
+    labelled: Vec<(f64, bool)>,
+    /// Truth fruit that could have been found.
+    findable: usize,
+    /// Whether the frame's truth is complete.
+    complete: bool,
+}
+
+/// Labels one frame's held-out detections by matching them to its truth.
 fn held_out_labels(
     frame: &LabelledFrame,
     detections: &[Detection],
     params: &CalibrationParams,
-) -> (Vec<(f64, bool)>, usize) {
+) -> HeldOut {
     let config = EvalConfig {
         tolerance_m: params.tolerance_m,
         min_visibility: params.min_visibility,
@@ -169,12 +178,28 @@ fn held_out_labels(
             _ => None,
         })
         .collect();
-    (labelled, m.counted_truth())
+    HeldOut {
+        labelled,
+        findable: m.counted_truth(),
+        complete: frame.truth.complete,
+    }
+}
+
+/// A trained model and, when it carries no calibration, why.
+#[derive(Debug, Clone)]
+pub struct CalibratedTraining {
+    /// The model trained on all frames (with `calibration` set unless `not_calibrated`).
+    pub model: ModelFile,
+    /// Why the model has no calibration: turned off, or incomplete truth left no held-out
+    /// detection known to be false.
+    pub not_calibrated: Option<String>,
 }
 
 /// Trains `pipeline` on `frames` and, unless `params.folds` is 0, attaches a
 /// [`ScoreCalibration`] fitted on cross-fitted held-out detections (see the module docs).
-/// `progress` receives (training frames processed, total) over all the training passes.
+/// When incomplete truth leaves no held-out detection known to be false, the model stays
+/// uncalibrated and [`CalibratedTraining::not_calibrated`] says so. `progress` receives
+/// (training frames processed, total) over all the training passes.
 ///
 /// # Errors
 /// Training or detection errors of the pipeline; [`PipelineError::NotEnoughTrainingData`] when
@@ -186,9 +211,12 @@ pub fn train_calibrated(
     options: &TrainOptions,
     params: &CalibrationParams,
     progress: &(dyn Fn(usize, usize) + Sync),
-) -> Result<ModelFile, PipelineError> {
+) -> Result<CalibratedTraining, PipelineError> {
     if params.folds == 0 {
-        return pipeline.train(frames, options, progress);
+        return Ok(CalibratedTraining {
+            model: pipeline.train(frames, options, progress)?,
+            not_calibrated: Some("calibration was turned off (0 folds)".into()),
+        });
     }
     let n = frames.len();
     let not_enough = |reason: String| PipelineError::NotEnoughTrainingData {
@@ -210,6 +238,7 @@ pub fn train_calibrated(
     let mut done = 0;
     let mut labelled = Vec::new();
     let mut truth_fruit = 0;
+    let mut incomplete = 0;
     for k in 0..folds {
         let (held, train): (Vec<usize>, Vec<usize>) = (0..n).partition(|&i| fold[i] == k);
         let train_set = FrameSubset {
@@ -226,7 +255,7 @@ pub fn train_calibrated(
         })?;
         done += train_set.len();
         let detector = pipeline.load(&model)?;
-        let per_frame: Vec<(Vec<(f64, bool)>, usize)> = held
+        let per_frame: Vec<HeldOut> = held
             .par_iter()
             .map(|&i| {
                 let frame = frames.load(i)?;
@@ -234,22 +263,38 @@ pub fn train_calibrated(
                 Ok(held_out_labels(&frame, &detections, params))
             })
             .collect::<Result<_, PipelineError>>()?;
-        for (l, t) in per_frame {
-            labelled.extend(l);
-            truth_fruit += t;
+        for h in per_frame {
+            labelled.extend(h.labelled);
+            truth_fruit += h.findable;
+            incomplete += usize::from(!h.complete);
         }
     }
+    let offset = done;
+    let mut model = pipeline.train(frames, options, &|d, _| progress(offset + d, total))?;
     let (scores, is_true): (Vec<f64>, Vec<bool>) = labelled.into_iter().unzip();
+    if !is_true.contains(&false) && incomplete > 0 {
+        // Every held-out detection matched an annotated fruit and the rest may be unannotated
+        // fruit: nothing tells true from false, so the model stays uncalibrated.
+        return Ok(CalibratedTraining {
+            model,
+            not_calibrated: Some(format!(
+                "no held-out detection is known to be false ({incomplete} of {n} frames have \
+                 incomplete truth, where unmatched detections may be unannotated fruit); the \
+                 model reports raw scores"
+            )),
+        });
+    }
     let calibration = ScoreCalibration::fit(&scores, &is_true, truth_fruit, params.operating_point)
         .map_err(|e| {
             not_enough(format!(
                 "cannot calibrate confidences on the held-out detections of {folds} folds: {e}"
             ))
         })?;
-    let offset = done;
-    let mut model = pipeline.train(frames, options, &|d, _| progress(offset + d, total))?;
     model.calibration = Some(calibration);
-    Ok(model)
+    Ok(CalibratedTraining {
+        model,
+        not_calibrated: None,
+    })
 }
 
 #[cfg(test)]

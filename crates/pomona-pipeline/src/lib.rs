@@ -24,7 +24,9 @@ mod synthetic_frames;
 mod timings;
 mod train_params;
 
-pub use calibration::{load_detector, train_calibrated, CalibratedDetector, CalibrationParams};
+pub use calibration::{
+    load_detector, train_calibrated, CalibratedDetector, CalibratedTraining, CalibrationParams,
+};
 pub use detector::{Detector, Pipeline, TrainOptions};
 pub use error::PipelineError;
 pub use frame_source::{DatasetFrames, FrameSource, LabelledFrame};

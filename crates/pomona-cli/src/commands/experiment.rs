@@ -492,9 +492,13 @@ pub fn run_with(
             bar.set_position(done as u64);
         };
         let started = Instant::now();
-        let model: ModelFile = pool
+        let trained = pool
             .install(|| train_calibrated(pipeline, &train_set, &options, &calibration, &progress))
             .with_context(|| format!("training `{}` on split {}", pipeline.name(), k + 1))?;
+        if let (Some(why), true) = (&trained.not_calibrated, calibration.folds > 0) {
+            eprintln!("split {}: no confidence calibration: {why}", k + 1);
+        }
+        let model: ModelFile = trained.model;
         let train_s = started.elapsed().as_secs_f64();
         bar.finish_and_clear();
         let operating_confidence = model.calibration.map(|c| c.operating_confidence);

@@ -144,7 +144,7 @@ pub fn run_with(pipelines: &[Box<dyn Pipeline>], args: &TrainArgs) -> Result<Tra
         bar.set_length(total as u64);
         bar.set_position(done as u64);
     };
-    let model = pool
+    let trained = pool
         .install(|| {
             train_calibrated(
                 pipeline,
@@ -155,6 +155,7 @@ pub fn run_with(pipelines: &[Box<dyn Pipeline>], args: &TrainArgs) -> Result<Tra
             )
         })
         .with_context(|| format!("training `{}`", pipeline.name()))?;
+    let model = trained.model;
     let seconds = started.elapsed().as_secs_f64();
     bar.finish_and_clear();
     model.save(&args.out)?;

@@ -5,7 +5,7 @@
 #
 #   scripts/cross_domain.sh [OUT] [PIPELINE] [TRAIN_FRAMES] [TEST_FRAMES]
 #
-# defaults: OUT=/tmp/pomona-cross-domain, PIPELINE=shape-fit, 40 training and 12 test frames per
+# POMONA=/path/to/pomona uses that binary instead of building one. Defaults: OUT=/tmp/pomona-cross-domain, PIPELINE=shape-fit, 40 training and 12 test frames per
 # set. Rows (each "held out" row is compared with the in-domain row testing the same set):
 #   narrow → narrow, narrow → wide, wide → narrow, wide → wide
 #   each leaf family: trained on wide worlds without it vs with every family, tested on it alone
@@ -20,8 +20,10 @@ OUT=${1:-/tmp/pomona-cross-domain}
 PIPELINE=${2:-shape-fit}
 NTRAIN=${3:-40}
 NTEST=${4:-12}
-cargo build --release -q -p pomona-cli
-POMONA=$(pwd)/target/release/pomona
+if [ -z "${POMONA:-}" ]; then
+  cargo build --release -q -p pomona-cli
+  POMONA=$(pwd)/target/release/pomona
+fi
 mkdir -p "$OUT/data" "$OUT/reports"
 
 # set NAME SEED FRAMES ARGS... : render a dataset once (kept between runs).

@@ -1,28 +1,59 @@
-//! Trains the models embedded in the binary as shape-fit's defaults: synthetic Kinect v2 frames
-//! of every fruit kind (one kind per frame), time-of-flight noise, spheres and cylinders, fixed
-//! seeds; `models/default.json` with colour and `models/default-depth.json` from the same
-//! frames without colour (used for depth-only datasets). Rerun after changing the pipeline:
+//! Trains the models embedded in the binary as shape-fit's defaults: synthetic frames of the
+//! `wide` domain (randomised leaves, backgrounds, light, distances 0.3–1.6 m, fruit shape and
+//! colour) of every fruit kind (one kind per frame), from three cameras with their own depth
+//! noise (half Kinect v2, a quarter each D435 and SR4000), spheres and cylinders, fixed seeds;
+//! each model carries a confidence calibration and an operating threshold fitted on 3 held-out
+//! folds (`pomona_pipeline::train_calibrated`). `models/default.json` with colour and
+//! `models/default-depth.json` from the same frames without colour (used for depth-only
+//! datasets). Rerun after changing the pipeline:
 //!
 //! ```sh
 //! cargo run --release -p pomona-shapefit --example train_default_model -- crates/pomona-shapefit/models
 //! ```
 
 use pomona_core::RgbdFrame;
-use pomona_pipeline::SyntheticFrames;
-use pomona_pipeline::{FrameSource, LabelledFrame, Pipeline, PipelineError, TrainOptions};
+use pomona_pipeline::{
+    train_calibrated, CalibrationParams, FrameSource, LabelledFrame, PipelineError,
+    SyntheticFrames, TrainOptions,
+};
 use pomona_shapefit::ShapeFitPipeline;
-use pomona_synth::{FruitChoice, NoiseModel, SceneSpec};
+use pomona_synth::{CameraPreset, Domain, FruitChoice, NoiseModel, SceneSpec};
 
-/// Frames rendered for training; seed 1000 is reserved for the default model (tests and
-/// benchmarks use other seeds).
-const FRAMES: usize = 60;
-const DATASET_SEED: u64 = 1000;
+/// Frames rendered for training per camera; seeds 1000–1002 are reserved for the default models
+/// (tests, benchmarks and the cross-domain script use other seeds).
+const CAMERAS: [(CameraPreset, usize, u64); 3] = [
+    (CameraPreset::KinectV2, 32, 1000),
+    (CameraPreset::D435, 16, 1001),
+    (CameraPreset::Sr4000, 16, 1002),
+];
 const TRAIN_SEED: u64 = 1;
 
-/// The same frames without their colour images.
-struct WithoutColor(SyntheticFrames);
+/// Several synthetic sets, one after another.
+struct Concat(Vec<SyntheticFrames>);
 
-impl FrameSource for WithoutColor {
+impl FrameSource for Concat {
+    fn len(&self) -> usize {
+        self.0.iter().map(FrameSource::len).sum()
+    }
+
+    fn load(&self, mut i: usize) -> Result<LabelledFrame, PipelineError> {
+        for part in &self.0 {
+            if i < part.len() {
+                return part.load(i);
+            }
+            i -= part.len();
+        }
+        Err(PipelineError::InvalidParameter {
+            name: "frame index".into(),
+            reason: format!("{i} is past the end"),
+        })
+    }
+}
+
+/// The same frames without their colour images.
+struct WithoutColor<'a>(&'a dyn FrameSource);
+
+impl FrameSource for WithoutColor<'_> {
     fn len(&self) -> usize {
         self.0.len()
     }
@@ -46,18 +77,26 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             .nth(1)
             .unwrap_or_else(|| "crates/pomona-shapefit/models".into()),
     );
-    let spec = SceneSpec {
-        fruit: FruitChoice::Mixed,
-        noise: NoiseModel::Tof,
-        green_fraction: 0.2,
-        ..SceneSpec::default()
-    };
-    let frames = SyntheticFrames {
-        spec,
-        seed: DATASET_SEED,
-        first: 0,
-        count: FRAMES,
-    };
+    let rendered = Concat(
+        CAMERAS
+            .iter()
+            .map(|&(camera, count, seed)| SyntheticFrames {
+                spec: SceneSpec {
+                    fruit: FruitChoice::Mixed,
+                    camera: camera.camera(),
+                    noise: NoiseModel::for_camera(camera),
+                    green_fraction: 0.2,
+                    domain: Domain::Wide,
+                    ..SceneSpec::default()
+                },
+                seed,
+                first: 0,
+                count,
+            })
+            .collect(),
+    );
+    // Rendered once, trained on by every calibration fold and both models.
+    let frames = rendered.load_all()?;
     let mut pipeline = ShapeFitPipeline::default();
     pipeline.params.shapes.shapes = pomona_consensus::ShapeChoice::Both;
     let options = TrainOptions {
@@ -65,19 +104,44 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         ..TrainOptions::default()
     };
     let progress = |done: usize, total: usize| eprint!("\rframes {done}/{total}");
-    let depth_only = WithoutColor(frames.clone());
+    let depth_only = WithoutColor(&frames);
     let sources: [(&str, &dyn FrameSource); 2] = [
         ("default.json", &frames),
         ("default-depth.json", &depth_only),
     ];
     for (name, source) in sources {
         let start = std::time::Instant::now();
-        let model = pipeline.train(source, &options, &progress)?;
+        let trained = train_calibrated(
+            &pipeline,
+            source,
+            &options,
+            &CalibrationParams::default(),
+            &progress,
+        )?;
         eprintln!();
+        let model = trained.model;
         let out = dir.join(name);
         model.save(&out)?;
+        let calibration = model.calibration.map_or_else(
+            || {
+                format!(
+                    "no calibration: {}",
+                    trained.not_calibrated.unwrap_or_default()
+                )
+            },
+            |c| {
+                format!(
+                    "operating confidence {:.3} (held-out precision {:.3}, recall {:.3} over {} \
+                     fruit)",
+                    c.operating_confidence,
+                    c.evidence.precision,
+                    c.evidence.recall,
+                    c.evidence.truth_fruit
+                )
+            },
+        );
         println!(
-            "wrote {}: {} support vectors, {:.1} s",
+            "wrote {}: {} support vectors, {calibration}, {:.1} s",
             out.display(),
             model.svm.n_support(),
             start.elapsed().as_secs_f64()

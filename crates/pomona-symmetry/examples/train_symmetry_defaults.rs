@@ -1,9 +1,12 @@
 //! Trains the models embedded in the binary as the defaults of `symmetry`
-//! (`models/symmetry.json`) and `viewer-pose` (`models/viewer-pose.json`): synthetic Kinect v2
-//! frames of every fruit kind (one kind per frame, as `pomona demo` renders them), time-of-flight
-//! noise, green fraction 0.5, dataset seed 1000 (reserved for default models; tests and
-//! benchmarks use other seeds), training seed 1. Both pipelines use their default parameters
-//! (highlight pruning on; it is skipped with a message on frames without colour).
+//! (`models/symmetry.json`) and `viewer-pose` (`models/viewer-pose.json`): synthetic frames of
+//! the `wide` domain (randomised leaves, backgrounds, light, distances 0.3–1.6 m) of every fruit
+//! kind (one kind per frame), from three cameras with their own depth noise (half Kinect v2, a
+//! quarter each D435 and SR4000), green fraction 0.5, dataset seeds 1000–1002 (reserved for
+//! default models; tests and benchmarks use other seeds), training seed 1. Both pipelines use
+//! their default parameters (highlight pruning on; it is skipped with a message on frames
+//! without colour), and each model carries a confidence calibration and operating threshold
+//! fitted on 3 held-out folds (`pomona_pipeline::train_calibrated`).
 //!
 //! Mixed fruit rather than peppers only: the detectors are shape-only, with one 12 cm box that
 //! holds every kind the scene generator makes, and the demo renders mixed fruit; the crate
@@ -11,7 +14,7 @@
 //!
 //! Model size: each support vector is 168 numbers, and the `symmetry` model holds two SVMs (the
 //! main one and its cascade's fixed-frame one, see `CascadeParams`), so the training set is
-//! capped ([`FRAMES`] frames, the pipelines' 40 negatives per frame) to keep each file under
+//! capped (32 frames, the pipelines' 40 negatives per frame) to keep each file under
 //! 2 MB (`ModelFile::save` writes compact JSON). Rerun after changing the pipeline:
 //!
 //! ```sh
@@ -19,15 +22,42 @@
 //! ```
 
 use pomona_learn::ModelFile;
-use pomona_pipeline::SyntheticFrames;
-use pomona_pipeline::{Pipeline, TrainOptions};
+use pomona_pipeline::{
+    train_calibrated, CalibrationParams, FrameSource, LabelledFrame, Pipeline, PipelineError,
+    SyntheticFrames, TrainOptions,
+};
 use pomona_symmetry::{SymmetryPipeline, ViewerPosePipeline};
-use pomona_synth::{CameraPreset, FruitChoice, NoiseModel, SceneSpec};
+use pomona_synth::{CameraPreset, Domain, FruitChoice, NoiseModel, SceneSpec};
 
-/// Frames rendered for training (the cap on the model size).
-const FRAMES: usize = 32;
-/// Dataset seed reserved for the default models.
-const DATASET_SEED: u64 = 1000;
+/// Frames rendered for training per camera (32 in all: the cap on the model size) and the
+/// dataset seeds reserved for the default models.
+const CAMERAS: [(CameraPreset, usize, u64); 3] = [
+    (CameraPreset::KinectV2, 16, 1000),
+    (CameraPreset::D435, 8, 1001),
+    (CameraPreset::Sr4000, 8, 1002),
+];
+
+/// Several synthetic sets, one after another.
+struct Concat(Vec<SyntheticFrames>);
+
+impl FrameSource for Concat {
+    fn len(&self) -> usize {
+        self.0.iter().map(FrameSource::len).sum()
+    }
+
+    fn load(&self, mut i: usize) -> Result<LabelledFrame, PipelineError> {
+        for part in &self.0 {
+            if i < part.len() {
+                return part.load(i);
+            }
+            i -= part.len();
+        }
+        Err(PipelineError::InvalidParameter {
+            name: "frame index".into(),
+            reason: format!("{i} is past the end"),
+        })
+    }
+}
 /// Seed of the training (sampling of negatives and jitters, cross-validation folds).
 const TRAIN_SEED: u64 = 1;
 
@@ -37,19 +67,26 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             .nth(1)
             .unwrap_or_else(|| "crates/pomona-symmetry/models".into()),
     );
-    let spec = SceneSpec {
-        fruit: FruitChoice::Mixed,
-        camera: CameraPreset::KinectV2.camera(),
-        noise: NoiseModel::Tof,
-        green_fraction: 0.5,
-        ..SceneSpec::default()
-    };
-    let frames = SyntheticFrames {
-        spec,
-        seed: DATASET_SEED,
-        first: 0,
-        count: FRAMES,
-    };
+    let rendered = Concat(
+        CAMERAS
+            .iter()
+            .map(|&(camera, count, seed)| SyntheticFrames {
+                spec: SceneSpec {
+                    fruit: FruitChoice::Mixed,
+                    camera: camera.camera(),
+                    noise: NoiseModel::for_camera(camera),
+                    green_fraction: 0.5,
+                    domain: Domain::Wide,
+                    ..SceneSpec::default()
+                },
+                seed,
+                first: 0,
+                count,
+            })
+            .collect(),
+    );
+    // Rendered once, trained on by every fold and both pipelines.
+    let frames = rendered.load_all()?;
     let options = TrainOptions {
         seed: TRAIN_SEED,
         ..TrainOptions::default()
@@ -61,8 +98,33 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     ];
     for (name, pipeline) in pipelines {
         let start = std::time::Instant::now();
-        let model = pipeline.train(&frames, &options, &progress)?;
+        let trained = train_calibrated(
+            pipeline.as_ref(),
+            &frames,
+            &options,
+            &CalibrationParams::default(),
+            &progress,
+        )?;
         eprintln!();
+        let model = trained.model;
+        let calibration = model.calibration.map_or_else(
+            || {
+                format!(
+                    "no calibration: {}",
+                    trained.not_calibrated.unwrap_or_default()
+                )
+            },
+            |c| {
+                format!(
+                    "operating confidence {:.3} (held-out precision {:.3}, recall {:.3} over {} \
+                     fruit)",
+                    c.operating_confidence,
+                    c.evidence.precision,
+                    c.evidence.recall,
+                    c.evidence.truth_fruit
+                )
+            },
+        );
         let out = dir.join(name);
         model.save(&out)?;
         let bytes = std::fs::metadata(&out)?.len();
@@ -72,7 +134,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             .as_array()
             .map_or(0, Vec::len);
         println!(
-            "wrote {} ({:.2} MB): {} support vectors (+ {cascade} in the cascade), {:.1} s",
+            "wrote {} ({:.2} MB): {} support vectors (+ {cascade} in the cascade), {calibration}, \
+             {:.1} s",
             out.display(),
             bytes as f64 / 1e6,
             model.svm.n_support(),

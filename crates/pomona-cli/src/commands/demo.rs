@@ -1,12 +1,14 @@
 //! `pomona demo`: the README's first command. Renders a small synthetic scene set (Kinect v2,
-//! mixed fruit, time-of-flight noise), runs every registered pipeline that has a built-in model,
-//! evaluates each, and writes everything needed to look at the result:
+//! mixed fruit, the `wide` domain's randomised worlds with time-of-flight multipath noise), runs
+//! every registered pipeline that has a built-in model, evaluates each at its model's operating
+//! confidence (score ≥ 0 for an uncalibrated model), and writes everything needed to look at
+//! the result:
 //!
 //! ```text
 //! <out>/data/                       the synthetic dataset (pomona synth layout)
 //! <out>/overlay/<frame>.png         the colour image with the truth (green)
-//! <out>/<pipeline>/detections/      one <frame>.json per frame (docs/formats.md)
-//! <out>/<pipeline>/overlay/<frame>.png   truth (green) and detections scoring ≥ 0 (red, score | diameter)
+//! <out>/<pipeline>/detections/      one <frame>.json per frame, every detection (docs/formats.md)
+//! <out>/<pipeline>/overlay/<frame>.png   truth (green) and detections at the operating point (red, score | diameter)
 //! <out>/<pipeline>/pr.png           precision-recall curve
 //! <out>/report.json                 settings, and per pipeline the evaluation and ms/frame
 //! ```
@@ -18,18 +20,18 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{bail, Context, Result};
-use pomona_core::FrameDetections;
+use pomona_core::{Detection, FrameDetections};
 use pomona_eval::{evaluate, write_pr_plot, EvalConfig, EvalReport, FrameInput};
 use pomona_io::Dataset;
 use pomona_pipeline::Pipeline;
 use pomona_synth::{
-    generate_dataset, CameraPreset, DatasetSpec, FruitChoice, NoiseModel, SceneSpec,
+    generate_dataset, CameraPreset, DatasetSpec, Domain, FruitChoice, NoiseModel, SceneSpec,
 };
 use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::detection_run::{build_detector, detect_frames, read_model, thread_pool};
-use crate::overlay::{shown, view_of, write_overlay};
+use crate::overlay::{view_of, write_overlay};
 use crate::pipelines;
 use crate::progress::progress_bar;
 
@@ -132,7 +134,8 @@ pub fn demo_spec(frames: u32, seed: u64) -> DatasetSpec {
     let scene = SceneSpec {
         fruit: FruitChoice::Mixed,
         camera: CameraPreset::KinectV2.camera(),
-        noise: NoiseModel::Tof,
+        noise: NoiseModel::for_camera(CameraPreset::KinectV2),
+        domain: Domain::Wide,
         ..SceneSpec::default()
     };
     DatasetSpec::new(scene, frames, seed)
@@ -164,7 +167,7 @@ pub fn run_with(pipelines: &[Box<dyn Pipeline>], args: &DemoArgs) -> Result<Demo
         .with_context(|| format!("rendering the demo scenes into {}", data_dir.display()))?;
     bar.finish_and_clear();
     println!(
-        "Rendered {} synthetic Kinect v2 frames (mixed fruit, time-of-flight noise, seed {}) with \
+        "Rendered {} synthetic Kinect v2 frames (mixed fruit, wide domain, time-of-flight noise, seed {}) with \
          {} visible fruit into {}",
         synth.frames,
         args.seed,
@@ -208,6 +211,11 @@ pub fn run_with(pipelines: &[Box<dyn Pipeline>], args: &DemoArgs) -> Result<Demo
         }
         let (model, source) = read_model(pipeline.as_ref(), None, true)?;
         let detector = build_detector(pipeline.as_ref(), model, &source, &[])?;
+        let operating_confidence = detector.operating_confidence();
+        let config = EvalConfig {
+            min_confidence: operating_confidence,
+            ..config
+        };
         let det_dir = args.out.join(name).join("detections");
         let ovl_dir = args.out.join(name).join("overlay");
         for dir in [&det_dir, &ovl_dir] {
@@ -229,7 +237,7 @@ pub fn run_with(pipelines: &[Box<dyn Pipeline>], args: &DemoArgs) -> Result<Demo
                         frame: stems[i].clone(),
                         pipeline: name.to_owned(),
                         detections: result.detections.clone(),
-                        operating_confidence: None,
+                        operating_confidence,
                         min_confidence: None,
                     };
                     pomona_io::write_json(&det_dir.join(format!("{}.json", stems[i])), &record)?;
@@ -245,7 +253,12 @@ pub fn run_with(pipelines: &[Box<dyn Pipeline>], args: &DemoArgs) -> Result<Demo
                 .zip(&frames)
                 .try_for_each(|(stem, (result, _))| -> Result<()> {
                     let (image, truth) = load_view(stem)?;
-                    let shown = shown(&result.detections, config.threshold);
+                    let shown: Vec<Detection> = result
+                        .detections
+                        .iter()
+                        .filter(|d| config.keeps(d))
+                        .cloned()
+                        .collect();
                     write_overlay(
                         &ovl_dir.join(format!("{stem}.png")),
                         &image,
@@ -254,9 +267,9 @@ pub fn run_with(pipelines: &[Box<dyn Pipeline>], args: &DemoArgs) -> Result<Demo
                         &shown,
                         config.min_visibility,
                         &format!(
-                            "{stem}: {name} ({} scoring ≥ {})",
+                            "{stem}: {name} ({} at {})",
                             shown.len(),
-                            config.threshold
+                            config.operating_point()
                         ),
                     )
                 })
@@ -275,12 +288,15 @@ pub fn run_with(pipelines: &[Box<dyn Pipeline>], args: &DemoArgs) -> Result<Demo
         let report = evaluate(&inputs, &camera, &config)?;
         if let Some(curve) = &report.pr_curve {
             let title = format!("{name} on {} demo frames", report.frames);
-            write_pr_plot(
-                &args.out.join(name).join("pr.png"),
-                curve,
-                &title,
-                config.threshold,
-            )?;
+            // The curve is over scores: mark the lowest score at the operating point.
+            let marked = inputs
+                .iter()
+                .flat_map(|f| &f.detections)
+                .filter(|d| config.keeps(d))
+                .map(|d| d.score)
+                .reduce(f64::min)
+                .unwrap_or(config.threshold);
+            write_pr_plot(&args.out.join(name).join("pr.png"), curve, &title, marked)?;
         }
         println!("\n### `{name}` (built-in model)\n");
         print!("{}", report.to_markdown());

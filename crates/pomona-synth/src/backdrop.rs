@@ -114,7 +114,7 @@ impl Backdrop {
                 // A woven texture: alternating threads 3 mm apart.
                 let weave = 0.5 + 0.5 * ((x / 0.003).sin() * (y / 0.003).sin());
                 let fine = value_noise(x / 0.05, y / 0.05, self.texture_seed);
-                let g = 0.012 + 0.012 * weave + 0.008 * fine;
+                let g = 0.005 + 0.008 * weave + 0.005 * fine;
                 Material {
                     albedo: [g, g, 1.1 * g],
                     specular: 0.04,

@@ -16,6 +16,9 @@ use crate::Scene;
 const MAX_CELLS_PER_SIDE: usize = 256;
 /// Smallest cell edge, metres.
 const MIN_CELL_M: f64 = 0.01;
+/// Casters with a bounding radius above this (long stalks, posts, pipes) are kept out of the
+/// grid and tested on every query, so they do not stretch the grid, metres.
+const BIG_CASTER_M: f64 = 0.3;
 /// Shadow rays start this far towards the sun from the surface point, metres (no self-hits on
 /// round-off).
 const SHADOW_BIAS_M: f64 = 2e-4;
@@ -52,6 +55,8 @@ pub(crate) struct ShadowGrid<'a> {
     members: Vec<u32>,
     starts: Vec<usize>,
     casters: Vec<Caster>,
+    /// Casters too large for the grid, tested on every query.
+    big: Vec<Caster>,
 }
 
 impl<'a> ShadowGrid<'a> {
@@ -88,6 +93,8 @@ impl<'a> ShadowGrid<'a> {
                 radius: fruit.bounding_radius_m(),
             });
         }
+        let (big, casters): (Vec<Caster>, Vec<Caster>) =
+            casters.into_iter().partition(|c| c.radius > BIG_CASTER_M);
         let project = |p: &Point3<f64>| (p.coords.dot(&e1), p.coords.dot(&e2));
         let (mut lo, mut hi) = ((f64::MAX, f64::MAX), (f64::MIN, f64::MIN));
         for c in &casters {
@@ -149,12 +156,18 @@ impl<'a> ShadowGrid<'a> {
             members,
             starts,
             casters,
+            big,
         }
     }
 
     /// Whether the sun is visible from scene point `p` (on the surface of `skip`, which is not
     /// tested: a surface does not shadow itself here; the diffuse term darkens its far side).
     pub(crate) fn sun_visible(&self, p: &Point3<f64>, skip: Option<Occluder>) -> bool {
+        let l = self.towards_sun.into_inner();
+        let origin = p + l * SHADOW_BIAS_M;
+        if self.big.iter().any(|c| self.blocks(c, &origin, skip)) {
+            return false;
+        }
         let (x, y) = (p.coords.dot(&self.e1), p.coords.dot(&self.e2));
         let (i, j) = (
             ((x - self.origin.0) / self.cell_m).floor(),
@@ -164,34 +177,31 @@ impl<'a> ShadowGrid<'a> {
             return true;
         }
         let cell = j as usize * self.cells.0 + i as usize;
-        let l = self.towards_sun.into_inner();
-        let origin = p + l * SHADOW_BIAS_M;
-        for &k in &self.members[self.starts[cell]..self.starts[cell + 1]] {
-            let c = &self.casters[k as usize];
-            if Some(c.object) == skip {
-                continue;
-            }
-            let to_center = c.center - origin;
-            let along = to_center.dot(&l);
-            // Sphere wholly behind the point, or the ray passes outside it.
-            if along < -c.radius || to_center.norm_squared() - along * along > c.radius * c.radius {
-                continue;
-            }
-            let blocked = match c.object {
-                Occluder::Leaf(k) => self.scene.leaves[k as usize]
-                    .intersect(&origin, &l)
-                    .is_some(),
-                Occluder::Stem(k) => self.scene.stems[k as usize]
-                    .intersect(&origin, &l)
-                    .is_some(),
-                Occluder::Fruit(k) => self.scene.fruits[k as usize]
-                    .intersect(&origin, &l)
-                    .is_some(),
-            };
-            if blocked {
-                return false;
-            }
+        !self.members[self.starts[cell]..self.starts[cell + 1]]
+            .iter()
+            .any(|&k| self.blocks(&self.casters[k as usize], &origin, skip))
+    }
+
+    /// Whether caster `c` (unless it is `skip`) blocks the ray from `origin` towards the sun.
+    fn blocks(&self, c: &Caster, origin: &Point3<f64>, skip: Option<Occluder>) -> bool {
+        if Some(c.object) == skip {
+            return false;
         }
-        true
+        let l = self.towards_sun.into_inner();
+        let to_center = c.center - origin;
+        let along = to_center.dot(&l);
+        // Sphere wholly behind the point, or the ray passes outside it.
+        if along < -c.radius || to_center.norm_squared() - along * along > c.radius * c.radius {
+            return false;
+        }
+        match c.object {
+            Occluder::Leaf(k) => self.scene.leaves[k as usize]
+                .intersect(origin, &l)
+                .is_some(),
+            Occluder::Stem(k) => self.scene.stems[k as usize].intersect(origin, &l).is_some(),
+            Occluder::Fruit(k) => self.scene.fruits[k as usize]
+                .intersect(origin, &l)
+                .is_some(),
+        }
     }
 }

@@ -46,8 +46,8 @@ pub const WIDE_PITCH_MAX_DEG: f64 = 20.0;
 /// Largest camera roll (about the optical axis) either way, degrees.
 pub const WIDE_ROLL_MAX_DEG: f64 = 20.0;
 /// Canopy density: total blade area per square metre of the view's cross-section at the row
-/// (m²/m²; 0.2 = sparse, 2.5 = dense and layered).
-pub const WIDE_CANOPY_DENSITY: (f64, f64) = (0.2, 2.5);
+/// (m²/m²; 0.15 = sparse, 1.5 = dense and layered).
+pub const WIDE_CANOPY_DENSITY: (f64, f64) = (0.15, 1.5);
 /// Fraction of the canopy's leaves in front of the fruit layer (the rest is behind it).
 pub const WIDE_FRONT_LEAF_FRACTION: (f64, f64) = (0.03, 0.35);
 /// Depth of the canopy in front of the fruit layer, metres.
@@ -57,7 +57,7 @@ pub const WIDE_BEHIND_DEPTH_M: (f64, f64) = (0.1, 0.6);
 /// Nearest a leaf may come to the camera, metres.
 pub const WIDE_MIN_LEAF_Z_M: f64 = 0.12;
 /// Bounds on the number of canopy leaves per frame.
-pub const WIDE_LEAF_COUNT: (usize, usize) = (10, 2500);
+pub const WIDE_LEAF_COUNT: (usize, usize) = (10, 1500);
 /// Leaf (blade) length, metres: the frame draws a typical length in this range, each leaf
 /// varies ±30 % about it (clamped to the range).
 pub const WIDE_LEAF_LENGTH_M: (f64, f64) = (0.03, 0.15);
@@ -750,7 +750,7 @@ impl WideSampler<'_> {
                 let area = (cam.width as f64 * mid / cam.fx) * (cam.height as f64 * mid / cam.fy);
                 let length = uniform(rng, 0.08, 0.15);
                 let count = ((uniform(rng, 0.8, 2.0) * area / (0.3 * length * length)) as usize)
-                    .clamp(50, 1500);
+                    .clamp(50, 800);
                 let haze = uniform(rng, 0.7, 1.0);
                 for _ in 0..count {
                     let z = uniform(rng, near, WIDE_SECOND_ROW_M.1);

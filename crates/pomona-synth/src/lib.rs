@@ -5,6 +5,22 @@
 //! visible-pixel box, visibility). Detectors need thousands of labelled fruit to train and a
 //! controlled benchmark to be measured on; real data with 3D truth is scarce.
 //!
+//! ## Domains
+//! [`Domain::Narrow`] (the library default) is the original crop row: fruit 0.4–0.9 m away, one
+//! ovate leaf shape, a textured backdrop plane, no shadows, a level camera; it stays
+//! byte-identical per seed (`tests/narrow_unchanged.rs`). Detectors trained only on it fail on
+//! frames from other renderers and real cameras, because they learn the generator's few fixed
+//! statistics. [`Domain::Wide`] (the CLI default) therefore draws every nuisance factor per
+//! frame from wide documented ranges (the `WIDE_*` constants): camera distance 0.3–1.6 m, pitch
+//! and roll, canopy density and layering, four [`LeafFamily`] outlines with bent blades and
+//! petioles, stems and branches, five [`Background`]s (sky and black cloth give no depth),
+//! cast shadows from a random sun, exposure / white balance / vignetting / noise, fruit aspect,
+//! lobes, tilt, touching clusters, colour and gloss, and per-camera depth artefacts
+//! ([`NoiseModel::for_camera`]: ToF multipath and flying pixels, stereo occlusion holes).
+//! Hold-out knobs ([`SceneSpec::leaf_families`], [`SceneSpec::backgrounds`],
+//! [`SceneSpec::wide_distance_m`]) restrict one factor for cross-domain validation. What each
+//! wide frame drew is recorded as a [`WideDraw`] in its truth `extra["synth"]`.
+//!
 //! ## Pipeline
 //! [`SceneSpec`] (what to draw) → [`SceneSpec::sample`] → [`Scene`] (fruit bodies, leaves, stems,
 //! background, light) → [`render`] → [`RenderedFrame`] (`RgbdFrame` + `FrameTruth` +

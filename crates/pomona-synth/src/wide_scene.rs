@@ -736,7 +736,11 @@ impl WideSampler<'_> {
                 plane(
                     100.0,
                     Unit::new_normalize(-Vector3::z()),
-                    BackdropKind::Sky { horizon, zenith },
+                    BackdropKind::Sky {
+                        horizon,
+                        zenith,
+                        up: self.up,
+                    },
                     rng.gen(),
                 )
             }

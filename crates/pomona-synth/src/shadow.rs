@@ -205,3 +205,104 @@ impl<'a> ShadowGrid<'a> {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{Backdrop, BackdropKind, Leaf, LeafFamily, Light, Material, NoiseModel};
+    use nalgebra::Rotation3;
+
+    /// A scene with one flat leaf at (0, 0, 0.5) facing the camera and the sun straight behind
+    /// the camera (towards −z).
+    fn scene() -> Scene {
+        let leaf = Leaf {
+            center: Point3::new(0.0, 0.0, 0.5),
+            orientation: Rotation3::from_axis_angle(&Vector3::x_axis(), std::f64::consts::PI),
+            half_length_m: 0.05,
+            half_width_m: 0.025,
+            bend_along: 0.0,
+            bend_across: 0.0,
+            material: Material {
+                albedo: [0.1, 0.3, 0.1],
+                specular: 0.0,
+                shininess: 1.0,
+            },
+            family: LeafFamily::Elliptic,
+        };
+        Scene {
+            fruits: Vec::new(),
+            leaves: vec![leaf],
+            stems: Vec::new(),
+            backdrop: Backdrop {
+                point: Point3::new(0.0, 0.0, 1.0),
+                normal: Unit::new_normalize(-Vector3::z()),
+                texture_seed: 1,
+                kind: BackdropKind::Soil,
+            },
+            light: Light {
+                towards_light: Unit::new_normalize(-Vector3::z()),
+                intensity: 1.0,
+                ambient: 0.2,
+                color: [1.0; 3],
+                image_noise_sigma: 0.0,
+            },
+            noise: NoiseModel::None,
+            noise_seed: 0,
+            shadows: true,
+            image_effects: None,
+            max_depth_m: f64::INFINITY,
+            truth_extra: serde_json::Map::new(),
+        }
+    }
+
+    #[test]
+    fn a_leaf_shadows_the_ground_behind_it_only() {
+        let s = scene();
+        let grid = ShadowGrid::new(&s);
+        // Straight behind the leaf (the sun is behind the camera): in shadow.
+        assert!(!grid.sun_visible(&Point3::new(0.0, 0.0, 1.0), None));
+        assert!(!grid.sun_visible(&Point3::new(0.03, 0.01, 1.0), None));
+        // Beside the leaf's outline: lit.
+        assert!(grid.sun_visible(&Point3::new(0.0, 0.04, 1.0), None));
+        assert!(grid.sun_visible(&Point3::new(0.2, 0.0, 1.0), None));
+        // In front of the leaf: lit; the leaf does not shadow itself.
+        assert!(grid.sun_visible(&Point3::new(0.0, 0.0, 0.3), None));
+        assert!(grid.sun_visible(&Point3::new(0.0, 0.0, 0.5), Some(Occluder::Leaf(0))));
+    }
+
+    #[test]
+    fn rendered_shadow_darkens_the_ground() {
+        let cam = crate::CameraPreset::Sr4000.camera();
+        let mut s = scene();
+        let with = crate::render(&s, &cam).unwrap();
+        s.shadows = false;
+        let without = crate::render(&s, &cam).unwrap();
+        let (a, b) = (
+            with.frame.color().unwrap().as_rgb(),
+            without.frame.color().unwrap().as_rgb(),
+        );
+        // With the sun straight behind the camera the shadow lies behind the leaf, hidden by
+        // it; moving the sun sideways uncovers it.
+        assert_eq!(
+            a, b,
+            "a shadow straight behind the leaf is hidden by the leaf"
+        );
+        let mut s = scene();
+        s.light.towards_light = Unit::new_normalize(Vector3::new(-0.3, 0.0, -1.0));
+        let with = crate::render(&s, &cam).unwrap();
+        s.shadows = false;
+        let without = crate::render(&s, &cam).unwrap();
+        let (a, b) = (
+            with.frame.color().unwrap().as_rgb(),
+            without.frame.color().unwrap().as_rgb(),
+        );
+        let darker = a
+            .iter()
+            .zip(b.iter())
+            .filter(|(x, y)| u16::from(**x) + 10 < u16::from(**y))
+            .count();
+        let brighter = a.iter().zip(b.iter()).filter(|(x, y)| **x > **y).count();
+        assert!(darker > 100, "only {darker} channels darkened");
+        assert_eq!(brighter, 0);
+    }
+}

@@ -23,7 +23,8 @@ POMONA=target/release/pomona
 
 for noise in tof none low; do
   [ -d "$OUT/sr4000-$noise" ] || "$POMONA" synth --out "$OUT/sr4000-$noise" --frames 60 \
-    --seed 11 --fruit pepper --camera sr4000 --noise "$noise" --green-fraction 0.5
+    --seed 11 --fruit pepper --camera sr4000 --noise "$noise" --green-fraction 0.5 \
+    --domain narrow
 done
 
 run() {

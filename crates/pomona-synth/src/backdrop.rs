@@ -36,12 +36,14 @@ pub enum BackdropKind {
     /// White greenhouse plastic film with folds.
     Plastic,
     /// Open sky: no surface (no depth); pixels that hit nothing get this linear radiance at
-    /// the horizon, fading to `zenith` (linear RGB) towards the top of the image.
+    /// the horizon, fading to `zenith` (linear RGB) towards `up`.
     Sky {
         /// Linear RGB radiance near the horizon.
         horizon: [f64; 3],
         /// Linear RGB radiance high up.
         zenith: [f64; 3],
+        /// The world's up direction in the scene frame (tilted with the camera).
+        up: Unit<Vector3<f64>>,
     },
 }
 
@@ -71,12 +73,15 @@ impl Backdrop {
     /// Radiance of a sky pixel whose (unnormalised, scene-frame) ray direction is `dir`, or
     /// `None` when the backdrop is not sky.
     pub fn sky_radiance(&self, dir: &Vector3<f64>) -> Option<[f64; 3]> {
-        let BackdropKind::Sky { horizon, zenith } = self.kind else {
+        let BackdropKind::Sky {
+            horizon,
+            zenith,
+            up,
+        } = self.kind
+        else {
             return None;
         };
-        // Elevation of the ray relative to the plane's "up" (−y of the camera, tilted with
-        // the plane): 0 at the horizon, 1 straight up.
-        let up = -Vector3::y();
+        // Elevation of the ray: 0 at the horizon, 1 straight up.
         let e = (dir.normalize().dot(&up)).clamp(0.0, 1.0).sqrt();
         Some(std::array::from_fn(|c| {
             horizon[c] * (1.0 - e) + zenith[c] * e
@@ -114,7 +119,7 @@ impl Backdrop {
                 // A woven texture: alternating threads 3 mm apart.
                 let weave = 0.5 + 0.5 * ((x / 0.003).sin() * (y / 0.003).sin());
                 let fine = value_noise(x / 0.05, y / 0.05, self.texture_seed);
-                let g = 0.012 + 0.012 * weave + 0.008 * fine;
+                let g = 0.005 + 0.008 * weave + 0.005 * fine;
                 Material {
                     albedo: [g, g, 1.1 * g],
                     specular: 0.04,
@@ -205,6 +210,7 @@ mod tests {
             kind: BackdropKind::Sky {
                 horizon: [0.8, 0.85, 0.9],
                 zenith: [0.3, 0.5, 0.9],
+                up: -Vector3::y_axis(),
             },
             ..b.clone()
         };

@@ -48,6 +48,23 @@ impl Leaf {
         (a * a + b * b + sag * sag).sqrt() * 1.01
     }
 
+    /// The eight corners, scene frame, of a leaf-frame box that contains the blade: `|x| <= a`,
+    /// `|y| <= 1.05·b` (the widest outline), z between the lowest and highest sag. Its
+    /// projection bounds the blade's pixels far more tightly than the bounding sphere's for
+    /// narrow or tilted blades.
+    pub fn box_corners(&self) -> [Point3<f64>; 8] {
+        let (a, b) = (self.half_length_m, 1.05 * self.half_width_m);
+        let (sx, sy) = (self.bend_along * a * a, self.bend_across * b * b);
+        let z_lo = 0f64.min(sx) + 0f64.min(sy) - 1e-9;
+        let z_hi = 0f64.max(sx) + 0f64.max(sy) + 1e-9;
+        std::array::from_fn(|i| {
+            let x = if i & 1 == 0 { -a } else { a };
+            let y = if i & 2 == 0 { -b } else { b };
+            let z = if i & 4 == 0 { z_lo } else { z_hi };
+            self.center + self.orientation * Vector3::new(x, y, z)
+        })
+    }
+
     /// Nearest intersection with `t > 0` of `origin + t·dir` (`dir` need not be unit length).
     pub fn intersect(&self, origin: &Point3<f64>, dir: &Vector3<f64>) -> Option<LeafHit> {
         let inv = self.orientation.inverse();

@@ -93,17 +93,24 @@ impl LeafFamily {
                 }
                 // (1 + s)^0.5 (1 - s)^1.5 peaks at s = -0.5 with 0.5^0.5 · 1.5^1.5.
                 const PEAK: f64 = 1.299_038_105_676_658;
-                let half = b * (1.0 + s).sqrt() * (1.0 - s).powf(1.5) / PEAK;
+                let half = b * (1.0 + s).sqrt() * (1.0 - s) * (1.0 - s).sqrt() / PEAK;
                 (y.abs() <= half).then(|| y / half)
             }
             LeafFamily::Lobed => {
                 let ys = y * a / b;
-                let r = x.hypot(ys);
-                if r >= a {
+                let r2 = x * x + ys * ys;
+                if r2 >= a * a {
                     return None;
                 }
+                // Inside the notch radius every direction is blade.
+                let notch = LOBED_NOTCH_RADIUS * a;
+                if r2 <= notch * notch {
+                    return Some(y / b);
+                }
+                let r = r2.sqrt();
                 let theta = ys.atan2(x);
-                let lobe = (0.5 * (1.0 + (5.0 * theta).cos())).powf(1.5);
+                let c = 0.5 * (1.0 + (5.0 * theta).cos());
+                let lobe = c * c.sqrt();
                 let reach = a * (LOBED_NOTCH_RADIUS + (1.0 - LOBED_NOTCH_RADIUS) * lobe);
                 (r <= reach).then(|| y / b)
             }

@@ -5,6 +5,22 @@
 //! visible-pixel box, visibility). Detectors need thousands of labelled fruit to train and a
 //! controlled benchmark to be measured on; real data with 3D truth is scarce.
 //!
+//! ## Domains
+//! [`Domain::Narrow`] (the library default) is the original crop row: fruit 0.4–0.9 m away, one
+//! ovate leaf shape, a textured backdrop plane, no shadows, a level camera; it stays
+//! byte-identical per seed (`tests/narrow_unchanged.rs`). Detectors trained only on it fail on
+//! frames from other renderers and real cameras, because they learn the generator's few fixed
+//! statistics. [`Domain::Wide`] (the CLI default) therefore draws every nuisance factor per
+//! frame from wide documented ranges (the `WIDE_*` constants): camera distance 0.3–1.6 m, pitch
+//! and roll, canopy density and layering, four [`LeafFamily`] outlines with bent blades and
+//! petioles, stems and branches, five [`Background`]s (sky and black cloth give no depth),
+//! cast shadows from a random sun, exposure / white balance / vignetting / noise, fruit aspect,
+//! lobes, tilt, touching clusters, colour and gloss, and per-camera depth artefacts
+//! ([`NoiseModel::for_camera`]: ToF multipath and flying pixels, stereo occlusion holes).
+//! Hold-out knobs ([`SceneSpec::leaf_families`], [`SceneSpec::backgrounds`],
+//! [`SceneSpec::wide_distance_m`]) restrict one factor for cross-domain validation. What each
+//! wide frame drew is recorded as a [`WideDraw`] in its truth `extra["synth"]`.
+//!
 //! ## Pipeline
 //! [`SceneSpec`] (what to draw) → [`SceneSpec::sample`] → [`Scene`] (fruit bodies, leaves, stems,
 //! background, light) → [`render`] → [`RenderedFrame`] (`RgbdFrame` + `FrameTruth` +
@@ -55,6 +71,7 @@ mod scene_spec;
 mod shadow;
 mod stem;
 mod stereo;
+mod wide_draw;
 mod wide_scene;
 
 pub use backdrop::{Backdrop, BackdropKind};
@@ -83,4 +100,16 @@ pub use scene::Scene;
 pub use scene_spec::SceneSpec;
 pub use stem::Stem;
 pub use stereo::{RigFile, StereoRig};
-pub use wide_scene::*;
+pub use wide_draw::{SunDraw, WideDraw};
+pub use wide_scene::{
+    WIDE_BEHIND_DEPTH_M, WIDE_BRANCHES, WIDE_BRANCH_LENGTH_M, WIDE_BRANCH_RADIUS_M,
+    WIDE_CANOPY_DENSITY, WIDE_CLUSTER_PROBABILITY, WIDE_CLUSTER_SIZE, WIDE_COLOUR_MIX,
+    WIDE_DISTANCE_LIMITS_M, WIDE_DISTANCE_M, WIDE_EXPOSURE, WIDE_FRONT_DEPTH_M,
+    WIDE_FRONT_LEAF_FRACTION, WIDE_FRUIT_ASPECT, WIDE_FRUIT_LAYER_HALF_DEPTH_M,
+    WIDE_FRUIT_TILT_MAX_DEG, WIDE_GLOSS_SCALE, WIDE_IMAGE_NOISE_SIGMA, WIDE_LEAF_BEND_ALONG,
+    WIDE_LEAF_COUNT, WIDE_LEAF_CURL_ACROSS, WIDE_LEAF_LENGTH_M, WIDE_LEAF_TILT_MAX_DEG,
+    WIDE_MAX_DEPTH_M, WIDE_MIN_LEAF_Z_M, WIDE_PETIOLE_LENGTH, WIDE_PETIOLE_PROBABILITY,
+    WIDE_PITCH_MAX_DEG, WIDE_ROLL_MAX_DEG, WIDE_SECOND_ROW_M, WIDE_SKY_LIGHT, WIDE_STALKS,
+    WIDE_STALK_RADIUS_M, WIDE_SUN_ELEVATION_DEG, WIDE_SUN_INTENSITY, WIDE_VIGNETTING,
+    WIDE_WHITE_BALANCE,
+};

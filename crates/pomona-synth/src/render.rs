@@ -99,7 +99,7 @@ pub fn render_view(
         });
     }
     for (k, leaf) in scene.leaves.iter().enumerate() {
-        let rect = view.screen_rect(&[(leaf.center, leaf.bounding_radius_m())]);
+        let rect = view.screen_rect(&leaf.box_corners().map(|p| (p, 0.0)));
         view.each_pixel(rect, |i, o, d| {
             if let Some(hit) = leaf.intersect(o, d) {
                 if hit.t < depth[i] {

@@ -1,7 +1,10 @@
 //! What kind of scenes to draw, and the random sampler that draws them.
 //!
-//! A [`SceneSpec`] holds the user-facing knobs (`--fruit`, `--camera`, `--noise`, `--light`,
-//! `--green-fraction`) plus the scene layout ranges. [`SceneSpec::sample`] turns it and a seed
+//! A [`SceneSpec`] holds the user-facing knobs (`--domain`, `--fruit`, `--camera`, `--noise`,
+//! `--light`, `--green-fraction`, and the wide domain's hold-out knobs `--leaf-families`,
+//! `--distance-m`, `--backgrounds`) plus the scene layout ranges. In the wide domain
+//! [`SceneSpec::sample`] hands over to the wide sampler (`wide_scene.rs`); in the narrow domain
+//! (described here, unchanged since before the wide domain) it turns the spec and a seed
 //! into a [`Scene`]: a crop row 0.4–0.9 m in front of the camera with 3–10 fruit hanging among
 //! leaves that mostly face the camera, one to three stalks, and a textured background. Part of
 //! the leaves are placed right in front of fruit so visibility spans about 0.1 to 1. Fruit do

@@ -16,6 +16,9 @@ use crate::Scene;
 const MAX_CELLS_PER_SIDE: usize = 256;
 /// Smallest cell edge, metres.
 const MIN_CELL_M: f64 = 0.01;
+/// Casters with a bounding radius above this (long stalks, posts, pipes) are kept out of the
+/// grid and tested on every query, so they do not stretch the grid, metres.
+const BIG_CASTER_M: f64 = 0.3;
 /// Shadow rays start this far towards the sun from the surface point, metres (no self-hits on
 /// round-off).
 const SHADOW_BIAS_M: f64 = 2e-4;
@@ -52,6 +55,8 @@ pub(crate) struct ShadowGrid<'a> {
     members: Vec<u32>,
     starts: Vec<usize>,
     casters: Vec<Caster>,
+    /// Casters too large for the grid, tested on every query.
+    big: Vec<Caster>,
 }
 
 impl<'a> ShadowGrid<'a> {
@@ -88,6 +93,8 @@ impl<'a> ShadowGrid<'a> {
                 radius: fruit.bounding_radius_m(),
             });
         }
+        let (big, casters): (Vec<Caster>, Vec<Caster>) =
+            casters.into_iter().partition(|c| c.radius > BIG_CASTER_M);
         let project = |p: &Point3<f64>| (p.coords.dot(&e1), p.coords.dot(&e2));
         let (mut lo, mut hi) = ((f64::MAX, f64::MAX), (f64::MIN, f64::MIN));
         for c in &casters {
@@ -149,12 +156,18 @@ impl<'a> ShadowGrid<'a> {
             members,
             starts,
             casters,
+            big,
         }
     }
 
     /// Whether the sun is visible from scene point `p` (on the surface of `skip`, which is not
     /// tested: a surface does not shadow itself here; the diffuse term darkens its far side).
     pub(crate) fn sun_visible(&self, p: &Point3<f64>, skip: Option<Occluder>) -> bool {
+        let l = self.towards_sun.into_inner();
+        let origin = p + l * SHADOW_BIAS_M;
+        if self.big.iter().any(|c| self.blocks(c, &origin, skip)) {
+            return false;
+        }
         let (x, y) = (p.coords.dot(&self.e1), p.coords.dot(&self.e2));
         let (i, j) = (
             ((x - self.origin.0) / self.cell_m).floor(),
@@ -164,34 +177,132 @@ impl<'a> ShadowGrid<'a> {
             return true;
         }
         let cell = j as usize * self.cells.0 + i as usize;
-        let l = self.towards_sun.into_inner();
-        let origin = p + l * SHADOW_BIAS_M;
-        for &k in &self.members[self.starts[cell]..self.starts[cell + 1]] {
-            let c = &self.casters[k as usize];
-            if Some(c.object) == skip {
-                continue;
-            }
-            let to_center = c.center - origin;
-            let along = to_center.dot(&l);
-            // Sphere wholly behind the point, or the ray passes outside it.
-            if along < -c.radius || to_center.norm_squared() - along * along > c.radius * c.radius {
-                continue;
-            }
-            let blocked = match c.object {
-                Occluder::Leaf(k) => self.scene.leaves[k as usize]
-                    .intersect(&origin, &l)
-                    .is_some(),
-                Occluder::Stem(k) => self.scene.stems[k as usize]
-                    .intersect(&origin, &l)
-                    .is_some(),
-                Occluder::Fruit(k) => self.scene.fruits[k as usize]
-                    .intersect(&origin, &l)
-                    .is_some(),
-            };
-            if blocked {
-                return false;
-            }
+        !self.members[self.starts[cell]..self.starts[cell + 1]]
+            .iter()
+            .any(|&k| self.blocks(&self.casters[k as usize], &origin, skip))
+    }
+
+    /// Whether caster `c` (unless it is `skip`) blocks the ray from `origin` towards the sun.
+    fn blocks(&self, c: &Caster, origin: &Point3<f64>, skip: Option<Occluder>) -> bool {
+        if Some(c.object) == skip {
+            return false;
         }
-        true
+        let l = self.towards_sun.into_inner();
+        let to_center = c.center - origin;
+        let along = to_center.dot(&l);
+        // Sphere wholly behind the point, or the ray passes outside it.
+        if along < -c.radius || to_center.norm_squared() - along * along > c.radius * c.radius {
+            return false;
+        }
+        match c.object {
+            Occluder::Leaf(k) => self.scene.leaves[k as usize]
+                .intersect(origin, &l)
+                .is_some(),
+            Occluder::Stem(k) => self.scene.stems[k as usize].intersect(origin, &l).is_some(),
+            Occluder::Fruit(k) => self.scene.fruits[k as usize]
+                .intersect(origin, &l)
+                .is_some(),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{Backdrop, BackdropKind, Leaf, LeafFamily, Light, Material, NoiseModel};
+    use nalgebra::Rotation3;
+
+    /// A scene with one flat leaf at (0, 0, 0.5) facing the camera and the sun straight behind
+    /// the camera (towards −z).
+    fn scene() -> Scene {
+        let leaf = Leaf {
+            center: Point3::new(0.0, 0.0, 0.5),
+            orientation: Rotation3::from_axis_angle(&Vector3::x_axis(), std::f64::consts::PI),
+            half_length_m: 0.05,
+            half_width_m: 0.025,
+            bend_along: 0.0,
+            bend_across: 0.0,
+            material: Material {
+                albedo: [0.1, 0.3, 0.1],
+                specular: 0.0,
+                shininess: 1.0,
+            },
+            family: LeafFamily::Elliptic,
+        };
+        Scene {
+            fruits: Vec::new(),
+            leaves: vec![leaf],
+            stems: Vec::new(),
+            backdrop: Backdrop {
+                point: Point3::new(0.0, 0.0, 1.0),
+                normal: Unit::new_normalize(-Vector3::z()),
+                texture_seed: 1,
+                kind: BackdropKind::Soil,
+            },
+            light: Light {
+                towards_light: Unit::new_normalize(-Vector3::z()),
+                intensity: 1.0,
+                ambient: 0.2,
+                color: [1.0; 3],
+                image_noise_sigma: 0.0,
+            },
+            noise: NoiseModel::None,
+            noise_seed: 0,
+            shadows: true,
+            image_effects: None,
+            max_depth_m: f64::INFINITY,
+            truth_extra: serde_json::Map::new(),
+        }
+    }
+
+    #[test]
+    fn a_leaf_shadows_the_ground_behind_it_only() {
+        let s = scene();
+        let grid = ShadowGrid::new(&s);
+        // Straight behind the leaf (the sun is behind the camera): in shadow.
+        assert!(!grid.sun_visible(&Point3::new(0.0, 0.0, 1.0), None));
+        assert!(!grid.sun_visible(&Point3::new(0.03, 0.01, 1.0), None));
+        // Beside the leaf's outline: lit.
+        assert!(grid.sun_visible(&Point3::new(0.0, 0.04, 1.0), None));
+        assert!(grid.sun_visible(&Point3::new(0.2, 0.0, 1.0), None));
+        // In front of the leaf: lit; the leaf does not shadow itself.
+        assert!(grid.sun_visible(&Point3::new(0.0, 0.0, 0.3), None));
+        assert!(grid.sun_visible(&Point3::new(0.0, 0.0, 0.5), Some(Occluder::Leaf(0))));
+    }
+
+    #[test]
+    fn rendered_shadow_darkens_the_ground() {
+        let cam = crate::CameraPreset::Sr4000.camera();
+        let mut s = scene();
+        let with = crate::render(&s, &cam).unwrap();
+        s.shadows = false;
+        let without = crate::render(&s, &cam).unwrap();
+        let (a, b) = (
+            with.frame.color().unwrap().as_rgb(),
+            without.frame.color().unwrap().as_rgb(),
+        );
+        // With the sun straight behind the camera the shadow lies behind the leaf, hidden by
+        // it; moving the sun sideways uncovers it.
+        assert_eq!(
+            a, b,
+            "a shadow straight behind the leaf is hidden by the leaf"
+        );
+        let mut s = scene();
+        s.light.towards_light = Unit::new_normalize(Vector3::new(-0.3, 0.0, -1.0));
+        let with = crate::render(&s, &cam).unwrap();
+        s.shadows = false;
+        let without = crate::render(&s, &cam).unwrap();
+        let (a, b) = (
+            with.frame.color().unwrap().as_rgb(),
+            without.frame.color().unwrap().as_rgb(),
+        );
+        let darker = a
+            .iter()
+            .zip(b.iter())
+            .filter(|(x, y)| u16::from(**x) + 10 < u16::from(**y))
+            .count();
+        let brighter = a.iter().zip(b.iter()).filter(|(x, y)| **x > **y).count();
+        assert!(darker > 100, "only {darker} channels darkened");
+        assert_eq!(brighter, 0);
     }
 }

@@ -26,13 +26,12 @@
 
 use nalgebra::{Point3, Rotation3, Unit, Vector3};
 use rand::Rng;
-use serde::{Deserialize, Serialize};
 
 use crate::rng::{uniform, SynthRng};
 use crate::scene_spec::{cuts_fruit, segment_distance};
 use crate::{
     Backdrop, BackdropKind, Background, Blush, FruitBody, FruitKind, FruitShape, ImageEffects,
-    Leaf, LeafFamily, Light, Material, NoiseModel, Scene, SceneSpec, Stem,
+    Leaf, LeafFamily, Light, Material, Scene, SceneSpec, Stem, SunDraw, WideDraw,
 };
 
 /// Default band of camera-to-fruit-centre distances, metres (`--distance-m`).
@@ -46,8 +45,8 @@ pub const WIDE_PITCH_MAX_DEG: f64 = 20.0;
 /// Largest camera roll (about the optical axis) either way, degrees.
 pub const WIDE_ROLL_MAX_DEG: f64 = 20.0;
 /// Canopy density: total blade area per square metre of the view's cross-section at the row
-/// (m²/m²; 0.2 = sparse, 2.5 = dense and layered).
-pub const WIDE_CANOPY_DENSITY: (f64, f64) = (0.2, 2.5);
+/// (m²/m²; 0.15 = sparse, 1.5 = dense and layered).
+pub const WIDE_CANOPY_DENSITY: (f64, f64) = (0.15, 1.5);
 /// Fraction of the canopy's leaves in front of the fruit layer (the rest is behind it).
 pub const WIDE_FRONT_LEAF_FRACTION: (f64, f64) = (0.03, 0.35);
 /// Depth of the canopy in front of the fruit layer, metres.
@@ -57,7 +56,7 @@ pub const WIDE_BEHIND_DEPTH_M: (f64, f64) = (0.1, 0.6);
 /// Nearest a leaf may come to the camera, metres.
 pub const WIDE_MIN_LEAF_Z_M: f64 = 0.12;
 /// Bounds on the number of canopy leaves per frame.
-pub const WIDE_LEAF_COUNT: (usize, usize) = (10, 2500);
+pub const WIDE_LEAF_COUNT: (usize, usize) = (10, 1500);
 /// Leaf (blade) length, metres: the frame draws a typical length in this range, each leaf
 /// varies ±30 % about it (clamped to the range).
 pub const WIDE_LEAF_LENGTH_M: (f64, f64) = (0.03, 0.15);
@@ -112,66 +111,6 @@ pub const WIDE_CLUSTER_SIZE: (u32, u32) = (2, 4);
 pub const WIDE_COLOUR_MIX: [f64; 4] = [0.45, 0.2, 0.2, 0.15];
 /// Gloss: the kind's specular weight is scaled by this factor, drawn log-uniformly.
 pub const WIDE_GLOSS_SCALE: (f64, f64) = (0.3, 2.5);
-
-/// The values drawn for one wide frame, written to truth `extra.synth`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct WideDraw {
-    /// Always `"wide"`.
-    pub domain: String,
-    /// Leaf outline family of every leaf in the frame.
-    pub leaf_family: LeafFamily,
-    /// Typical blade length, metres.
-    pub leaf_length_m: f64,
-    /// Background.
-    pub background: Background,
-    /// Row distance: fruit centres lie within ±0.12 m of it (clamped to the band), metres.
-    pub distance_m: f64,
-    /// The band fruit-centre distances were restricted to, metres.
-    pub distance_band_m: (f64, f64),
-    /// Camera pitch, degrees (positive: looking down).
-    pub pitch_deg: f64,
-    /// Camera roll, degrees.
-    pub roll_deg: f64,
-    /// Canopy density, blade area per cross-section area.
-    pub canopy_density: f64,
-    /// Fraction of canopy leaves in front of the fruit layer.
-    pub front_leaf_fraction: f64,
-    /// Leaves in the scene (canopy, occluders and second row).
-    pub leaves: usize,
-    /// Fruit placed (visible or not).
-    pub fruits: usize,
-    /// Clusters of touching fruit.
-    pub fruit_clusters: usize,
-    /// The sun.
-    pub sun: SunDraw,
-    /// Sky (ambient) light strength.
-    pub sky_light: f64,
-    /// Exposure gain.
-    pub exposure: f64,
-    /// White-balance gains (linear RGB).
-    pub white_balance: [f64; 3],
-    /// Vignetting strength.
-    pub vignetting: f64,
-    /// Image noise σ, grey levels.
-    pub image_noise_sigma: f64,
-    /// Depth noise model.
-    pub noise: NoiseModel,
-    /// The leaf families this dataset draws from.
-    pub leaf_families: Vec<LeafFamily>,
-    /// The backgrounds this dataset draws from.
-    pub backgrounds: Vec<Background>,
-}
-
-/// The sun of a wide frame.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct SunDraw {
-    /// Azimuth about the up direction, degrees; 0 = behind the camera, ±180 = facing it.
-    pub azimuth_deg: f64,
-    /// Elevation above the horizon, degrees.
-    pub elevation_deg: f64,
-    /// Directional strength.
-    pub intensity: f64,
-}
 
 /// Draws one wide-domain scene (`spec` must be valid).
 pub(crate) fn sample_wide(spec: &SceneSpec, rng: &mut SynthRng) -> Scene {
@@ -736,7 +675,11 @@ impl WideSampler<'_> {
                 plane(
                     100.0,
                     Unit::new_normalize(-Vector3::z()),
-                    BackdropKind::Sky { horizon, zenith },
+                    BackdropKind::Sky {
+                        horizon,
+                        zenith,
+                        up: self.up,
+                    },
                     rng.gen(),
                 )
             }
@@ -750,7 +693,7 @@ impl WideSampler<'_> {
                 let area = (cam.width as f64 * mid / cam.fx) * (cam.height as f64 * mid / cam.fy);
                 let length = uniform(rng, 0.08, 0.15);
                 let count = ((uniform(rng, 0.8, 2.0) * area / (0.3 * length * length)) as usize)
-                    .clamp(50, 1500);
+                    .clamp(50, 800);
                 let haze = uniform(rng, 0.7, 1.0);
                 for _ in 0..count {
                     let z = uniform(rng, near, WIDE_SECOND_ROW_M.1);

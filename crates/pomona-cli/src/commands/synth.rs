@@ -53,10 +53,11 @@ pub struct SynthArgs {
     /// Wide only: backgrounds to draw from, comma-separated (default: all).
     #[arg(long, value_enum, value_delimiter = ',', value_name = "LIST")]
     pub backgrounds: Option<Vec<BackgroundArg>>,
-    /// Illumination.
+    /// Illumination (narrow domain; the wide domain draws its own sun, sky light and exposure).
     #[arg(long, value_enum, default_value_t = LightArg::Day)]
     pub light: LightArg,
-    /// Fraction of peppers coloured like the leaves, 0 to 1.
+    /// Fraction of peppers coloured like the leaves, 0 to 1 (narrow domain; the wide domain draws
+    /// ripe, unripe green, blushed and yellow fruit of every kind).
     #[arg(long, value_name = "F", default_value_t = 0.0, value_parser = parse_fraction)]
     pub green_fraction: f64,
     /// Also render every frame from a second, rotated pose into DIR/stereo (pose in DIR/rig.json).
@@ -540,6 +541,11 @@ mod tests {
         assert!(out.join("depth/000002.png").exists());
         assert!(out.join("stereo/mask/000002.png").exists());
         assert!(out.join("rig.json").exists());
+        // The default domain is wide: every truth file records what its frame drew.
+        let truth = std::fs::read_to_string(out.join("truth/000001.json")).unwrap();
+        let truth: serde_json::Value = serde_json::from_str(&truth).unwrap();
+        assert_eq!(truth["synth"]["domain"], "wide");
+        assert_eq!(truth["synth"]["noise"], "tof");
 
         // Refuses to mix datasets, naming the folder.
         let err = run(&args("1", &[])).unwrap_err();

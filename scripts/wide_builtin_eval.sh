@@ -1,0 +1,64 @@
+#!/usr/bin/env bash
+# The built-in models on held-out `wide` test sets (seeds never used for training: the built-in
+# models use 1000-1002), through `pomona synth`, `detect --min-confidence 0` and `eval` only.
+# AP needs every detection; precision and recall are read at the operating confidence the
+# detection files record (the model's own), or at score >= 0 for an uncalibrated model.
+#
+#   scripts/wide_builtin_eval.sh [OUT] [PIPELINE...]      (default: shape-fit symmetry viewer-pose)
+#
+# POMONA=/path/to/pomona uses that binary instead of building one. Prints a Markdown table and
+# writes OUT/table.md.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+OUT=${1:-/tmp/pomona-wide-eval}
+shift || true
+PIPELINES=("$@")
+[ ${#PIPELINES[@]} -gt 0 ] || PIPELINES=(shape-fit symmetry viewer-pose)
+if [ -z "${POMONA:-}" ]; then
+  cargo build --release -q -p pomona-cli
+  POMONA=$(pwd)/target/release/pomona
+fi
+mkdir -p "$OUT"
+
+# name seed args... : one test set, 10 frames.
+SETS=(
+  "pepper 501 --fruit pepper"
+  "eggplant 501 --fruit eggplant"
+  "guava 501 --fruit guava"
+  "apple 501 --fruit apple"
+  "orange 501 --fruit orange"
+  "mixed-d435 503 --fruit mixed --camera d435"
+  "pepper-sr4000 504 --fruit pepper --camera sr4000"
+  "narrow-mixed 505 --fruit mixed --domain narrow --noise tof"
+)
+ROWS=()
+for pipeline in "${PIPELINES[@]}"; do
+  for s in "${SETS[@]}"; do
+    read -r name seed args <<< "$s"
+    data="$OUT/data/$name"
+    if [ ! -f "$data/camera.json" ]; then
+      # shellcheck disable=SC2086
+      "$POMONA" synth --out "$data" --frames 10 --seed "$seed" $args --force > /dev/null
+    fi
+    det="$OUT/det/$pipeline/$name"
+    rm -rf "$det"
+    "$POMONA" detect --pipeline "$pipeline" --data "$data" --out "$det" --min-confidence 0 \
+      > /dev/null 2>&1 || { "$POMONA" detect --pipeline "$pipeline" --data "$data" --out "$det" > /dev/null; }
+    "$POMONA" eval --data "$data" --detections "$det" --json "$OUT/$pipeline-$name.json" > /dev/null
+    ROWS+=("$(python3 - "$OUT/$pipeline-$name.json" "$pipeline" "$name" <<'PY'
+import json, sys
+r = json.load(open(sys.argv[1]))
+f = lambda v: "n/a" if v is None else f"{v:.3f}"
+op = r.get("min_confidence")
+point = f"confidence ≥ {op:.3f}" if op is not None else f"score ≥ {r['threshold']}"
+print(f"| {sys.argv[2]} | {sys.argv[3]} | {r['fruits']} | {f(r['ap_voc11'])} | {f(r['ap'])} | "
+      f"{f(r['precision'])} | {f(r['recall'])} | {point} |")
+PY
+)")
+  done
+done
+{
+  echo "| pipeline | test set (10 frames) | fruit | AP (VOC 11) | AP (all) | precision | recall | operating point |"
+  echo "|---|---|---|---|---|---|---|---|"
+  printf "%s\n" "${ROWS[@]}"
+} | tee "$OUT/table.md"

@@ -250,6 +250,23 @@ pub struct TrainingParams {
     /// it did not raise AP on the synthetic benchmark.
     #[serde(default)]
     pub hard_negatives_per_frame: usize,
+    /// Rounds of hard-negative mining (bootstrapping, as in Dalal–Triggs and Felzenszwalb et
+    /// al.): after each fit the detector scores every box of every training frame with complete
+    /// truth, the boxes scoring ≥ 0 whose centre is at least `negative_min_distance_m` from every
+    /// truth fruit centre become extra negatives (at most `max_hard_negatives_per_frame` per frame
+    /// and round, best first), and the SVMs are refitted. 0 is the training without mining; a
+    /// model file trained with 0 does not carry the two mining keys (so it is byte-identical to
+    /// one trained before mining existed), and a model file without them reads as 0.
+    #[serde(default)]
+    pub hard_negative_rounds: usize,
+    /// Mined negatives per frame and round at most (the highest-scoring first).
+    #[serde(default = "default_max_hard_negatives_per_frame")]
+    pub max_hard_negatives_per_frame: usize,
+}
+
+/// Default of [`TrainingParams::max_hard_negatives_per_frame`].
+fn default_max_hard_negatives_per_frame() -> usize {
+    20
 }
 
 impl Default for TrainingParams {
@@ -260,6 +277,8 @@ impl Default for TrainingParams {
             negatives_per_frame: 40,
             negative_min_distance_m: 0.06,
             hard_negatives_per_frame: 0,
+            hard_negative_rounds: 1,
+            max_hard_negatives_per_frame: default_max_hard_negatives_per_frame(),
         }
     }
 }
@@ -499,6 +518,13 @@ impl StageParams {
                 value: t.min_visibility,
                 reason: "must be in [0, 1]",
             });
+        }
+        if t.hard_negative_rounds > 0 {
+            check_at_least(
+                "training.max_hard_negatives_per_frame",
+                t.max_hard_negatives_per_frame,
+                1,
+            )?;
         }
         if self.cascade.min_score.is_nan() {
             return Err(SymmetryError::InvalidParameter {

@@ -14,6 +14,22 @@
 //! plus a few "hard" ones just beyond that distance (overlapping a fruit off-centre).
 //! Random choices use ChaCha8 seeded by the training seed and the frame index, so the training set
 //! does not depend on the thread count. The RBF C-SVC is chosen by cross-validated grid search.
+//!
+//! Hard-negative mining (`training.hard_negative_rounds`, default 1; bootstrapping as in
+//! Dalal–Triggs and Felzenszwalb et al.): after the first fit, each round runs the detector's
+//! box-scoring path — same sliding box, highlight pruning mask and cascade as detection, up to
+//! the main SVM's decision value per box, *before* merging (cheaper than merging and it yields
+//! every false box, not one per cluster) — on every training frame. Boxes scoring ≥ 0 whose
+//! centre is at least `training.negative_min_distance_m` from every truth fruit centre (every
+//! fruit, including those too occluded to be positives, so they never become negatives) are
+//! taken best first, at most `training.max_hard_negatives_per_frame` per frame and round, never
+//! the same box twice; their features become extra negatives, and their fixed-frame features
+//! extra negatives of the cascade's SVM when the cascade is on (it computed them anyway). Then
+//! both SVMs are refitted. Frames with incomplete truth (`truth.complete == false`) or with a
+//! fruit without a 3D centre are not mined: an unannotated fruit would become a negative.
+//! Mining has no random choice; frames are mined in parallel but collected in frame order, so
+//! the model does not depend on the thread count. A round that finds nothing ends the mining.
+//! With 0 rounds training is exactly the one before mining existed (same model file bytes).
 
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
@@ -332,6 +348,13 @@ impl Stage<Vec<BoxPatch>, Vec<BoxPatch>> for Cascade<'_> {
     }
 
     fn run(&self, patches: Vec<BoxPatch>) -> Result<Vec<BoxPatch>, PipelineError> {
+        Ok(self.gate(patches)?.into_iter().map(|(p, _)| p).collect())
+    }
+}
+
+impl Cascade<'_> {
+    /// The patches that pass, in order, each with its fixed-frame features.
+    fn gate(&self, patches: Vec<BoxPatch>) -> Result<Vec<(BoxPatch, Vec<f64>)>, PipelineError> {
         let features: Vec<Option<Vec<f64>>> = patches
             .par_iter()
             .map(|p| {
@@ -346,8 +369,12 @@ impl Stage<Vec<BoxPatch>, Vec<BoxPatch>> for Cascade<'_> {
         .run(&features)?;
         Ok(patches
             .into_iter()
+            .zip(features)
             .zip(scores)
-            .filter_map(|(p, s)| s.is_some_and(|s| s >= self.min_score).then_some(p))
+            .filter_map(|((p, f), s)| {
+                let f = f?;
+                s.is_some_and(|s| s >= self.min_score).then_some((p, f))
+            })
             .collect())
     }
 }
@@ -761,30 +788,233 @@ fn train(
             r
         })
         .collect::<Result<_, _>>()?;
-    let mut main = (Vec::new(), Vec::new());
-    let mut cascade = (Vec::new(), Vec::new());
+    let mut main: (Vec<Vec<f64>>, Vec<Vec<f64>>) = (Vec::new(), Vec::new());
+    let mut cascade: (Vec<Vec<f64>>, Vec<Vec<f64>>) = (Vec::new(), Vec::new());
     for f in per_frame {
         main.0.extend(f.positives);
         main.1.extend(f.negatives);
         cascade.0.extend(f.cascade_positives);
         cascade.1.extend(f.cascade_negatives);
     }
-    let model = fit_classifier(name, main, options)?;
-    let mut params = params.clone();
-    if stages.cascade_features.is_some() {
-        let c = fit_classifier(name, cascade, options)?;
-        params.cascade.classifier = Some(CascadeClassifier::from_classifier(&c));
+    let mut model = fit_classifier(name, &main, options)?;
+    let mut cascade_model = match stages.cascade_features {
+        Some(_) => Some(fit_classifier(name, &cascade, options)?),
+        None => None,
+    };
+    let t = params.training;
+    // Centres mined so far, per frame (a box is mined at most once).
+    let mut mined: Vec<Vec<Point3<f64>>> = vec![Vec::new(); total];
+    for round in 1..=t.hard_negative_rounds {
+        let per_frame: Vec<Option<Vec<MinedBox>>> = (0..total)
+            .into_par_iter()
+            .map(|i| {
+                mine_frame(
+                    &stages,
+                    &model,
+                    cascade_model.as_ref(),
+                    frames,
+                    i,
+                    &mined[i],
+                )
+            })
+            .collect::<Result<_, _>>()?;
+        let skipped = per_frame.iter().filter(|f| f.is_none()).count();
+        let mut added = 0;
+        for (i, boxes) in per_frame.into_iter().enumerate() {
+            for b in boxes.into_iter().flatten() {
+                mined[i].push(b.center);
+                main.1.push(b.features);
+                if let Some(f) = b.cascade_features {
+                    cascade.1.push(f);
+                }
+                added += 1;
+            }
+        }
+        eprintln!(
+            "{name}: hard-negative round {round}: {added} false-positive boxes added as \
+             negatives ({} negatives in all; {skipped} of {total} frames not mined: incomplete \
+             truth or a fruit without a 3D centre)",
+            main.1.len()
+        );
+        if added == 0 {
+            break;
+        }
+        model = fit_classifier(name, &main, options)?;
+        if cascade_model.is_some() {
+            cascade_model = Some(fit_classifier(name, &cascade, options)?);
+        }
     }
-    let stage_params =
+    let mut params = params.clone();
+    if let Some(c) = &cascade_model {
+        params.cascade.classifier = Some(CascadeClassifier::from_classifier(c));
+    }
+    let mut stage_params =
         serde_json::to_value(&params).map_err(|e| PipelineError::StageParams(e.to_string()))?;
+    if t.hard_negative_rounds == 0 {
+        // Without mining the model file is exactly the one written before mining existed (and
+        // reads back as `hard_negative_rounds: 0`).
+        if let Some(training) = stage_params
+            .get_mut("training")
+            .and_then(|v| v.as_object_mut())
+        {
+            training.remove("hard_negative_rounds");
+            training.remove("max_hard_negatives_per_frame");
+        }
+    }
     Ok(ModelFile::new(name, stage_params, &model))
+}
+
+/// Decision value at or above which a box counts as a (false) detection when mining: the SVM's
+/// own boundary.
+const HARD_NEGATIVE_MIN_SCORE: f64 = 0.0;
+
+/// A box mined as a hard negative: centre and features (main; fixed-frame when the cascade is
+/// on).
+struct MinedBox {
+    center: Point3<f64>,
+    features: Vec<f64>,
+    cascade_features: Option<Vec<f64>>,
+}
+
+/// A box scored by the detector path: centre, main decision value, features.
+struct ScoredSample {
+    center: Point3<f64>,
+    score: f64,
+    features: Vec<f64>,
+    cascade_features: Option<Vec<f64>>,
+}
+
+/// Every box of `cloud` that the detector would score (same sliding box, pruning mask and
+/// cascade as [`BoxDetector::detect_frame`]), with its decision value, before merging.
+fn score_boxes(
+    stages: &Stages,
+    classifier: &SvmClassifier,
+    cascade: Option<&SvmClassifier>,
+    cloud: &SceneCloud,
+    mask: Option<&crate::PruningMask>,
+) -> Result<Vec<ScoredSample>, PipelineError> {
+    let patches = stages.boxes.patches(cloud, mask);
+    let (patches, cascade_features): (Vec<BoxPatch>, Vec<Option<Vec<f64>>>) =
+        match (cascade, &stages.cascade_features) {
+            (Some(classifier), Some(features)) => Cascade {
+                classifier,
+                features,
+                min_score: stages.params.cascade.min_score,
+            }
+            .gate(patches)?
+            .into_iter()
+            .map(|(p, f)| (p, Some(f)))
+            .unzip(),
+            _ => {
+                let n = patches.len();
+                (patches, vec![None; n])
+            }
+        };
+    let frames = stages.frames.frames(&patches);
+    let features = stages.features.features(&patches, &frames);
+    let scores = Classify { classifier }.run(&features)?;
+    Ok(patches
+        .iter()
+        .zip(features)
+        .zip(scores)
+        .zip(cascade_features)
+        .filter_map(|(((p, f), s), cf)| {
+            Some(ScoredSample {
+                center: p.center,
+                score: s?,
+                features: f?,
+                cascade_features: cf,
+            })
+        })
+        .collect())
+}
+
+/// Indices of the boxes to mine, best first: score ≥ `min_score`, centre at least
+/// `min_distance_m` from every fruit centre, not mined before (`already`), at most `cap`.
+/// Ties keep the box order.
+fn select_hard_negatives(
+    boxes: &[(Point3<f64>, f64)],
+    fruit_centres: &[Point3<f64>],
+    min_distance_m: f64,
+    min_score: f64,
+    cap: usize,
+    already: &[Point3<f64>],
+) -> Vec<usize> {
+    let mut picked: Vec<usize> = (0..boxes.len())
+        .filter(|&i| {
+            let (c, score) = boxes[i];
+            score >= min_score
+                && fruit_centres
+                    .iter()
+                    .all(|f| (f - c).norm() >= min_distance_m)
+                && !already.contains(&c)
+        })
+        .collect();
+    picked.sort_by(|&a, &b| boxes[b].1.total_cmp(&boxes[a].1));
+    picked.truncate(cap);
+    picked
+}
+
+/// The hard negatives of training frame `index` under the current classifiers, or `None` when
+/// the frame is not mined: its truth is incomplete (an unannotated fruit would become a
+/// negative) or some fruit has no 3D centre (distances to it are unknown).
+fn mine_frame(
+    stages: &Stages,
+    classifier: &SvmClassifier,
+    cascade: Option<&SvmClassifier>,
+    frames: &dyn FrameSource,
+    index: usize,
+    already: &[Point3<f64>],
+) -> Result<Option<Vec<MinedBox>>, PipelineError> {
+    let labelled = frames.load(index)?;
+    let truth = &labelled.truth;
+    let Some(fruit_centres) = truth
+        .fruits
+        .iter()
+        .map(|f| f.center_m)
+        .collect::<Option<Vec<Point3<f64>>>>()
+        .filter(|_| truth.complete)
+    else {
+        return Ok(None);
+    };
+    let cloud = stages.normals.cloud(&labelled.frame)?;
+    let highlights = stages.highlight.run(&labelled.frame)?;
+    let scored = score_boxes(
+        stages,
+        classifier,
+        cascade,
+        &cloud,
+        highlights.as_ref().map(|h| &h.mask),
+    )?;
+    let t = &stages.params.training;
+    let keys: Vec<(Point3<f64>, f64)> = scored.iter().map(|s| (s.center, s.score)).collect();
+    let picked = select_hard_negatives(
+        &keys,
+        &fruit_centres,
+        t.negative_min_distance_m,
+        HARD_NEGATIVE_MIN_SCORE,
+        t.max_hard_negatives_per_frame,
+        already,
+    );
+    let mut scored: Vec<Option<ScoredSample>> = scored.into_iter().map(Some).collect();
+    Ok(Some(
+        picked
+            .into_iter()
+            .filter_map(|i| scored[i].take())
+            .map(|s| MinedBox {
+                center: s.center,
+                features: s.features,
+                cascade_features: s.cascade_features,
+            })
+            .collect(),
+    ))
 }
 
 /// RBF C-SVC on positive and negative rows, by cross-validated grid search (balanced class
 /// weights, balanced accuracy).
 fn fit_classifier(
     name: &'static str,
-    (positives, negatives): (Vec<Vec<f64>>, Vec<Vec<f64>>),
+    (positives, negatives): &(Vec<Vec<f64>>, Vec<Vec<f64>>),
     options: &TrainOptions,
 ) -> Result<SvmClassifier, PipelineError> {
     let (n_pos, n_neg) = (positives.len(), negatives.len());
@@ -796,8 +1026,8 @@ fn fit_classifier(
     }
     let mut labels = vec![true; n_pos];
     labels.extend(std::iter::repeat_n(false, n_neg));
-    let mut rows = positives;
-    rows.extend(negatives);
+    let mut rows = positives.clone();
+    rows.extend(negatives.iter().cloned());
     let data = TrainingSet::from_rows(&rows, labels)?;
     let folds = options.folds.clamp(2, n_pos.min(n_neg));
     let grid = if options.full_grid {
@@ -828,6 +1058,117 @@ fn fit_classifier(
     .check()?
     .fit(&data)?;
     Ok(search.model)
+}
+
+#[cfg(test)]
+mod mining_tests {
+    use super::*;
+    use pomona_learn::RbfSvm;
+    use pomona_pipeline::{LabelledFrame, SyntheticFrames};
+    use pomona_synth::{CameraPreset, NoiseModel, SceneSpec};
+
+    #[test]
+    fn selection_keeps_far_high_scoring_new_boxes_best_first() {
+        let p = |x: f64| Point3::new(x, 0.0, 1.0);
+        let fruit = [p(0.0)];
+        let boxes = [
+            (p(0.03), 5.0), // near a fruit
+            (p(0.2), 0.5),  // far
+            (p(0.3), -0.1), // below the threshold
+            (p(0.4), 2.0),  // far, best
+            (p(0.5), 0.5),  // far, ties with 1: box order
+            (p(0.6), 3.0),  // already mined
+            (p(0.06), 1.0), // exactly at the distance: allowed
+        ];
+        let picked = select_hard_negatives(&boxes, &fruit, 0.06, 0.0, 3, &[p(0.6)]);
+        assert_eq!(picked, vec![3, 6, 1]);
+        let all = select_hard_negatives(&boxes, &fruit, 0.06, 0.0, 10, &[]);
+        assert_eq!(all, vec![5, 3, 6, 1, 4]);
+        assert!(select_hard_negatives(&boxes, &fruit, 0.06, 0.0, 0, &[]).is_empty());
+    }
+
+    /// A classifier that scores every box +1 (no support vectors, ρ = −1).
+    fn accept_all(n_features: usize) -> SvmClassifier {
+        SvmClassifier {
+            scaler: None,
+            svm: RbfSvm {
+                n_features,
+                gamma: 1.0,
+                rho: -1.0,
+                support_vectors: Vec::new(),
+                coef: Vec::new(),
+                n_support_negative: 0,
+                n_support_positive: 0,
+                probability: None,
+            },
+            info: None,
+        }
+    }
+
+    /// With a detector that accepts every box, mining takes exactly the cap of boxes per frame,
+    /// every one far from every truth fruit (occluded ones included), with cascade features; a
+    /// frame with incomplete truth gives none.
+    #[test]
+    fn mined_boxes_are_far_from_every_fruit_and_incomplete_frames_are_skipped() {
+        let spec = SceneSpec {
+            camera: CameraPreset::Sr4000.camera(),
+            noise: NoiseModel::Tof,
+            ..SceneSpec::default()
+        };
+        let mut frames: Vec<LabelledFrame> = SyntheticFrames {
+            spec,
+            seed: 11,
+            first: 0,
+            count: 2,
+        }
+        .load_all()
+        .unwrap();
+        frames[1].truth.complete = false;
+        let mut params = StageParams::symmetry();
+        params.training.max_hard_negatives_per_frame = 15;
+        let stages = Stages::new(&params).unwrap();
+        let main = accept_all(stages.features.feature_len());
+        let cascade = accept_all(stages.cascade_features.as_ref().unwrap().feature_len());
+        let mined = mine_frame(&stages, &main, Some(&cascade), &frames, 0, &[])
+            .unwrap()
+            .unwrap();
+        assert_eq!(mined.len(), 15);
+        let truth = &frames[0].truth;
+        assert!(truth.fruits.len() > 1);
+        for b in &mined {
+            for f in &truth.fruits {
+                let d = (f.center_m.unwrap() - b.center).norm();
+                assert!(d >= params.training.negative_min_distance_m, "{d}");
+            }
+            assert_eq!(b.features.len(), main.n_features());
+            assert_eq!(
+                b.cascade_features.as_ref().map(Vec::len),
+                Some(cascade.n_features())
+            );
+        }
+        // Boxes mined before are not mined again.
+        let before: Vec<Point3<f64>> = mined.iter().map(|b| b.center).collect();
+        let again = mine_frame(&stages, &main, Some(&cascade), &frames, 0, &before)
+            .unwrap()
+            .unwrap();
+        assert!(again.iter().all(|b| !before.contains(&b.center)));
+        assert!(mine_frame(&stages, &main, Some(&cascade), &frames, 1, &[])
+            .unwrap()
+            .is_none());
+    }
+
+    #[test]
+    fn zero_rounds_leave_no_mining_keys_and_read_back_as_zero() {
+        let mut p = StageParams::viewer_pose();
+        assert_eq!(p.training.hard_negative_rounds, 1);
+        p.training.hard_negative_rounds = 0;
+        let mut json = serde_json::to_value(&p).unwrap();
+        let t = json["training"].as_object_mut().unwrap();
+        t.remove("hard_negative_rounds");
+        t.remove("max_hard_negatives_per_frame");
+        let back: StageParams = serde_json::from_value(json).unwrap();
+        assert_eq!(back, p);
+    }
 }
 
 #[cfg(test)]

@@ -271,3 +271,39 @@ fn cascade_can_be_switched_off() {
         .remove("classifier");
     assert!(BoxDetector::from_model("symmetry", &broken).is_err());
 }
+
+/// Hard-negative mining (on by default): the same seed gives the same model file whatever the
+/// thread count; it changes the model; with `training.hard_negative_rounds = 0` the model file
+/// carries no mining keys (the file written before mining existed) and trains without mining.
+#[test]
+fn hard_negative_mining_is_deterministic_and_zero_rounds_is_the_old_training() {
+    let frames = data().0[..6].to_vec();
+    let pipeline = SymmetryPipeline::default();
+    assert_eq!(pipeline.params.training.hard_negative_rounds, 1);
+    let train = |p: &SymmetryPipeline, threads| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| p.train(&frames, &options(), &|_, _| {}).unwrap())
+    };
+    let mined = train(&pipeline, 1);
+    assert_eq!(
+        serde_json::to_string(&mined).unwrap(),
+        serde_json::to_string(&train(&pipeline, 2)).unwrap()
+    );
+    assert_eq!(mined.stage_params["training"]["hard_negative_rounds"], 1);
+    let mut old = SymmetryPipeline::default();
+    old.params.training.hard_negative_rounds = 0;
+    let plain = train(&old, 2);
+    let training = plain.stage_params["training"].as_object().unwrap();
+    assert!(!training.contains_key("hard_negative_rounds"));
+    assert!(!training.contains_key("max_hard_negatives_per_frame"));
+    assert_ne!(plain.svm, mined.svm, "mining changed nothing");
+    // Both load and detect.
+    for m in [&plain, &mined] {
+        let d = pipeline.load(m).unwrap();
+        d.detect(&data().1[0].frame, &mut StageTimings::default())
+            .unwrap();
+    }
+}

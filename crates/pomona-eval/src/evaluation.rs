@@ -142,7 +142,7 @@ pub fn evaluate(
                 null_reasons.insert(
                     "precision".into(),
                     format!(
-                        "no detection at the operating point ({})",
+                        "no detection reaches the operating threshold ({})",
                         config.operating_point()
                     ),
                 );

@@ -343,11 +343,6 @@ pub fn summary_markdown(r: &ExperimentReport) -> String {
     out
 }
 
-/// Opens `dirs` as one frame source, refusing folders that do not exist.
-fn open_sets(pipeline: &dyn Pipeline, dirs: &[PathBuf]) -> Result<DatasetFrames> {
-    open_frames(pipeline, dirs)
-}
-
 /// Refuses a cross-domain experiment whose test folders include a training folder (compared
 /// after resolving links and `..`).
 ///
@@ -385,7 +380,7 @@ struct Plan {
 
 fn plan(pipeline: &dyn Pipeline, args: &ExperimentArgs) -> Result<Plan> {
     if let Some(data) = &args.data {
-        let frames = open_sets(pipeline, std::slice::from_ref(data))?;
+        let frames = open_frames(pipeline, std::slice::from_ref(data))?;
         let n = frames.len();
         let (protocol, splits) = if args.leave_one_out {
             if n < 2 {
@@ -417,8 +412,8 @@ fn plan(pipeline: &dyn Pipeline, args: &ExperimentArgs) -> Result<Plan> {
         bail!("give either --data DIR, or --train DIR... and --test DIR...");
     }
     check_disjoint(&args.train, &args.test)?;
-    let train = open_sets(pipeline, &args.train)?;
-    let test = open_sets(pipeline, &args.test)?;
+    let train = open_frames(pipeline, &args.train)?;
+    let test = open_frames(pipeline, &args.test)?;
     let splits = vec![((0..train.len()).collect(), (0..test.len()).collect())];
     Ok(Plan {
         protocol: Protocol::CrossDomain,

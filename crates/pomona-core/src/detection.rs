@@ -40,6 +40,14 @@ pub struct Detection {
     pub confidence: Option<f64>,
 }
 
+impl Detection {
+    /// Whether the detection has a calibrated confidence of at least `min_confidence` (one
+    /// without a confidence never has).
+    pub fn confidence_at_least(&self, min_confidence: f64) -> bool {
+        self.confidence.is_some_and(|c| c >= min_confidence)
+    }
+}
+
 /// All detections of one frame (`<out>/<frame>.json`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct FrameDetections {

@@ -78,7 +78,7 @@ impl EvalConfig {
     /// score reaches `threshold` otherwise.
     pub fn keeps(&self, detection: &pomona_core::Detection) -> bool {
         match self.min_confidence {
-            Some(c) => detection.confidence.is_some_and(|d| d >= c),
+            Some(c) => detection.confidence_at_least(c),
             None => detection.score >= self.threshold,
         }
     }

@@ -75,6 +75,31 @@ impl FrameSource for Vec<LabelledFrame> {
     }
 }
 
+/// Several frame sources one after another (e.g. synthetic sets of different cameras or
+/// domains trained on together): frame `i` is the `i`-th frame of the concatenation.
+#[derive(Debug, Clone, Default)]
+pub struct ChainedFrames<S>(pub Vec<S>);
+
+impl<S: FrameSource> FrameSource for ChainedFrames<S> {
+    fn len(&self) -> usize {
+        self.0.iter().map(FrameSource::len).sum()
+    }
+
+    fn load(&self, i: usize) -> Result<LabelledFrame, PipelineError> {
+        let mut rest = i;
+        for part in &self.0 {
+            if rest < part.len() {
+                return part.load(rest);
+            }
+            rest -= part.len();
+        }
+        Err(PipelineError::InvalidParameter {
+            name: "frame index".into(),
+            reason: format!("{i} is past the {} chained frames", self.len()),
+        })
+    }
+}
+
 /// Frames drawn from one or more datasets; only frames that have truth are included.
 #[derive(Debug, Clone, Default)]
 pub struct DatasetFrames {
@@ -142,5 +167,37 @@ impl FrameSource for DatasetFrames {
             truth,
             mask,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use pomona_core::{DepthImage, PinholeCamera};
+
+    fn frame(name: &str) -> LabelledFrame {
+        let camera = PinholeCamera::new(2, 2, 1.0, 1.0, 0.5, 0.5).unwrap();
+        let depth = DepthImage::from_meters(2, 2, vec![1.0; 4]).unwrap();
+        LabelledFrame {
+            name: name.to_owned(),
+            frame: RgbdFrame::new(camera, depth, None).unwrap(),
+            truth: FrameTruth {
+                complete: true,
+                fruits: Vec::new(),
+                extra: serde_json::Map::new(),
+            },
+            mask: None,
+        }
+    }
+
+    #[test]
+    fn chained_sources_index_through_every_part() {
+        let part =
+            |n: usize| -> Vec<LabelledFrame> { (0..n).map(|k| frame(&k.to_string())).collect() };
+        let chained = ChainedFrames(vec![part(2), part(0), part(3)]);
+        assert_eq!(chained.len(), 5);
+        let names: Vec<String> = (0..5).map(|i| chained.load(i).unwrap().name).collect();
+        assert_eq!(names, ["0", "1", "0", "1", "2"]);
+        assert!(chained.load(5).is_err());
     }
 }

@@ -29,7 +29,7 @@ pub use calibration::{
 };
 pub use detector::{Detector, Pipeline, TrainOptions};
 pub use error::PipelineError;
-pub use frame_source::{DatasetFrames, FrameSource, LabelledFrame};
+pub use frame_source::{ChainedFrames, DatasetFrames, FrameSource, LabelledFrame};
 pub use pomona_learn::ModelFile;
 pub use stage::{run_stage, Stage};
 pub use synthetic_frames::SyntheticFrames;

@@ -17,7 +17,7 @@
 
 use pomona_core::RgbdFrame;
 use pomona_pipeline::{
-    train_calibrated, CalibrationParams, FrameSource, LabelledFrame, PipelineError,
+    train_calibrated, CalibrationParams, ChainedFrames, FrameSource, LabelledFrame, PipelineError,
     SyntheticFrames, TrainOptions,
 };
 use pomona_shapefit::ShapeFitPipeline;
@@ -32,28 +32,6 @@ const CAMERAS: [(Domain, CameraPreset, usize, u64); 4] = [
     (Domain::Wide, CameraPreset::Sr4000, 8, 1002),
 ];
 const TRAIN_SEED: u64 = 1;
-
-/// Several synthetic sets, one after another.
-struct Concat(Vec<SyntheticFrames>);
-
-impl FrameSource for Concat {
-    fn len(&self) -> usize {
-        self.0.iter().map(FrameSource::len).sum()
-    }
-
-    fn load(&self, mut i: usize) -> Result<LabelledFrame, PipelineError> {
-        for part in &self.0 {
-            if i < part.len() {
-                return part.load(i);
-            }
-            i -= part.len();
-        }
-        Err(PipelineError::InvalidParameter {
-            name: "frame index".into(),
-            reason: format!("{i} is past the end"),
-        })
-    }
-}
 
 /// The same frames without their colour images.
 struct WithoutColor<'a>(&'a dyn FrameSource);
@@ -82,7 +60,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             .nth(1)
             .unwrap_or_else(|| "crates/pomona-shapefit/models".into()),
     );
-    let rendered = Concat(
+    let rendered = ChainedFrames(
         CAMERAS
             .iter()
             .map(|&(domain, camera, count, seed)| SyntheticFrames {
@@ -130,24 +108,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let model = trained.model;
         let out = dir.join(name);
         model.save(&out)?;
-        let calibration = model.calibration.map_or_else(
-            || {
-                format!(
-                    "no calibration: {}",
-                    trained.not_calibrated.unwrap_or_default()
-                )
-            },
-            |c| {
-                format!(
-                    "operating confidence {:.3} (held-out precision {:.3}, recall {:.3} over {} \
-                     fruit)",
-                    c.operating_confidence,
-                    c.evidence.precision,
-                    c.evidence.recall,
-                    c.evidence.truth_fruit
-                )
-            },
-        );
+        let calibration = match &model.calibration {
+            Some(c) => c.to_string(),
+            None => format!(
+                "no calibration: {}",
+                trained.not_calibrated.unwrap_or_default()
+            ),
+        };
         println!(
             "wrote {}: {} support vectors, {calibration}, {:.1} s",
             out.display(),

@@ -25,8 +25,8 @@
 
 use pomona_learn::ModelFile;
 use pomona_pipeline::{
-    train_calibrated, CalibrationParams, FrameSource, LabelledFrame, Pipeline, PipelineError,
-    SyntheticFrames, TrainOptions,
+    train_calibrated, CalibrationParams, ChainedFrames, FrameSource, Pipeline, SyntheticFrames,
+    TrainOptions,
 };
 use pomona_symmetry::{SymmetryPipeline, ViewerPosePipeline};
 use pomona_synth::{CameraPreset, Domain, FruitChoice, NoiseModel, SceneSpec};
@@ -40,27 +40,6 @@ const CAMERAS: [(Domain, CameraPreset, usize, u64); 4] = [
     (Domain::Wide, CameraPreset::Sr4000, 4, 1002),
 ];
 
-/// Several synthetic sets, one after another.
-struct Concat(Vec<SyntheticFrames>);
-
-impl FrameSource for Concat {
-    fn len(&self) -> usize {
-        self.0.iter().map(FrameSource::len).sum()
-    }
-
-    fn load(&self, mut i: usize) -> Result<LabelledFrame, PipelineError> {
-        for part in &self.0 {
-            if i < part.len() {
-                return part.load(i);
-            }
-            i -= part.len();
-        }
-        Err(PipelineError::InvalidParameter {
-            name: "frame index".into(),
-            reason: format!("{i} is past the end"),
-        })
-    }
-}
 /// Seed of the training (sampling of negatives and jitters, cross-validation folds).
 const TRAIN_SEED: u64 = 1;
 
@@ -70,7 +49,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             .nth(1)
             .unwrap_or_else(|| "crates/pomona-symmetry/models".into()),
     );
-    let rendered = Concat(
+    let rendered = ChainedFrames(
         CAMERAS
             .iter()
             .map(|&(domain, camera, count, seed)| SyntheticFrames {
@@ -113,24 +92,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         )?;
         eprintln!();
         let model = trained.model;
-        let calibration = model.calibration.map_or_else(
-            || {
-                format!(
-                    "no calibration: {}",
-                    trained.not_calibrated.unwrap_or_default()
-                )
-            },
-            |c| {
-                format!(
-                    "operating confidence {:.3} (held-out precision {:.3}, recall {:.3} over {} \
-                     fruit)",
-                    c.operating_confidence,
-                    c.evidence.precision,
-                    c.evidence.recall,
-                    c.evidence.truth_fruit
-                )
-            },
-        );
+        let calibration = match &model.calibration {
+            Some(c) => c.to_string(),
+            None => format!(
+                "no calibration: {}",
+                trained.not_calibrated.unwrap_or_default()
+            ),
+        };
         let out = dir.join(name);
         model.save(&out)?;
         let bytes = std::fs::metadata(&out)?.len();

@@ -273,14 +273,15 @@ mod tests {
     #[test]
     fn rendered_shadow_darkens_the_ground() {
         let cam = crate::CameraPreset::Sr4000.camera();
-        let mut s = scene();
-        let with = crate::render(&s, &cam).unwrap();
-        s.shadows = false;
-        let without = crate::render(&s, &cam).unwrap();
-        let (a, b) = (
-            with.frame.color().unwrap().as_rgb(),
-            without.frame.color().unwrap().as_rgb(),
-        );
+        // Colour bytes of `s` rendered with and without shadows.
+        let with_and_without = |mut s: crate::Scene| {
+            let with = crate::render(&s, &cam).unwrap();
+            s.shadows = false;
+            let without = crate::render(&s, &cam).unwrap();
+            let rgb = |r: &crate::RenderedFrame| r.frame.color().unwrap().as_rgb().to_vec();
+            (rgb(&with), rgb(&without))
+        };
+        let (a, b) = with_and_without(scene());
         // With the sun straight behind the camera the shadow lies behind the leaf, hidden by
         // it; moving the sun sideways uncovers it.
         assert_eq!(
@@ -289,13 +290,7 @@ mod tests {
         );
         let mut s = scene();
         s.light.towards_light = Unit::new_normalize(Vector3::new(-0.3, 0.0, -1.0));
-        let with = crate::render(&s, &cam).unwrap();
-        s.shadows = false;
-        let without = crate::render(&s, &cam).unwrap();
-        let (a, b) = (
-            with.frame.color().unwrap().as_rgb(),
-            without.frame.color().unwrap().as_rgb(),
-        );
+        let (a, b) = with_and_without(s);
         let darker = a
             .iter()
             .zip(b.iter())

@@ -118,10 +118,7 @@ pub fn run_with(pipelines: &[Box<dyn Pipeline>], args: &DetectArgs) -> Result<De
     let detector = build_detector(pipeline, model, &source, &args.set)?;
     let min_confidence = min_confidence(detector.as_ref(), args.min_confidence)?;
     let operating_confidence = detector.operating_confidence();
-    let kept = |d: &pomona_core::Detection| match min_confidence {
-        Some(c) => d.confidence.is_some_and(|x| x >= c),
-        None => true,
-    };
+    let kept = |d: &pomona_core::Detection| min_confidence.is_none_or(|c| d.confidence_at_least(c));
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create output folder {}", args.out.display()))?;
     if let Some(dir) = &args.overlay {

@@ -183,19 +183,13 @@ pub fn run_with(pipelines: &[Box<dyn Pipeline>], args: &TrainArgs) -> Result<Tra
     );
     match &model.calibration {
         Some(c) => println!(
-            "Confidence calibrated on {} held-out detections ({} true, {} findable fruit, {} \
-             folds): operating confidence {:.3} (held-out precision {:.3}, recall {:.3}); \
+            "Confidence calibrated on {} held-out detections ({} true, {} folds): {c}; \
              `pomona detect` keeps detections at or above it by default.",
-            c.evidence.detections,
-            c.evidence.true_positives,
-            c.evidence.truth_fruit,
-            args.calibration_folds,
-            c.operating_confidence,
-            c.evidence.precision,
-            c.evidence.recall
+            c.evidence.detections, c.evidence.true_positives, args.calibration_folds,
         ),
         None => println!(
-            "No confidence calibration (--calibration-folds 0): detections carry raw scores only."
+            "No confidence calibration ({}): detections carry raw scores only.",
+            trained.not_calibrated.as_deref().unwrap_or("none fitted")
         ),
     }
     Ok(summary)

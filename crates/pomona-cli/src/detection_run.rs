@@ -10,86 +10,33 @@ use std::path::Path;
 use std::time::{Duration, Instant};
 
 use anyhow::{anyhow, bail, Context, Result};
-use pomona_core::{Detection, RgbdFrame};
-use pomona_pipeline::{Detector, ModelFile, Pipeline, StageTimings};
+use pomona::{Detection, Detector, ModelInfo, ParamOverride, Pipeline, RgbdFrame, StageTimings};
 use rayon::prelude::*;
 
-use crate::params::{self, ParamOverride};
-
-/// Where a model came from, for messages and reports.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub enum ModelSource {
-    /// A model file given with `--model`.
-    File(std::path::PathBuf),
-    /// The model compiled into the binary.
-    BuiltIn,
-}
-
-impl std::fmt::Display for ModelSource {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            Self::File(p) => write!(f, "{}", p.display()),
-            Self::BuiltIn => f.write_str("the built-in model"),
-        }
-    }
-}
-
-/// Reads the model for `pipeline`: `model` when given, otherwise the pipeline's built-in one
-/// (its depth-only built-in model when the data has no colour and the pipeline ships one).
+/// The detector of `pipeline`: the model file `model` when given, otherwise the pipeline's
+/// built-in model(s) (the depth-only one for frames without colour), with `overrides` applied to
+/// the stage parameters; its detections carry a calibrated confidence when the model has a
+/// calibration.
 ///
 /// # Errors
-/// An unreadable model or one made for another pipeline or format version (naming the file), or
-/// no `model` for a pipeline without a built-in one.
-pub fn read_model(
+/// An unreadable model or one made for another pipeline or format version (naming the file), no
+/// `model` for a pipeline without a built-in one, a bad override (unknown key, wrong type) or
+/// stage parameters the pipeline rejects.
+pub fn load_detector(
     pipeline: &dyn Pipeline,
     model: Option<&Path>,
-    has_color: bool,
-) -> Result<(ModelFile, ModelSource)> {
-    let name = pipeline.name();
-    match model {
-        Some(path) => {
-            let m = ModelFile::load(path, name)?;
-            Ok((m, ModelSource::File(path.to_owned())))
-        }
-        None => {
-            let built_in = if has_color {
-                pipeline.default_model()
-            } else {
-                pipeline
-                    .default_depth_only_model()
-                    .or_else(|| pipeline.default_model())
-            };
-            let Some(text) = built_in else {
-                bail!(
-                    "pipeline `{name}` has no built-in model yet; train one with \
-                     `pomona train --pipeline {name} --data DIR --out MODEL` and pass it with --model MODEL"
-                );
-            };
-            let label = format!("<built-in model of {name}>");
-            let m = ModelFile::from_json(text, Path::new(&label), name)?;
-            Ok((m, ModelSource::BuiltIn))
-        }
-    }
-}
-
-/// Builds the detector of `model`, after applying `--set` overrides to its stage parameters; its
-/// detections carry a calibrated confidence when the model has a calibration.
-///
-/// # Errors
-/// A bad override (unknown key, wrong type) or stage parameters the pipeline rejects.
-pub fn build_detector(
-    pipeline: &dyn Pipeline,
-    mut model: ModelFile,
-    source: &ModelSource,
     overrides: &[ParamOverride],
-) -> Result<Box<dyn Detector>> {
-    let what = format!("the model of `{}` ({source})", pipeline.name());
-    params::apply(&mut model.stage_params, overrides, &what)?;
-    pomona_pipeline::load_detector(pipeline, &model).with_context(|| {
-        format!(
-            "cannot build a `{}` detector from {source}",
-            pipeline.name()
-        )
+) -> Result<Detector> {
+    let mut builder = Detector::builder_for(pipeline).overrides(overrides.iter().cloned());
+    if let Some(path) = model {
+        builder = builder.model_file(path);
+    }
+    builder.build().map_err(|e| match e {
+        pomona::Error::NoBuiltInModel { pipeline } => anyhow!(
+            "pipeline `{pipeline}` has no built-in model yet; train one with \
+             `pomona train --pipeline {pipeline} --data DIR --out MODEL` and pass it with --model MODEL"
+        ),
+        other => other.into(),
     })
 }
 
@@ -99,7 +46,7 @@ pub fn build_detector(
 ///
 /// # Errors
 /// `--min-confidence` outside `[0, 1]` or given for a model without calibration.
-pub fn min_confidence(detector: &dyn Detector, requested: Option<f64>) -> Result<Option<f64>> {
+pub fn min_confidence(detector: &Detector, requested: Option<f64>) -> Result<Option<f64>> {
     match (requested, detector.operating_confidence()) {
         (Some(c), _) if !(0.0..=1.0).contains(&c) => {
             bail!("--min-confidence must be in [0, 1], got {c}")
@@ -155,6 +102,8 @@ pub struct FrameResult {
     pub timings: StageTimings,
     /// Wall time of `Detector::detect` on this frame.
     pub elapsed: Duration,
+    /// The model that detected (the depth-only one for a frame without colour).
+    pub model: ModelInfo,
 }
 
 /// Totals of a detection run.
@@ -177,54 +126,112 @@ impl RunTotals {
     }
 }
 
+/// A frame that could not be processed: its index and why.
+#[derive(Debug)]
+pub struct FrameFailure {
+    /// Index of the frame in the run.
+    pub index: usize,
+    /// What went wrong (loading, detecting or the `done` callback), with context.
+    pub error: anyhow::Error,
+}
+
+impl FrameFailure {
+    /// The file at fault, when the error names one (a dataset file that would not load).
+    pub fn file(&self) -> Option<&Path> {
+        self.error.chain().find_map(|cause| {
+            cause
+                .downcast_ref::<pomona_io::DatasetError>()
+                .or_else(|| match cause.downcast_ref::<pomona::Error>() {
+                    Some(pomona::Error::Dataset(e)) => Some(e),
+                    _ => None,
+                })
+                .map(pomona_io::DatasetError::path)
+        })
+    }
+}
+
+/// What a batch did: the frames done (in frame order, with what `load` returned beside each),
+/// those that failed, and totals over the frames done.
+#[derive(Debug)]
+pub struct Batch<X> {
+    /// Results of the frames that succeeded, in frame order.
+    pub done: Vec<(usize, FrameResult, X)>,
+    /// The frames that failed, in frame order.
+    pub failed: Vec<FrameFailure>,
+    /// Totals over `done`.
+    pub totals: RunTotals,
+}
+
+impl<X> Batch<X> {
+    /// Every frame's result, for callers that need all of them (evaluation over a whole set).
+    ///
+    /// # Errors
+    /// The first failed frame's error.
+    pub fn all_or_first_error(self) -> Result<(Vec<(FrameResult, X)>, RunTotals)> {
+        if let Some(first) = self.failed.into_iter().next() {
+            return Err(first.error);
+        }
+        let done = self.done.into_iter().map(|(_, r, x)| (r, x)).collect();
+        Ok((done, self.totals))
+    }
+}
+
 /// Runs `detector` on frames `0..n` in parallel: `load(i)` reads frame `i` with a name for
 /// messages and anything else the caller wants back with the result (such as its truth),
 /// `done(i, &result)` consumes its result (for example writes its file) and `tick` is called once
-/// per finished frame (progress). Results are also returned in frame order.
-///
-/// # Errors
-/// The first failing frame in frame order: loading, detection (naming the frame) or `done`.
+/// per finished frame, failed or not (progress). A failing frame does not stop the others.
 pub fn detect_frames<X, L, D>(
-    detector: &dyn Detector,
+    detector: &Detector,
     n: usize,
     load: L,
     done: D,
     tick: &(dyn Fn() + Sync),
-) -> Result<(Vec<(FrameResult, X)>, RunTotals)>
+) -> Batch<X>
 where
     X: Send,
     L: Fn(usize) -> Result<(String, RgbdFrame, X)> + Sync,
     D: Fn(usize, &FrameResult) -> Result<()> + Sync,
 {
+    let one = |i: usize| -> Result<(FrameResult, X)> {
+        let (name, frame, extra) = load(i)?;
+        let start = Instant::now();
+        let (detections, timings) = detector
+            .detect_with_timings(&frame)
+            .with_context(|| format!("detecting in frame {name}"))?;
+        let result = FrameResult {
+            detections,
+            timings,
+            elapsed: start.elapsed(),
+            model: detector.model_for(&frame).clone(),
+        };
+        drop(frame);
+        done(i, &result)?;
+        Ok((result, extra))
+    };
     let results: Vec<Result<(FrameResult, X)>> = (0..n)
         .into_par_iter()
         .map(|i| {
-            let (name, frame, extra) = load(i)?;
-            let mut timings = StageTimings::default();
-            let start = Instant::now();
-            let detections = detector
-                .detect(&frame, &mut timings)
-                .with_context(|| format!("detecting in frame {name}"))?;
-            let result = FrameResult {
-                detections,
-                timings,
-                elapsed: start.elapsed(),
-            };
-            drop(frame);
-            done(i, &result)?;
+            let r = one(i);
             tick();
-            Ok((result, extra))
+            r
         })
         .collect();
-    let mut totals = RunTotals::default();
-    let mut out = Vec::with_capacity(n);
-    for r in results {
-        let (r, extra) = r?;
-        totals.frames += 1;
-        totals.detections += r.detections.len();
-        totals.timings.merge(&r.timings);
-        totals.detect_time += r.elapsed;
-        out.push((r, extra));
+    let mut batch = Batch {
+        done: Vec::with_capacity(n),
+        failed: Vec::new(),
+        totals: RunTotals::default(),
+    };
+    for (index, r) in results.into_iter().enumerate() {
+        match r {
+            Ok((r, extra)) => {
+                batch.totals.frames += 1;
+                batch.totals.detections += r.detections.len();
+                batch.totals.timings.merge(&r.timings);
+                batch.totals.detect_time += r.elapsed;
+                batch.done.push((index, r, extra));
+            }
+            Err(error) => batch.failed.push(FrameFailure { index, error }),
+        }
     }
-    Ok((out, totals))
+    batch
 }

@@ -2,7 +2,7 @@
 //!
 //! Each subcommand lives in `commands/<name>.rs` (in the `pomona_cli` library) with its clap
 //! arguments and a `run` function; this file only dispatches and turns errors into one line on
-//! stderr and a non-zero exit code.
+//! stderr and an exit status (`exit_status.rs`).
 
 use std::process::ExitCode;
 
@@ -54,11 +54,8 @@ fn main() -> ExitCode {
         Command::Experiment(args) => commands::experiment::run(args),
         Command::Demo(args) => commands::demo::run(args),
     };
-    match result {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(err) => {
-            eprintln!("error: {}", pomona_cli::error_line::error_line(&err));
-            ExitCode::FAILURE
-        }
+    if let Err(err) = &result {
+        eprintln!("error: {}", pomona_cli::error_line::error_line(err));
     }
+    pomona_cli::exit_status::exit_code(&result)
 }

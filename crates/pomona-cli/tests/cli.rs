@@ -307,6 +307,7 @@ fn detect_args(
         set: Vec::new(),
         overlay: None,
         min_confidence: None,
+        resume: false,
     }
 }
 
@@ -430,13 +431,13 @@ fn train_detect_eval_through_an_injected_pipeline() {
     // --set changes a stored stage parameter; a wrong key lists the real ones.
     let det2 = dir.path().join("det2");
     let mut set = detect_args("blob", Some(&model), &test_ds, &det2);
-    set.set = vec![pomona_cli::params::parse_override("nms_m=0.5").unwrap()];
+    set.set = vec!["nms_m=0.5".parse().unwrap()];
     let wide = detect::run_with(&pipelines, &set).unwrap();
     assert!(
         wide.detections < d.detections,
         "a wider NMS keeps fewer detections"
     );
-    set.set = vec![pomona_cli::params::parse_override("nms=0.5").unwrap()];
+    set.set = vec!["nms=0.5".parse().unwrap()];
     let err = format!("{:#}", detect::run_with(&pipelines, &set).unwrap_err());
     assert!(err.contains("nms_m") && err.contains("window_m"), "{err}");
 }
@@ -734,7 +735,7 @@ fn demo_renders_data_detects_and_draws_overlays() {
     let out = pomona(&args);
     assert!(out.status.success(), "{}", stderr(&out));
     // Every registered pipeline with a built-in model runs and is evaluated.
-    for p in pomona_cli::pipelines::all()
+    for p in pomona::pipelines()
         .iter()
         .filter(|p| p.default_model().is_some())
     {

@@ -64,6 +64,10 @@ pub struct FrameDetections {
     /// The lowest confidence kept in this file (`None`: every detection was kept).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub min_confidence: Option<f64>,
+    /// Identity of the model that produced the detections (a hash of the model file after
+    /// parameter overrides), so `pomona detect --resume` never mixes two models' output.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub model_id: Option<String>,
 }
 
 #[cfg(test)]
@@ -88,6 +92,7 @@ mod tests {
             }],
             operating_confidence: Some(0.5),
             min_confidence: None,
+            model_id: Some("0123456789abcdef".into()),
         };
         let json = serde_json::to_string(&d).unwrap();
         assert!(json.contains(r#""center_m":[0.1,-0.2,0.7]"#));

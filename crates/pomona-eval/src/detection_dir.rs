@@ -52,7 +52,12 @@ fn read_one(path: &Path, stem: &str) -> Result<FrameDetections, EvalError> {
     Ok(d)
 }
 
-/// Reads every `*.json` in `dir` (hidden files and other extensions are skipped).
+/// The file `pomona detect` writes into a detection folder listing the frames it could not
+/// process (not a detection file; skipped here unless the dataset has a frame of that name).
+pub const FAILURES_FILE: &str = "failures.json";
+
+/// Reads every `*.json` in `dir` (hidden files, other extensions and [`FAILURES_FILE`] are
+/// skipped).
 ///
 /// # Errors
 /// [`EvalError::Io`] for an unreadable folder or file, [`EvalError::DetectionJson`],
@@ -81,6 +86,10 @@ pub fn load_detections(dir: &Path, dataset: &Dataset) -> Result<DetectionSet, Ev
     files.sort();
     let known: std::collections::BTreeSet<&str> =
         dataset.frames().iter().map(String::as_str).collect();
+    let failures_stem = FAILURES_FILE.trim_end_matches(".json");
+    if !known.contains(failures_stem) {
+        files.retain(|(stem, _)| stem != failures_stem);
+    }
     let mut by_frame = BTreeMap::new();
     for (stem, path) in files {
         if !known.contains(stem.as_str()) {

@@ -26,7 +26,7 @@ mod pr_plot;
 mod report;
 mod split_summary;
 
-pub use detection_dir::{load_detections, DetectionSet};
+pub use detection_dir::{load_detections, DetectionSet, FAILURES_FILE};
 pub use error::EvalError;
 pub use eval_config::EvalConfig;
 pub use evaluation::{evaluate, FrameInput};

@@ -109,6 +109,23 @@ pub enum DatasetError {
 }
 
 impl DatasetError {
+    /// The file or folder at fault (the dataset root for an unknown frame).
+    pub fn path(&self) -> &std::path::Path {
+        match self {
+            Self::Io { path, .. }
+            | Self::Json { path, .. }
+            | Self::InvalidCamera { path, .. }
+            | Self::Image { path, .. }
+            | Self::DepthNotSixteenBit { path, .. }
+            | Self::SizeMismatch { path, .. }
+            | Self::Missing { path, .. }
+            | Self::UnpairedFrame { path, .. }
+            | Self::DuplicateFrame { path, .. }
+            | Self::Core { path, .. } => path,
+            Self::UnknownFrame { root, .. } => root,
+        }
+    }
+
     pub(crate) fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
         Self::Io {
             path: path.into(),

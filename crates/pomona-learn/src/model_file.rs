@@ -97,6 +97,30 @@ impl ModelFile {
         Self::from_json(&text, path, pipeline)
     }
 
+    /// Reads a model file of any pipeline (the one it names), checking everything
+    /// [`ModelFile::load`] checks except which pipeline it is for.
+    ///
+    /// # Errors
+    /// As [`ModelFile::load`], without [`ModelFileError::Pipeline`].
+    pub fn load_any(path: impl AsRef<Path>) -> Result<Self, ModelFileError> {
+        #[derive(serde::Deserialize)]
+        struct Named {
+            #[serde(default)]
+            pipeline: serde_json::Value,
+        }
+        let path = path.as_ref();
+        let text = std::fs::read_to_string(path).map_err(|source| ModelFileError::Io {
+            path: path.to_owned(),
+            source,
+        })?;
+        let named: Named = serde_json::from_str(&text).map_err(|source| ModelFileError::Json {
+            path: path.to_owned(),
+            source,
+        })?;
+        let pipeline = named.pipeline.as_str().unwrap_or_default().to_owned();
+        Self::from_json(&text, path, &pipeline)
+    }
+
     /// Parses model JSON; `path` is only used in error messages.
     ///
     /// # Errors

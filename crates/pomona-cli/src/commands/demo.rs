@@ -30,9 +30,8 @@ use pomona_synth::{
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::detection_run::{build_detector, detect_frames, read_model, thread_pool};
+use crate::detection_run::{detect_frames, load_detector, thread_pool};
 use crate::overlay::{view_of, write_overlay};
-use crate::pipelines;
 use crate::progress::progress_bar;
 
 /// Arguments of `pomona demo`.
@@ -146,7 +145,7 @@ pub fn demo_spec(frames: u32, seed: u64) -> DatasetSpec {
 /// # Errors
 /// See [`run_with`].
 pub fn run(args: &DemoArgs) -> Result<()> {
-    run_with(&pipelines::all(), args).map(|_| ())
+    run_with(&pomona::pipelines(), args).map(|_| ())
 }
 
 /// Runs `pomona demo` with `pipelines` (tests pass their own).
@@ -209,8 +208,7 @@ pub fn run_with(pipelines: &[Box<dyn Pipeline>], args: &DemoArgs) -> Result<Demo
             without.push(name.to_owned());
             continue;
         }
-        let (model, source) = read_model(pipeline.as_ref(), None, true)?;
-        let detector = build_detector(pipeline.as_ref(), model, &source, &[])?;
+        let detector = load_detector(pipeline.as_ref(), None, &[])?;
         let operating_confidence = detector.operating_confidence();
         let config = EvalConfig {
             min_confidence: operating_confidence,
@@ -223,29 +221,35 @@ pub fn run_with(pipelines: &[Box<dyn Pipeline>], args: &DemoArgs) -> Result<Demo
                 .with_context(|| format!("cannot create {}", dir.display()))?;
         }
         let bar = progress_bar(stems.len(), name);
-        let (frames, totals) = pool.install(|| {
-            detect_frames(
-                detector.as_ref(),
-                stems.len(),
-                |i| {
-                    let frame = dataset.load_frame(&stems[i])?;
-                    let truth = dataset.load_truth(&stems[i])?;
-                    Ok((format!("{}/{}", data_dir.display(), stems[i]), frame, truth))
-                },
-                |i, result| {
-                    let record = FrameDetections {
-                        frame: stems[i].clone(),
-                        pipeline: name.to_owned(),
-                        detections: result.detections.clone(),
-                        operating_confidence,
-                        min_confidence: None,
-                    };
-                    pomona_io::write_json(&det_dir.join(format!("{}.json", stems[i])), &record)?;
-                    Ok(())
-                },
-                &|| bar.inc(1),
-            )
-        })?;
+        let (frames, totals) = pool
+            .install(|| {
+                detect_frames(
+                    &detector,
+                    stems.len(),
+                    |i| {
+                        let frame = dataset.load_frame(&stems[i])?;
+                        let truth = dataset.load_truth(&stems[i])?;
+                        Ok((format!("{}/{}", data_dir.display(), stems[i]), frame, truth))
+                    },
+                    |i, result| {
+                        let record = FrameDetections {
+                            frame: stems[i].clone(),
+                            pipeline: name.to_owned(),
+                            detections: result.detections.clone(),
+                            operating_confidence,
+                            min_confidence: None,
+                            model_id: Some(result.model.id.clone()),
+                        };
+                        pomona_io::write_json(
+                            &det_dir.join(format!("{}.json", stems[i])),
+                            &record,
+                        )?;
+                        Ok(())
+                    },
+                    &|| bar.inc(1),
+                )
+            })
+            .all_or_first_error()?;
         bar.finish_and_clear();
         pool.install(|| {
             stems
@@ -329,7 +333,7 @@ pub fn run_with(pipelines: &[Box<dyn Pipeline>], args: &DemoArgs) -> Result<Demo
         } else {
             format!(
                 "no registered pipeline ({}) has a built-in model yet",
-                pipelines::names(pipelines)
+                pomona::pipeline_names(pipelines)
             )
         };
         println!(

@@ -3,22 +3,27 @@
 //!
 //! The model comes from `--model` or, without it, the pipeline's built-in model. Frames are
 //! loaded lazily and processed in parallel; `--timings` prints the per-stage cost table.
+//!
+//! A frame that fails (unreadable image, detection error) does not stop the run: every other
+//! frame is written, the failures go to `<out>/failures.json`, and the command exits with status
+//! 3 (see `exit_status.rs`). `--resume` continues a killed run: frames whose file it would write
+//! unchanged are skipped (see `detection_folder.rs`).
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{Context, Result};
+use pomona::{ModelSource, Pipeline, StageTimings};
 use pomona_core::FrameDetections;
 use pomona_io::Dataset;
-use pomona_pipeline::{Pipeline, StageTimings};
 
+use crate::detection_folder::{prepare, write_failures, FailedFrame, RunIdentity};
 use crate::detection_run::{
-    build_detector, check_color, detect_frames, min_confidence, read_model, thread_pool,
-    ModelSource,
+    check_color, detect_frames, load_detector, min_confidence, thread_pool,
 };
+use crate::error_line::error_line;
+use crate::exit_status::FramesFailed;
 use crate::overlay::{shown, view_of, write_overlay};
-use crate::params::{parse_override, ParamOverride};
-use crate::pipelines;
 use crate::progress::progress_bar;
 
 /// Arguments of `pomona detect`.
@@ -43,8 +48,8 @@ pub struct DetectArgs {
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=1024))]
     pub threads: Option<u64>,
     /// Override a stage parameter of the model, KEY=VALUE (dotted keys, JSON values); repeat.
-    #[arg(long = "set", value_name = "KEY=VALUE", value_parser = parse_override)]
-    pub set: Vec<ParamOverride>,
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub set: Vec<pomona::ParamOverride>,
     /// Also draw each frame's truth (green) and detections scoring at least 0 (red, score and
     /// diameter) on its colour image, written as `<DIR>/<frame>.png`.
     #[arg(long, value_name = "DIR")]
@@ -53,6 +58,11 @@ pub struct DetectArgs {
     /// model's operating confidence; models without calibration keep every detection.
     #[arg(long, value_name = "C")]
     pub min_confidence: Option<f64>,
+    /// Continue an interrupted run: skip frames whose detection file exists and was made by the
+    /// same pipeline, model, `--set` and threshold. (Without it, such files are rewritten; files
+    /// made differently are an error either way.)
+    #[arg(long)]
+    pub resume: bool,
 }
 
 /// What a detection run did.
@@ -60,6 +70,10 @@ pub struct DetectArgs {
 pub struct DetectSummary {
     /// Frames processed (= files written).
     pub frames: usize,
+    /// Frames skipped because `--resume` found their file already written.
+    pub resumed: usize,
+    /// Frames that failed (listed in `failures.json`).
+    pub failed: usize,
     /// Detections written over all frames (those kept at the confidence threshold).
     pub detections: usize,
     /// Stage times merged over frames.
@@ -81,9 +95,11 @@ fn warn_foreign_files(out: &Path, frames: &[String]) {
         .filter_map(|e| e.ok().map(|e| e.path()))
         .filter(|p| p.extension().is_some_and(|e| e == "json"))
         .filter(|p| {
-            p.file_stem()
-                .and_then(|s| s.to_str())
-                .is_some_and(|s| !s.starts_with('.') && !known.contains(s))
+            p.file_stem().and_then(|s| s.to_str()).is_some_and(|s| {
+                !s.starts_with('.')
+                    && !known.contains(s)
+                    && format!("{s}.json") != pomona_eval::FAILURES_FILE
+            })
         })
         .count();
     if foreign > 0 {
@@ -100,7 +116,7 @@ fn warn_foreign_files(out: &Path, frames: &[String]) {
 /// # Errors
 /// See [`run_with`].
 pub fn run(args: &DetectArgs) -> Result<()> {
-    run_with(&pipelines::all(), args).map(|_| ())
+    run_with(&pomona::pipelines(), args).map(|_| ())
 }
 
 /// Runs `pomona detect` choosing the pipeline from `pipelines` (tests pass their own).
@@ -110,37 +126,45 @@ pub fn run(args: &DetectArgs) -> Result<()> {
 /// or version, a colour-less dataset for a colour pipeline, unreadable frames, detection
 /// failures and unwritable output, each naming the file or frame.
 pub fn run_with(pipelines: &[Box<dyn Pipeline>], args: &DetectArgs) -> Result<DetectSummary> {
-    let pipeline = pipelines::find(pipelines, &args.pipeline)?;
+    let pipeline = pomona::find_pipeline(pipelines, &args.pipeline)?;
     let dataset = Dataset::open(&args.data)
         .with_context(|| format!("cannot open dataset {}", args.data.display()))?;
     check_color(pipeline, dataset.has_color(), &args.data)?;
-    let (model, source) = read_model(pipeline, args.model.as_deref(), dataset.has_color())?;
-    let detector = build_detector(pipeline, model, &source, &args.set)?;
-    let min_confidence = min_confidence(detector.as_ref(), args.min_confidence)?;
-    let operating_confidence = detector.operating_confidence();
+    let detector = load_detector(pipeline, args.model.as_deref(), &args.set)?;
+    let min_confidence = min_confidence(&detector, args.min_confidence)?;
+    let model = detector.model_for_color(dataset.has_color()).clone();
     let kept = |d: &pomona_core::Detection| min_confidence.is_none_or(|c| d.confidence_at_least(c));
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("cannot create output folder {}", args.out.display()))?;
+    let name = pipeline.name();
+    let identity = RunIdentity {
+        pipeline: name,
+        model_id: &model.id,
+        min_confidence,
+    };
+    let already = prepare(&args.out, dataset.frames(), &identity)?;
     if let Some(dir) = &args.overlay {
         std::fs::create_dir_all(dir)
             .with_context(|| format!("cannot create overlay folder {}", dir.display()))?;
     }
+    let frames: Vec<&String> = dataset
+        .frames()
+        .iter()
+        .filter(|f| !(args.resume && already.contains(*f)))
+        .collect();
+    let resumed = dataset.frames().len() - frames.len();
 
-    let frames = dataset.frames();
     let pool = thread_pool(args.threads.map(|n| n as usize))?;
     let bar = progress_bar(frames.len(), "detecting");
     let started = Instant::now();
-    let name = pipeline.name();
     let kept_words = match min_confidence {
         Some(c) => format!("with confidence ≥ {c:.2}"),
         None => "scoring ≥ 0".to_owned(),
     };
-    let (results, totals) = pool.install(|| {
+    let batch = pool.install(|| {
         detect_frames(
-            detector.as_ref(),
+            &detector,
             frames.len(),
             |i| {
-                let stem = &frames[i];
+                let stem = frames[i];
                 let frame = dataset.load_frame(stem)?;
                 Ok((format!("{}/{stem}", args.data.display()), frame, ()))
             },
@@ -154,12 +178,13 @@ pub fn run_with(pipelines: &[Box<dyn Pipeline>], args: &DetectArgs) -> Result<De
                         .filter(|d| kept(d))
                         .cloned()
                         .collect(),
-                    operating_confidence,
+                    operating_confidence: result.model.operating_confidence,
                     min_confidence,
+                    model_id: Some(result.model.id.clone()),
                 };
                 pomona_io::write_json(&args.out.join(format!("{}.json", frames[i])), &record)?;
                 if let Some(dir) = &args.overlay {
-                    let (image, truth) = view_of(&dataset, &frames[i])?;
+                    let (image, truth) = view_of(&dataset, frames[i])?;
                     let shown = match min_confidence {
                         Some(_) => record.detections.clone(),
                         None => shown(&result.detections, 0.0),
@@ -178,38 +203,60 @@ pub fn run_with(pipelines: &[Box<dyn Pipeline>], args: &DetectArgs) -> Result<De
             },
             &|| bar.inc(1),
         )
-    })?;
+    });
     bar.finish_and_clear();
     let wall = started.elapsed().as_secs_f64();
-    let all: usize = results.iter().map(|(r, ())| r.detections.len()).sum();
-    let written: usize = results
+    let failures: Vec<FailedFrame> = batch
+        .failed
         .iter()
-        .map(|(r, ())| r.detections.iter().filter(|d| kept(d)).count())
+        .map(|f| FailedFrame {
+            frame: frames[f.index].clone(),
+            file: f.file().map(Path::to_owned),
+            error: error_line(&f.error),
+        })
+        .collect();
+    for f in &failures {
+        eprintln!("error: frame {}: {}", f.frame, f.error);
+    }
+    let report = write_failures(&args.out, name, frames.len(), &failures)?;
+    let all: usize = batch.done.iter().map(|(_, r, ())| r.detections.len()).sum();
+    let written: usize = batch
+        .done
+        .iter()
+        .map(|(_, r, ())| r.detections.iter().filter(|d| kept(d)).count())
         .sum();
     let summary = DetectSummary {
-        frames: totals.frames,
+        frames: batch.totals.frames,
+        resumed,
+        failed: failures.len(),
         detections: written,
-        ms_per_frame: totals.ms_per_frame(),
-        timings: totals.timings,
-        model: source,
+        ms_per_frame: batch.totals.ms_per_frame(),
+        timings: batch.totals.timings,
+        model: model.source.clone(),
     };
-    let kept_note = match (min_confidence, operating_confidence) {
+    let kept_note = match (min_confidence, model.operating_confidence) {
         (Some(c), Some(op)) if c == op => {
             format!("{written} kept at the model's operating confidence {c:.3}")
         }
         (Some(c), _) => format!("{written} kept at confidence ≥ {c:.3}"),
         (None, _) => format!(
             "all kept: the model has no confidence calibration; {} score ≥ 0",
-            results
+            batch
+                .done
                 .iter()
-                .map(|(r, ())| r.detections.iter().filter(|d| d.score >= 0.0).count())
+                .map(|(_, r, ())| r.detections.iter().filter(|d| d.score >= 0.0).count())
                 .sum::<usize>()
         ),
     };
-    warn_foreign_files(&args.out, frames);
+    warn_foreign_files(&args.out, dataset.frames());
+    let resumed_note = if resumed > 0 {
+        format!(" ({resumed} already done, skipped)")
+    } else {
+        String::new()
+    };
     println!(
-        "`{name}` ({}) made {all} detections ({kept_note}) in {} frame(s) of {} in {:.1} s; \
-         detection files in {}",
+        "`{name}` ({}) made {all} detections ({kept_note}) in {} frame(s) of {}{resumed_note} in \
+         {:.1} s; detection files in {}",
         summary.model,
         summary.frames,
         args.data.display(),
@@ -223,6 +270,14 @@ pub fn run_with(pipelines: &[Box<dyn Pipeline>], args: &DetectArgs) -> Result<De
                 "{ms:.2} ms/frame (single-frame detection time, loading and writing excluded)"
             );
         }
+    }
+    if let Some(report) = report {
+        return Err(FramesFailed {
+            failed: failures.len(),
+            total: frames.len(),
+            report,
+        }
+        .into());
     }
     Ok(summary)
 }

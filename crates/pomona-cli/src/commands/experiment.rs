@@ -35,10 +35,10 @@ use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
 
 use crate::commands::train::open_frames;
-use crate::detection_run::{build_detector, detect_frames, thread_pool, ModelSource};
-use crate::params::{self, parse_override, ParamOverride};
-use crate::pipelines;
+use crate::detection_run::{detect_frames, thread_pool};
+use crate::params;
 use crate::progress::progress_bar;
+use pomona::{Detector, ModelSource, ParamOverride};
 
 /// Arguments of `pomona experiment`.
 #[derive(Debug, Clone, clap::Args)]
@@ -100,11 +100,11 @@ pub struct ExperimentArgs {
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=1024))]
     pub threads: Option<u64>,
     /// Override a stage parameter of every trained model before detection, KEY=VALUE; repeat.
-    #[arg(long = "set", value_name = "KEY=VALUE", value_parser = parse_override)]
+    #[arg(long = "set", value_name = "KEY=VALUE")]
     pub set: Vec<ParamOverride>,
     /// Override a training parameter of the pipeline before every split's training,
     /// KEY=VALUE; repeat (for ablations that change features, e.g. the reference frame).
-    #[arg(long = "train-set", value_name = "KEY=VALUE", value_parser = parse_override)]
+    #[arg(long = "train-set", value_name = "KEY=VALUE")]
     pub train_set: Vec<ParamOverride>,
 }
 
@@ -224,7 +224,7 @@ pub struct ExperimentReport {
 /// # Errors
 /// See [`run_with`].
 pub fn run(args: &ExperimentArgs) -> Result<()> {
-    run_with(&pipelines::all(), args).map(|_| ())
+    run_with(&pomona::pipelines(), args).map(|_| ())
 }
 
 fn fmt_mean_sd(m: Option<MeanSd>, scale: f64, digits: usize, unit: &str) -> String {
@@ -443,7 +443,7 @@ pub fn run_with(
     pipelines: &[Box<dyn Pipeline>],
     args: &ExperimentArgs,
 ) -> Result<ExperimentReport> {
-    let found = pipelines::find(pipelines, &args.pipeline)?;
+    let found = pomona::find_pipeline(pipelines, &args.pipeline)?;
     let configured = params::configured(found, &args.train_set)?;
     let pipeline = configured.as_deref().unwrap_or(found);
     let config = EvalConfig {
@@ -497,22 +497,29 @@ pub fn run_with(
         let train_s = started.elapsed().as_secs_f64();
         bar.finish_and_clear();
         let operating_confidence = model.calibration.map(|c| c.operating_confidence);
-        let source = ModelSource::File(PathBuf::from(format!("<model of split {}>", k + 1)));
-        let detector = build_detector(pipeline, model, &source, &args.set)?;
+        let detector = Detector::builder_for(pipeline)
+            .model(
+                model,
+                ModelSource::InMemory(format!("the model of split {}", k + 1)),
+            )
+            .overrides(args.set.iter().cloned())
+            .build()?;
 
         let bar = progress_bar(test_set.len(), &format!("split {}: detect", k + 1));
-        let (results, totals) = pool.install(|| {
-            detect_frames(
-                detector.as_ref(),
-                test_set.len(),
-                |i| {
-                    let f = test_set.load(i)?;
-                    Ok((f.name, f.frame, f.truth))
-                },
-                |_, _| Ok(()),
-                &|| bar.inc(1),
-            )
-        })?;
+        let (results, totals) = pool
+            .install(|| {
+                detect_frames(
+                    &detector,
+                    test_set.len(),
+                    |i| {
+                        let f = test_set.load(i)?;
+                        Ok((f.name, f.frame, f.truth))
+                    },
+                    |_, _| Ok(()),
+                    &|| bar.inc(1),
+                )
+            })
+            .all_or_first_error()?;
         bar.finish_and_clear();
         all_timings.merge(&totals.timings);
         let mut inputs = Vec::with_capacity(results.len());
@@ -582,7 +589,7 @@ pub fn run_with(
         train_fraction: (plan.protocol == Protocol::RandomSplits).then_some(args.train_fraction),
         eval: config,
         kinds: args.kind.clone(),
-        set: params::to_json(&args.set),
+        set: pomona::overrides_to_json(&args.set),
         summary: SplitSummary::new(&reports),
         pooled,
         train_ms_per_frame: MeanSd::of(per_split.iter().map(|s| Some(s.train_ms_per_frame))),

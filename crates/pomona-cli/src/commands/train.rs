@@ -16,7 +16,6 @@ use pomona_pipeline::{
 };
 
 use crate::detection_run::{check_color, thread_pool};
-use crate::pipelines;
 use crate::progress::progress_bar;
 
 /// Arguments of `pomona train`.
@@ -55,8 +54,8 @@ pub struct TrainArgs {
     #[arg(long, value_name = "P")]
     pub operating_precision: Option<f64>,
     /// Override a training parameter of the pipeline, KEY=VALUE (dotted path); repeat.
-    #[arg(long = "set", value_name = "KEY=VALUE", value_parser = crate::params::parse_override)]
-    pub set: Vec<crate::params::ParamOverride>,
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub set: Vec<pomona::ParamOverride>,
 }
 
 impl TrainArgs {
@@ -124,7 +123,7 @@ pub fn open_frames(pipeline: &dyn Pipeline, data: &[PathBuf]) -> Result<DatasetF
 /// # Errors
 /// See [`run_with`].
 pub fn run(args: &TrainArgs) -> Result<()> {
-    run_with(&pipelines::all(), args).map(|_| ())
+    run_with(&pomona::pipelines(), args).map(|_| ())
 }
 
 /// Runs `pomona train` choosing the pipeline from `pipelines` (tests pass their own).
@@ -133,7 +132,7 @@ pub fn run(args: &TrainArgs) -> Result<()> {
 /// Unknown pipeline (listing the known ones), unreadable data, training failures, an unwritable
 /// model file (naming it).
 pub fn run_with(pipelines: &[Box<dyn Pipeline>], args: &TrainArgs) -> Result<TrainSummary> {
-    let found = pipelines::find(pipelines, &args.pipeline)?;
+    let found = pomona::find_pipeline(pipelines, &args.pipeline)?;
     let configured = crate::params::configured(found, &args.set)?;
     let pipeline = configured.as_deref().unwrap_or(found);
     let frames = open_frames(pipeline, &args.data)?;

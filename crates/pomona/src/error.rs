@@ -1,0 +1,79 @@
+//! The one error type of the facade: everything that can go wrong between "I have a model name
+//! or file" and "here are the detections", each variant naming the file, model or frame at fault.
+
+use pomona_io::DatasetError;
+use pomona_learn::ModelFileError;
+use pomona_pipeline::PipelineError;
+
+/// Why a detector could not be built or could not detect.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// No pipeline has this name.
+    #[error("unknown pipeline `{name}`; known pipelines: {known}")]
+    UnknownPipeline {
+        /// The name asked for.
+        name: String,
+        /// The registered names, comma-separated.
+        known: String,
+    },
+    /// The pipeline ships no built-in model, so a model file is needed.
+    #[error(
+        "pipeline `{pipeline}` has no built-in model yet; train one with \
+         `pomona train --pipeline {pipeline} --data DIR --out MODEL` and load that file"
+    )]
+    NoBuiltInModel {
+        /// Pipeline name.
+        pipeline: String,
+    },
+    /// A model file is unreadable, not a model, or made for another pipeline or version.
+    #[error(transparent)]
+    ModelFile(#[from] ModelFileError),
+    /// The model's stage parameters are rejected by its pipeline.
+    #[error("cannot build a `{pipeline}` detector from {model}: {source}")]
+    Load {
+        /// Pipeline name.
+        pipeline: String,
+        /// Where the model came from (a path or "the built-in model").
+        model: String,
+        /// The pipeline's reason.
+        source: Box<PipelineError>,
+    },
+    /// A parameter override names a key the model does not have.
+    #[error("{owner} has no parameter `{key}`; {known}")]
+    UnknownParameter {
+        /// The dotted key given.
+        key: String,
+        /// Whose parameters (for example "the model of `symmetry` (the built-in model)").
+        owner: String,
+        /// The keys there are.
+        known: String,
+    },
+    /// A parameter override has another JSON type than the value it replaces.
+    #[error("parameter `{key}` of {owner} expects {expected} (currently {current}), got {got}")]
+    ParameterType {
+        /// The dotted key given.
+        key: String,
+        /// Whose parameters.
+        owner: String,
+        /// The JSON type expected.
+        expected: &'static str,
+        /// The current value.
+        current: String,
+        /// The value given.
+        got: String,
+    },
+    /// Detection failed on a frame (for example a colour pipeline on a frame without colour).
+    #[error("`{pipeline}` detection failed: {source}")]
+    Detect {
+        /// Pipeline name.
+        pipeline: &'static str,
+        /// The stage's reason.
+        source: Box<PipelineError>,
+    },
+    /// A frame built in memory is inconsistent (image sizes, camera parameters).
+    #[error("invalid frame: {0}")]
+    Frame(#[from] pomona_core::CoreError),
+    /// A dataset or one of its frames could not be read.
+    #[error(transparent)]
+    Dataset(#[from] DatasetError),
+}

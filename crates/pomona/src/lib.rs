@@ -1,0 +1,72 @@
+//! # pomona
+//!
+//! Fruit detection in 3D for harvesting robots, as a library: load a detector (built-in or
+//! trained with `pomona train`), give it an RGB-D frame, get each fruit's centre in the camera
+//! frame (metres), its diameter and, where the method estimates them, its axis and a calibrated
+//! confidence.
+//!
+//! This crate is the facade over the workspace's layers (data model, file formats, detectors):
+//! one error type, the pipeline registry and the choice of built-in model live here, so a robot
+//! program depends on `pomona` alone. The `pomona` command-line tool is built on it.
+//!
+//! ## Detect on a dataset frame
+//! ```no_run
+//! # fn main() -> Result<(), pomona::Error> {
+//! let dataset = pomona::Dataset::open("orchard-run")?;
+//! let detector = pomona::Detector::builtin("shape-fit")?;
+//! for stem in dataset.frames() {
+//!     let frame = dataset.load_frame(stem)?;
+//!     for fruit in detector.detect(&frame)?.iter().filter(|d| detector.keeps(d)) {
+//!         println!("{stem}: {} m, {:?} m across", fruit.center_m, fruit.diameter_m);
+//!     }
+//! }
+//! # Ok(())
+//! # }
+//! ```
+//! `examples/detect_frame.rs` is the same as a program.
+//!
+//! ## Detect on your own buffers
+//! Frames are built from a camera and images in memory, for example straight from a driver:
+//! ```
+//! # fn main() -> Result<(), pomona::Error> {
+//! use pomona::{ColorImage, DepthImage, PinholeCamera, RgbdFrame};
+//!
+//! let (w, h) = (64, 48);
+//! let camera = PinholeCamera::new(w, h, 60.0, 60.0, 31.5, 23.5)?;
+//! let depth = DepthImage::from_meters(w, h, vec![0.8; (w * h) as usize])?;
+//! let color = ColorImage::from_rgb(w, h, vec![90; (3 * w * h) as usize])?;
+//! let frame = RgbdFrame::new(camera, depth, Some(color))?;
+//!
+//! let detector = pomona::Detector::builtin("symmetry")?;
+//! let (detections, timings) = detector.detect_with_timings(&frame)?;
+//! assert!(detections.is_empty(), "a flat grey wall holds no fruit");
+//! assert!(!timings.table().is_empty());
+//! # Ok(())
+//! # }
+//! ```
+//!
+//! ## What a detection holds
+//! See [`Detection`]: `center_m` (camera frame: x right, y down, z forward), `score` (raw
+//! classifier value), `confidence` (calibrated, comparable across models), `diameter_m`, and
+//! pipeline-specific fields. [`Detector::detect`] applies no threshold; [`Detector::keeps`]
+//! applies the model's operating confidence, as `pomona detect` does by default.
+
+mod detector;
+mod error;
+mod model_info;
+mod param_override;
+mod registry;
+
+pub use detector::{Detector, DetectorBuilder};
+pub use error::Error;
+pub use model_info::{ModelInfo, ModelSource};
+pub use param_override::{apply_overrides, overrides_to_json, settable_keys, ParamOverride};
+pub use registry::{find_pipeline, pipeline, pipeline_names, pipelines};
+
+pub use pomona_core::{
+    nalgebra, ColorImage, DepthImage, Detection, FrameDetections, FrameTruth, FruitTruth,
+    PinholeCamera, PixelBox, RgbdFrame,
+};
+pub use pomona_io::Dataset;
+pub use pomona_learn::ModelFile;
+pub use pomona_pipeline::{Pipeline, StageTimings};

@@ -1,0 +1,79 @@
+//! The detection pipelines this build ships, by name.
+//!
+//! Everything that picks a method by name (the facade's [`crate::Detector::builtin`], the CLI's
+//! `--pipeline`) looks it up here and knows nothing else about it. To add a detector, depend on
+//! its crate and add one line to [`pipelines`].
+
+use pomona_pipeline::Pipeline;
+
+use crate::Error;
+
+/// Every registered pipeline, in the order `pomona demo` runs them.
+pub fn pipelines() -> Vec<Box<dyn Pipeline>> {
+    vec![
+        Box::new(pomona_shapefit::ShapeFitPipeline::default()),
+        Box::new(pomona_symmetry::SymmetryPipeline::default()),
+        Box::new(pomona_symmetry::ViewerPosePipeline::default()),
+    ]
+}
+
+/// The names of `pipelines`, comma-separated (for messages).
+pub fn pipeline_names(pipelines: &[Box<dyn Pipeline>]) -> String {
+    if pipelines.is_empty() {
+        return "none are registered yet".to_owned();
+    }
+    pipelines
+        .iter()
+        .map(|p| p.name())
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// Finds the pipeline called `name` in `pipelines`.
+///
+/// # Errors
+/// [`Error::UnknownPipeline`], listing the known names.
+pub fn find_pipeline<'a>(
+    pipelines: &'a [Box<dyn Pipeline>],
+    name: &str,
+) -> Result<&'a dyn Pipeline, Error> {
+    match pipelines.iter().find(|p| p.name() == name) {
+        Some(p) => Ok(p.as_ref()),
+        None => Err(Error::UnknownPipeline {
+            name: name.to_owned(),
+            known: pipeline_names(pipelines),
+        }),
+    }
+}
+
+/// The registered pipeline called `name`.
+///
+/// # Errors
+/// [`Error::UnknownPipeline`], listing the registered names.
+pub fn pipeline(name: &str) -> Result<Box<dyn Pipeline>, Error> {
+    let mut all = pipelines();
+    match all.iter().position(|p| p.name() == name) {
+        Some(i) => Ok(all.swap_remove(i)),
+        None => Err(Error::UnknownPipeline {
+            name: name.to_owned(),
+            known: pipeline_names(&all),
+        }),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn unknown_names_list_the_known_ones() {
+        let err = pipeline("no-such-detector").err().map(|e| e.to_string());
+        let err = err.unwrap_or_default();
+        assert!(err.contains("no-such-detector"), "{err}");
+        assert!(err.contains("known pipelines"), "{err}");
+        for p in pipelines() {
+            assert!(err.contains(p.name()), "{err}");
+            assert_eq!(pipeline(p.name()).map(|q| q.name()).ok(), Some(p.name()));
+        }
+    }
+}

@@ -25,18 +25,7 @@ fn stderr(o: &Output) -> String {
 }
 
 fn shared_data(rel: &str) -> Option<PathBuf> {
-    let p = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/data")
-        .join(rel);
-    if p.exists() {
-        Some(p)
-    } else {
-        eprintln!(
-            "skipped: {} is absent (real data lives in ../shared/data)",
-            p.display()
-        );
-        None
-    }
+    pomona_test_support::shared_data(rel, "pomona-cli/tests/cli.rs")
 }
 
 /// A 4×3 dataset, one frame: depth 0.5..0.61 m with one hole, red colour.

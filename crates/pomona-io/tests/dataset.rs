@@ -9,18 +9,7 @@ use pomona_core::{ColorImage, DepthImage, FrameTruth, InstanceMask, PinholeCamer
 use pomona_io::{Dataset, DatasetError, DatasetWriter};
 
 fn shared_data(rel: &str) -> Option<PathBuf> {
-    let p = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/data")
-        .join(rel);
-    if p.exists() {
-        Some(p)
-    } else {
-        eprintln!(
-            "skipped: {} is absent (real data lives in ../shared/data)",
-            p.display()
-        );
-        None
-    }
+    pomona_test_support::shared_data(rel, "pomona-io/tests/dataset.rs")
 }
 
 #[test]

@@ -31,22 +31,10 @@ const PLY_ENCODINGS: [PlyEncoding; 3] = [
 // ---------------------------------------------------------------------------------------------
 // Helpers
 
-/// A file under `/work/shared/data/pcl`, or `None` (with the skip reason printed) when absent.
+/// A file under the real-data folder's `pcl/`, or `None` when absent (skip recorded; fails
+/// under `POMONA_REQUIRE_DATA=1`).
 fn shared_pcl(rel: &str) -> Option<PathBuf> {
-    let path = PathBuf::from(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../../shared/data/pcl/"
-    ))
-    .join(rel);
-    if path.is_file() {
-        Some(path)
-    } else {
-        eprintln!(
-            "SKIP: {} not present (shared PCL data not available)",
-            path.display()
-        );
-        None
-    }
+    pomona_test_support::shared_data(&format!("pcl/{rel}"), "pomona-io/tests/pcd_ply.rs")
 }
 
 fn bits3(p: &Point3<f32>) -> [u32; 3] {

@@ -5,7 +5,7 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used)] // test helpers outside #[test] functions
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use pomona_consensus::ShapeChoice;
 use pomona_eval::{evaluate, EvalConfig, FrameInput};
@@ -14,21 +14,7 @@ use pomona_pipeline::{DatasetFrames, FrameSource, Pipeline, StageTimings, TrainO
 use pomona_shapefit::{ShapeFitPipeline, ShapeFitStageParams};
 
 fn shared_data(rel: &str) -> Option<PathBuf> {
-    let p = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/data")
-        .join(rel);
-    if p.exists() {
-        return Some(p);
-    }
-    let reason = format!(
-        "{} is absent (real data lives in ../shared/data)",
-        p.display()
-    );
-    if std::env::var_os("POMONA_REQUIRE_DATA").is_some_and(|v| v == "1") {
-        panic!("POMONA_REQUIRE_DATA=1 but {reason}");
-    }
-    eprintln!("skipped: {reason}");
-    None
+    pomona_test_support::shared_data(rel, "pomona-shapefit/tests/ak_apples_real.rs")
 }
 
 #[test]

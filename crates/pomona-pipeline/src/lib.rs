@@ -13,13 +13,14 @@
 //! * [`train_calibrated`] / [`load_detector`]: any pipeline's training with a confidence
 //!   calibrated on held-out frames and an operating threshold, and the detector that reports it.
 //! * [`FrameSource`]: labelled frames for training, loaded lazily from datasets
-//!   ([`DatasetFrames`]) or rendered on demand ([`SyntheticFrames`]).
+//!   ([`DatasetFrames`]) or rendered on demand (`SyntheticFrames`, with the `synth` feature).
 
 mod calibration;
 mod detector;
 mod error;
 mod frame_source;
 mod stage;
+#[cfg(feature = "synth")]
 mod synthetic_frames;
 mod timings;
 mod train_params;
@@ -32,6 +33,7 @@ pub use error::PipelineError;
 pub use frame_source::{ChainedFrames, DatasetFrames, FrameSource, LabelledFrame};
 pub use pomona_learn::ModelFile;
 pub use stage::{run_stage, Stage};
+#[cfg(feature = "synth")]
 pub use synthetic_frames::SyntheticFrames;
 pub use timings::StageTimings;
 pub use train_params::{params_from_json, params_to_json};

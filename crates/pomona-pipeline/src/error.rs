@@ -37,6 +37,9 @@ pub enum PipelineError {
         /// What was missing.
         reason: String,
     },
+    /// Scoring detections against truth failed.
+    #[error("evaluating detections: {0}")]
+    Evaluation(#[from] pomona_eval::EvalError),
     /// The model's stage parameters could not be read back.
     #[error("model stage parameters: {0}")]
     StageParams(String),

@@ -12,10 +12,12 @@
 //!   [`Detector`] from one.
 //! * [`train_calibrated`] / [`load_detector`]: any pipeline's training with a confidence
 //!   calibrated on held-out frames and an operating threshold, and the detector that reports it.
+//! * [`detect_and_evaluate`]: a detector run over labelled frames and scored against their truth.
 //! * [`FrameSource`]: labelled frames for training, loaded lazily from datasets
 //!   ([`DatasetFrames`]) or rendered on demand (`SyntheticFrames`, with the `synth` feature).
 
 mod calibration;
+mod detection_evaluation;
 mod detector;
 mod error;
 mod frame_source;
@@ -28,6 +30,7 @@ mod train_params;
 pub use calibration::{
     load_detector, train_calibrated, CalibratedDetector, CalibratedTraining, CalibrationParams,
 };
+pub use detection_evaluation::{detect_and_evaluate, DetectionEvaluation};
 pub use detector::{Detector, Pipeline, TrainOptions};
 pub use error::PipelineError;
 pub use frame_source::{ChainedFrames, DatasetFrames, FrameSource, LabelledFrame};

@@ -4,11 +4,12 @@
 #![allow(clippy::unwrap_used, clippy::expect_used)] // test helpers outside #[test] functions
 
 use pomona_core::RgbdFrame;
-use pomona_eval::{evaluate, EvalConfig, FrameInput};
+use pomona_eval::EvalConfig;
 use pomona_learn::ModelFile;
 use pomona_pipeline::SyntheticFrames;
 use pomona_pipeline::{
-    Detector, FrameSource, LabelledFrame, Pipeline, PipelineError, StageTimings, TrainOptions,
+    detect_and_evaluate, Detector, FrameSource, LabelledFrame, Pipeline, PipelineError,
+    StageTimings, TrainOptions,
 };
 use pomona_shapefit::ShapeFitPipeline;
 use pomona_synth::{CameraPreset, FruitChoice, FruitKind, NoiseModel, SceneSpec};
@@ -32,28 +33,14 @@ fn frames(seed: u64, count: usize) -> SyntheticFrames {
 }
 
 fn ap(detector: &dyn Detector, test: &dyn FrameSource) -> f64 {
-    let mut inputs = Vec::new();
-    for i in 0..test.len() {
-        let lf = test.load(i).unwrap();
-        let detections = detector
-            .detect(&lf.frame, &mut StageTimings::default())
-            .unwrap();
-        // Every detection reports its fit: at least the minimum inliers, all within the 12 mm
-        // inlier threshold of the surface, so an RMS below it.
-        for d in &detections {
-            assert!(d.support_points.is_some_and(|n| n >= 30), "{d:?}");
-            assert!(d.fit_rms_m.is_some_and(|r| r > 0.0 && r <= 0.012), "{d:?}");
-        }
-        inputs.push(FrameInput {
-            frame: lf.name,
-            truth: lf.truth,
-            detections,
-        });
+    let run = detect_and_evaluate(detector, test, &EvalConfig::default()).unwrap();
+    // Every detection reports its fit: at least the minimum inliers, all within the 12 mm
+    // inlier threshold of the surface, so an RMS below it.
+    for d in run.frames.iter().flat_map(|f| &f.detections) {
+        assert!(d.support_points.is_some_and(|n| n >= 30), "{d:?}");
+        assert!(d.fit_rms_m.is_some_and(|r| r > 0.0 && r <= 0.012), "{d:?}");
     }
-    evaluate(&inputs, &spec().camera, &EvalConfig::default())
-        .unwrap()
-        .ap_voc11
-        .unwrap()
+    run.report.ap_voc11.unwrap()
 }
 
 #[test]

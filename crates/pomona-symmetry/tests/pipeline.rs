@@ -4,10 +4,10 @@
 use std::sync::OnceLock;
 
 use pomona_core::RgbdFrame;
-use pomona_eval::{evaluate, EvalConfig, FrameInput};
+use pomona_eval::EvalConfig;
 use pomona_pipeline::{
-    Detector, FrameSource, LabelledFrame, ModelFile, Pipeline, PipelineError, StageTimings,
-    SyntheticFrames, TrainOptions,
+    detect_and_evaluate, Detector, FrameSource, LabelledFrame, ModelFile, Pipeline, PipelineError,
+    StageTimings, SyntheticFrames, TrainOptions,
 };
 use pomona_symmetry::{BoxDetector, PruningState, SymmetryPipeline, ViewerPosePipeline};
 use pomona_synth::{CameraPreset, NoiseModel, SceneSpec};
@@ -48,20 +48,10 @@ fn options() -> TrainOptions {
     }
 }
 
-fn ap(detector: &dyn Detector, frames: &[LabelledFrame]) -> f64 {
-    let inputs: Vec<FrameInput> = frames
-        .iter()
-        .map(|f| FrameInput {
-            frame: f.name.clone(),
-            truth: f.truth.clone(),
-            detections: detector
-                .detect(&f.frame, &mut StageTimings::default())
-                .unwrap(),
-        })
-        .collect();
-    let cam = *frames[0].frame.camera();
-    evaluate(&inputs, &cam, &EvalConfig::default())
+fn ap(detector: &dyn Detector, frames: &dyn FrameSource) -> f64 {
+    detect_and_evaluate(detector, frames, &EvalConfig::default())
         .unwrap()
+        .report
         .ap_voc11
         .unwrap()
 }

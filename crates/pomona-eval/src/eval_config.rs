@@ -83,6 +83,22 @@ impl EvalConfig {
         }
     }
 
+    /// Where the operating point sits on a precision-recall curve over scores: the threshold
+    /// itself, or, for a confidence threshold, the lowest score it keeps in `frames` (confidence
+    /// is non-decreasing in score).
+    pub fn operating_score(&self, frames: &[crate::FrameInput]) -> f64 {
+        match self.min_confidence {
+            Some(_) => frames
+                .iter()
+                .flat_map(|f| &f.detections)
+                .filter(|d| self.keeps(d))
+                .map(|d| d.score)
+                .reduce(f64::min)
+                .unwrap_or(self.threshold),
+            None => self.threshold,
+        }
+    }
+
     /// The operating point in words, e.g. `score ≥ 0` or `confidence ≥ 0.42`.
     pub fn operating_point(&self) -> String {
         match self.min_confidence {

@@ -20,7 +20,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{bail, Context, Result};
-use pomona_core::{Detection, FrameDetections};
+use pomona_core::{Detection, FrameDetections, PinholeCamera};
 use pomona_eval::{evaluate, write_pr_plot, EvalConfig, EvalReport, FrameInput};
 use pomona_io::Dataset;
 use pomona_pipeline::Pipeline;
@@ -140,6 +140,156 @@ pub fn demo_spec(frames: u32, seed: u64) -> DatasetSpec {
     DatasetSpec::new(scene, frames, seed)
 }
 
+/// The rendered demo dataset.
+struct DemoData {
+    data_dir: PathBuf,
+    dataset: Dataset,
+    camera: PinholeCamera,
+    stems: Vec<String>,
+}
+
+/// Renders the demo scenes into `<out>/data` and opens them.
+fn render(args: &DemoArgs) -> Result<DemoData> {
+    let data_dir = args.out.join("data");
+    let mut spec = demo_spec(args.frames, args.seed);
+    spec.threads = args.threads.map(|n| n as usize);
+    let bar = progress_bar(args.frames as usize, "rendering");
+    let synth = generate_dataset(&spec, &data_dir, &|_| bar.inc(1))
+        .with_context(|| format!("rendering the demo scenes into {}", data_dir.display()))?;
+    bar.finish_and_clear();
+    println!(
+        "Rendered {} synthetic Kinect v2 frames (mixed fruit, wide domain, time-of-flight noise, seed {}) with \
+         {} visible fruit into {}",
+        synth.frames,
+        args.seed,
+        synth.fruits,
+        data_dir.display()
+    );
+    let dataset = Dataset::open(&data_dir)
+        .with_context(|| format!("cannot open dataset {}", data_dir.display()))?;
+    Ok(DemoData {
+        camera: *dataset.camera(),
+        stems: dataset.frames().to_vec(),
+        data_dir,
+        dataset,
+    })
+}
+
+/// Draws each frame's truth on its colour image into `dir` (in parallel, in the current pool).
+fn write_truth_overlays(demo: &DemoData, dir: &Path, config: &EvalConfig) -> Result<()> {
+    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    demo.stems.par_iter().try_for_each(|stem| -> Result<()> {
+        let (image, truth) = view_of(&demo.dataset, stem)?;
+        let n = truth.as_ref().map_or(0, |t| t.fruits.len());
+        write_overlay(
+            &dir.join(format!("{stem}.png")),
+            &image,
+            &demo.camera,
+            truth.as_ref(),
+            &[],
+            config.min_visibility,
+            &format!("{stem}: truth ({n} fruit)"),
+        )
+    })
+}
+
+/// Detects with `pipeline`'s built-in model on every demo frame, writes its detections, overlays
+/// and PR curve under `<out>/<pipeline>/`, prints and returns its scores.
+fn run_pipeline(demo: &DemoData, pipeline: &dyn Pipeline, out: &Path) -> Result<DemoPipeline> {
+    let name = pipeline.name();
+    let detector = load_detector(pipeline, None, &[])?;
+    let config = EvalConfig {
+        min_confidence: detector.operating_confidence(),
+        ..EvalConfig::default()
+    };
+    let det_dir = out.join(name).join("detections");
+    let ovl_dir = out.join(name).join("overlay");
+    for dir in [&det_dir, &ovl_dir] {
+        std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    }
+    let stems = &demo.stems;
+    let bar = progress_bar(stems.len(), name);
+    let (frames, totals) = detect_frames(
+        &detector,
+        stems.len(),
+        |i| {
+            let frame = demo.dataset.load_frame(&stems[i])?;
+            let truth = demo.dataset.load_truth(&stems[i])?;
+            let label = format!("{}/{}", demo.data_dir.display(), stems[i]);
+            Ok((label, frame, truth))
+        },
+        |i, result| {
+            let record = FrameDetections {
+                frame: stems[i].clone(),
+                pipeline: name.to_owned(),
+                detections: result.detections.clone(),
+                operating_confidence: result.model.operating_confidence,
+                min_confidence: None,
+                model_id: Some(result.model.id.clone()),
+            };
+            pomona_io::write_json(&det_dir.join(format!("{}.json", stems[i])), &record)?;
+            Ok(())
+        },
+        &|| bar.inc(1),
+    )
+    .all_or_first_error()?;
+    bar.finish_and_clear();
+    stems
+        .par_iter()
+        .zip(&frames)
+        .try_for_each(|(stem, (result, _))| -> Result<()> {
+            let (image, truth) = view_of(&demo.dataset, stem)?;
+            let shown: Vec<Detection> = result
+                .detections
+                .iter()
+                .filter(|d| config.keeps(d))
+                .cloned()
+                .collect();
+            let title = format!(
+                "{stem}: {name} ({} at {})",
+                shown.len(),
+                config.operating_point()
+            );
+            write_overlay(
+                &ovl_dir.join(format!("{stem}.png")),
+                &image,
+                &demo.camera,
+                truth.as_ref(),
+                &shown,
+                config.min_visibility,
+                &title,
+            )
+        })?;
+    let inputs: Vec<FrameInput> = stems
+        .iter()
+        .zip(frames)
+        .filter_map(|(stem, (result, truth))| {
+            truth.map(|truth| FrameInput {
+                frame: stem.clone(),
+                truth,
+                detections: result.detections,
+            })
+        })
+        .collect();
+    let report = evaluate(&inputs, &demo.camera, &config)?;
+    if let Some(curve) = &report.pr_curve {
+        let title = format!("{name} on {} demo frames", report.frames);
+        let marked = config.operating_score(&inputs);
+        write_pr_plot(&out.join(name).join("pr.png"), curve, &title, marked)?;
+    }
+    println!("\n### `{name}` (built-in model)\n");
+    print!("{}", report.to_markdown());
+    if let Some(ms) = totals.ms_per_frame() {
+        println!("detection: {ms:.1} ms/frame");
+    }
+    Ok(DemoPipeline {
+        pipeline: name.to_owned(),
+        detections: totals.detections,
+        detect_ms_per_frame: totals.ms_per_frame(),
+        report,
+    })
+}
+
 /// Runs `pomona demo` with the registered pipelines.
 ///
 /// # Errors
@@ -156,163 +306,20 @@ pub fn run(args: &DemoArgs) -> Result<()> {
 pub fn run_with(pipelines: &[Box<dyn Pipeline>], args: &DemoArgs) -> Result<DemoReport> {
     let started = Instant::now();
     prepare_output(&args.out, pipelines)?;
-    let data_dir = args.out.join("data");
-    let mut spec = demo_spec(args.frames, args.seed);
-    spec.threads = args.threads.map(|n| n as usize);
-    let pool = thread_pool(spec.threads)?;
-
-    let bar = progress_bar(args.frames as usize, "rendering");
-    let synth = generate_dataset(&spec, &data_dir, &|_| bar.inc(1))
-        .with_context(|| format!("rendering the demo scenes into {}", data_dir.display()))?;
-    bar.finish_and_clear();
-    println!(
-        "Rendered {} synthetic Kinect v2 frames (mixed fruit, wide domain, time-of-flight noise, seed {}) with \
-         {} visible fruit into {}",
-        synth.frames,
-        args.seed,
-        synth.fruits,
-        data_dir.display()
-    );
-
-    let dataset = Dataset::open(&data_dir)
-        .with_context(|| format!("cannot open dataset {}", data_dir.display()))?;
-    let camera = *dataset.camera();
-    let stems = dataset.frames().to_vec();
+    let pool = thread_pool(args.threads.map(|n| n as usize))?;
+    let demo = render(args)?;
     let config = EvalConfig::default();
-
     let overlay_dir = args.out.join("overlay");
-    std::fs::create_dir_all(&overlay_dir)
-        .with_context(|| format!("cannot create {}", overlay_dir.display()))?;
-    let load_view = |stem: &str| view_of(&dataset, stem);
-    pool.install(|| {
-        stems.par_iter().try_for_each(|stem| -> Result<()> {
-            let (image, truth) = load_view(stem)?;
-            let n = truth.as_ref().map_or(0, |t| t.fruits.len());
-            write_overlay(
-                &overlay_dir.join(format!("{stem}.png")),
-                &image,
-                &camera,
-                truth.as_ref(),
-                &[],
-                config.min_visibility,
-                &format!("{stem}: truth ({n} fruit)"),
-            )
-        })
-    })?;
+    pool.install(|| write_truth_overlays(&demo, &overlay_dir, &config))?;
 
     let mut results = Vec::new();
     let mut without = Vec::new();
     for pipeline in pipelines {
-        let name = pipeline.name();
         if pipeline.default_model().is_none() {
-            without.push(name.to_owned());
+            without.push(pipeline.name().to_owned());
             continue;
         }
-        let detector = load_detector(pipeline.as_ref(), None, &[])?;
-        let operating_confidence = detector.operating_confidence();
-        let config = EvalConfig {
-            min_confidence: operating_confidence,
-            ..config
-        };
-        let det_dir = args.out.join(name).join("detections");
-        let ovl_dir = args.out.join(name).join("overlay");
-        for dir in [&det_dir, &ovl_dir] {
-            std::fs::create_dir_all(dir)
-                .with_context(|| format!("cannot create {}", dir.display()))?;
-        }
-        let bar = progress_bar(stems.len(), name);
-        let (frames, totals) = pool
-            .install(|| {
-                detect_frames(
-                    &detector,
-                    stems.len(),
-                    |i| {
-                        let frame = dataset.load_frame(&stems[i])?;
-                        let truth = dataset.load_truth(&stems[i])?;
-                        Ok((format!("{}/{}", data_dir.display(), stems[i]), frame, truth))
-                    },
-                    |i, result| {
-                        let record = FrameDetections {
-                            frame: stems[i].clone(),
-                            pipeline: name.to_owned(),
-                            detections: result.detections.clone(),
-                            operating_confidence,
-                            min_confidence: None,
-                            model_id: Some(result.model.id.clone()),
-                        };
-                        pomona_io::write_json(
-                            &det_dir.join(format!("{}.json", stems[i])),
-                            &record,
-                        )?;
-                        Ok(())
-                    },
-                    &|| bar.inc(1),
-                )
-            })
-            .all_or_first_error()?;
-        bar.finish_and_clear();
-        pool.install(|| {
-            stems
-                .par_iter()
-                .zip(&frames)
-                .try_for_each(|(stem, (result, _))| -> Result<()> {
-                    let (image, truth) = load_view(stem)?;
-                    let shown: Vec<Detection> = result
-                        .detections
-                        .iter()
-                        .filter(|d| config.keeps(d))
-                        .cloned()
-                        .collect();
-                    write_overlay(
-                        &ovl_dir.join(format!("{stem}.png")),
-                        &image,
-                        &camera,
-                        truth.as_ref(),
-                        &shown,
-                        config.min_visibility,
-                        &format!(
-                            "{stem}: {name} ({} at {})",
-                            shown.len(),
-                            config.operating_point()
-                        ),
-                    )
-                })
-        })?;
-        let inputs: Vec<FrameInput> = stems
-            .iter()
-            .zip(frames)
-            .filter_map(|(stem, (result, truth))| {
-                truth.map(|truth| FrameInput {
-                    frame: stem.clone(),
-                    truth,
-                    detections: result.detections,
-                })
-            })
-            .collect();
-        let report = evaluate(&inputs, &camera, &config)?;
-        if let Some(curve) = &report.pr_curve {
-            let title = format!("{name} on {} demo frames", report.frames);
-            // The curve is over scores: mark the lowest score at the operating point.
-            let marked = inputs
-                .iter()
-                .flat_map(|f| &f.detections)
-                .filter(|d| config.keeps(d))
-                .map(|d| d.score)
-                .reduce(f64::min)
-                .unwrap_or(config.threshold);
-            write_pr_plot(&args.out.join(name).join("pr.png"), curve, &title, marked)?;
-        }
-        println!("\n### `{name}` (built-in model)\n");
-        print!("{}", report.to_markdown());
-        if let Some(ms) = totals.ms_per_frame() {
-            println!("detection: {ms:.1} ms/frame");
-        }
-        results.push(DemoPipeline {
-            pipeline: name.to_owned(),
-            detections: totals.detections,
-            detect_ms_per_frame: totals.ms_per_frame(),
-            report,
-        });
+        results.push(pool.install(|| run_pipeline(&demo, pipeline.as_ref(), &args.out))?);
     }
 
     let report = DemoReport {
@@ -339,7 +346,7 @@ pub fn run_with(pipelines: &[Box<dyn Pipeline>], args: &DemoArgs) -> Result<Demo
         println!(
             "\nNo detector model is embedded yet: {registered}. The dataset and truth overlays \
              were written; train a model with `pomona train` and run `pomona detect` on {}.",
-            data_dir.display()
+            demo.data_dir.display()
         );
     }
     println!(

@@ -5,7 +5,7 @@
 //! The semantics (greedy matching within a 3D tolerance, ignored low-visibility truth, 2D-box
 //! truth, incomplete frames) live in `pomona-eval`; this module only reads files and reports.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
 use pomona_eval::{evaluate, load_detections, write_pr_plot, DetectionSet, EvalConfig, FrameInput};
@@ -74,6 +74,65 @@ fn warn_frames(frames: &[String], what: &str) {
     );
 }
 
+/// Pairs each frame that has truth with its detections (taken out of `detections`), keeping
+/// only truth of `kinds` when given; warns about frames without truth.
+///
+/// # Errors
+/// Unreadable truth, no truth object of the requested kinds, or no frame with truth.
+fn scored_frames(
+    dataset: &Dataset,
+    detections: &mut DetectionSet,
+    kinds: &[String],
+    data: &Path,
+) -> Result<Vec<FrameInput>> {
+    let mut frames = Vec::new();
+    let mut without_truth = Vec::new();
+    let (mut kept, mut left_out) = (0usize, 0usize);
+    for frame in dataset.frames() {
+        let Some(mut truth) = dataset.load_truth(frame)? else {
+            without_truth.push(frame.clone());
+            continue;
+        };
+        if !kinds.is_empty() {
+            let before = truth.fruits.len();
+            truth.fruits.retain(|f| kinds.contains(&f.kind));
+            kept += truth.fruits.len();
+            left_out += before - truth.fruits.len();
+        }
+        let detections = detections
+            .by_frame
+            .remove(frame)
+            .map(|d| d.detections)
+            .unwrap_or_default();
+        frames.push(FrameInput {
+            frame: frame.clone(),
+            truth,
+            detections,
+        });
+    }
+    warn_frames(&without_truth, "have no truth file and are not evaluated");
+    if !kinds.is_empty() {
+        eprintln!(
+            "evaluating kind(s) {}: {kept} truth object(s) kept, {left_out} of other kinds left out",
+            kinds.join(", ")
+        );
+        if kept == 0 {
+            bail!(
+                "{}: no truth object has kind {} (check `pomona info`)",
+                data.display(),
+                kinds.join(" or ")
+            );
+        }
+    }
+    if frames.is_empty() {
+        bail!(
+            "{}: no frame has a truth file (truth/<frame>.json), nothing to evaluate",
+            data.display()
+        );
+    }
+    Ok(frames)
+}
+
 /// Runs `pomona eval`.
 ///
 /// # Errors
@@ -120,52 +179,7 @@ pub fn run(args: &EvalArgs) -> Result<()> {
         );
     }
 
-    let mut frames = Vec::new();
-    let mut without_truth = Vec::new();
-    let (mut kept, mut left_out) = (0usize, 0usize);
-    for frame in dataset.frames() {
-        let Some(mut truth) = dataset.load_truth(frame)? else {
-            without_truth.push(frame.clone());
-            continue;
-        };
-        if !args.kind.is_empty() {
-            let before = truth.fruits.len();
-            truth.fruits.retain(|f| args.kind.contains(&f.kind));
-            kept += truth.fruits.len();
-            left_out += before - truth.fruits.len();
-        }
-        let detections = detections
-            .by_frame
-            .remove(frame)
-            .map(|d| d.detections)
-            .unwrap_or_default();
-        frames.push(FrameInput {
-            frame: frame.clone(),
-            truth,
-            detections,
-        });
-    }
-    warn_frames(&without_truth, "have no truth file and are not evaluated");
-    if !args.kind.is_empty() {
-        eprintln!(
-            "evaluating kind(s) {}: {kept} truth object(s) kept, {left_out} of other kinds left out",
-            args.kind.join(", ")
-        );
-        if kept == 0 {
-            bail!(
-                "{}: no truth object has kind {} (check `pomona info`)",
-                args.data.display(),
-                args.kind.join(" or ")
-            );
-        }
-    }
-    if frames.is_empty() {
-        bail!(
-            "{}: no frame has a truth file (truth/<frame>.json), nothing to evaluate",
-            args.data.display()
-        );
-    }
-
+    let frames = scored_frames(&dataset, &mut detections, &args.kind, &args.data)?;
     let report = evaluate(&frames, dataset.camera(), &config)?;
     if let Some(path) = &args.json {
         pomona_io::write_json(path, &report)?;
@@ -182,18 +196,7 @@ pub fn run(args: &EvalArgs) -> Result<()> {
                     },
                     report.frames
                 );
-                // The curve is over scores; a confidence threshold is marked at the lowest score
-                // it keeps (confidence is non-decreasing in score).
-                let marked = match config.min_confidence {
-                    Some(_) => frames
-                        .iter()
-                        .flat_map(|f| &f.detections)
-                        .filter(|d| config.keeps(d))
-                        .map(|d| d.score)
-                        .reduce(f64::min)
-                        .unwrap_or(config.threshold),
-                    None => config.threshold,
-                };
+                let marked = config.operating_score(&frames);
                 write_pr_plot(path, curve, &title, marked)?;
             }
             None => eprintln!(

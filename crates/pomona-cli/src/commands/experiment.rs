@@ -434,6 +434,131 @@ fn frame_name(frames: &DatasetFrames, i: usize, several: bool) -> String {
     }
 }
 
+/// What every split of an experiment shares.
+struct Splits<'a> {
+    pipeline: &'a dyn Pipeline,
+    args: &'a ExperimentArgs,
+    plan: &'a Plan,
+    calibration: CalibrationParams,
+    config: EvalConfig,
+    camera: PinholeCamera,
+}
+
+impl Splits<'_> {
+    /// Split `k`: trains a calibrated model on `train_idx`, detects on `test_idx` and scores at
+    /// the model's operating confidence; returns the split's record, its scored frames (for the
+    /// pooled report) and its detection stage times.
+    fn split(
+        &self,
+        k: usize,
+        train_idx: &[usize],
+        test_idx: &[usize],
+    ) -> Result<(SplitRecord, Vec<FrameInput>, StageTimings)> {
+        let (args, plan, pipeline) = (self.args, self.plan, self.pipeline);
+        let train_set = plan.train.subset(train_idx);
+        let test_set = plan.test.subset(test_idx);
+        let options = TrainOptions {
+            seed: args.seed.wrapping_add(k as u64),
+            folds: args.folds as usize,
+            full_grid: args.full_grid,
+        };
+        let bar = progress_bar(train_set.len(), &format!("split {}: train", k + 1));
+        let progress = |done: usize, total: usize| {
+            bar.set_length(total as u64);
+            bar.set_position(done as u64);
+        };
+        let started = Instant::now();
+        let trained =
+            train_calibrated(pipeline, &train_set, &options, &self.calibration, &progress)
+                .with_context(|| format!("training `{}` on split {}", pipeline.name(), k + 1))?;
+        if let (Some(why), true) = (&trained.not_calibrated, self.calibration.folds > 0) {
+            eprintln!("split {}: no confidence calibration: {why}", k + 1);
+        }
+        let model: ModelFile = trained.model;
+        let train_s = started.elapsed().as_secs_f64();
+        bar.finish_and_clear();
+        let operating_confidence = model.calibration.map(|c| c.operating_confidence);
+        let detector = Detector::builder_for(pipeline)
+            .model(
+                model,
+                ModelSource::InMemory(format!("the model of split {}", k + 1)),
+            )
+            .overrides(args.set.iter().cloned())
+            .build()?;
+
+        let bar = progress_bar(test_set.len(), &format!("split {}: detect", k + 1));
+        let (results, totals) = detect_frames(
+            &detector,
+            test_set.len(),
+            |i| {
+                let f = test_set.load(i)?;
+                Ok((f.name, f.frame, f.truth))
+            },
+            |_, _| Ok(()),
+            &|| bar.inc(1),
+        )
+        .all_or_first_error()?;
+        bar.finish_and_clear();
+        let several_test = plan.test_data.len() > 1;
+        let inputs: Vec<FrameInput> = results
+            .into_iter()
+            .zip(test_idx)
+            .map(|((r, mut truth), &i)| {
+                if !args.kind.is_empty() {
+                    truth.fruits.retain(|f| args.kind.contains(&f.kind));
+                }
+                FrameInput {
+                    frame: frame_name(&plan.test, i, several_test),
+                    truth,
+                    detections: r.detections,
+                }
+            })
+            .collect();
+        let split_config = EvalConfig {
+            min_confidence: operating_confidence,
+            ..self.config
+        };
+        let report = evaluate(&inputs, &self.camera, &split_config)?;
+        let fmt = |v: Option<f64>| v.map_or_else(|| "n/a".into(), |v| format!("{v:.3}"));
+        eprintln!(
+            "split {}/{}: trained on {} frames in {:.1} s{}, tested on {}: AP {} (VOC11 {}), P {}, R {}",
+            k + 1,
+            plan.splits.len(),
+            train_idx.len(),
+            train_s,
+            operating_confidence.map_or(String::new(), |c| format!(" (operating confidence {c:.3})")),
+            test_idx.len(),
+            fmt(report.ap),
+            fmt(report.ap_voc11),
+            fmt(report.precision),
+            fmt(report.recall)
+        );
+        let several_train = plan.train_data.len() > 1;
+        let record = SplitRecord {
+            split: k as u64,
+            train_frames: train_idx
+                .iter()
+                .map(|&i| frame_name(&plan.train, i, several_train))
+                .collect(),
+            test_frames: test_idx
+                .iter()
+                .map(|&i| frame_name(&plan.test, i, several_test))
+                .collect(),
+            train_ms_per_frame: 1e3 * train_s / train_idx.len().max(1) as f64,
+            operating_confidence,
+            detect_ms_per_frame: totals.ms_per_frame(),
+            stage_ms: totals
+                .timings
+                .entries()
+                .iter()
+                .map(|&(s, d, runs)| (s.to_owned(), 1e3 * d.as_secs_f64() / f64::from(runs.max(1))))
+                .collect(),
+            report,
+        };
+        Ok((record, inputs, totals.timings))
+    }
+}
+
 /// Runs `pomona experiment` choosing the pipeline from `pipelines` (tests pass their own).
 ///
 /// # Errors
@@ -464,117 +589,26 @@ pub fn run_with(
         Some((ds, _)) => *ds.camera(),
         None => bail!("{}: no labelled frames", dirs(&plan.test_data)),
     };
-    let several_train = plan.train_data.len() > 1;
-    let several_test = plan.test_data.len() > 1;
     let pool = thread_pool(args.threads.map(|n| n as usize))?;
-    let n_splits = plan.splits.len();
-
+    let run = Splits {
+        pipeline,
+        args,
+        plan: &plan,
+        calibration,
+        config,
+        camera,
+    };
     let mut per_split = Vec::new();
     let mut pooled_inputs = Vec::new();
     let mut all_timings = StageTimings::default();
     for (k, (train_idx, test_idx)) in plan.splits.iter().enumerate() {
-        let k = k as u64;
-        let train_set = plan.train.subset(train_idx);
-        let test_set = plan.test.subset(test_idx);
-        let options = TrainOptions {
-            seed: args.seed.wrapping_add(k),
-            folds: args.folds as usize,
-            full_grid: args.full_grid,
-        };
-        let bar = progress_bar(train_set.len(), &format!("split {}: train", k + 1));
-        let progress = |done: usize, total: usize| {
-            bar.set_length(total as u64);
-            bar.set_position(done as u64);
-        };
-        let started = Instant::now();
-        let trained = pool
-            .install(|| train_calibrated(pipeline, &train_set, &options, &calibration, &progress))
-            .with_context(|| format!("training `{}` on split {}", pipeline.name(), k + 1))?;
-        if let (Some(why), true) = (&trained.not_calibrated, calibration.folds > 0) {
-            eprintln!("split {}: no confidence calibration: {why}", k + 1);
-        }
-        let model: ModelFile = trained.model;
-        let train_s = started.elapsed().as_secs_f64();
-        bar.finish_and_clear();
-        let operating_confidence = model.calibration.map(|c| c.operating_confidence);
-        let detector = Detector::builder_for(pipeline)
-            .model(
-                model,
-                ModelSource::InMemory(format!("the model of split {}", k + 1)),
-            )
-            .overrides(args.set.iter().cloned())
-            .build()?;
-
-        let bar = progress_bar(test_set.len(), &format!("split {}: detect", k + 1));
-        let (results, totals) = pool
-            .install(|| {
-                detect_frames(
-                    &detector,
-                    test_set.len(),
-                    |i| {
-                        let f = test_set.load(i)?;
-                        Ok((f.name, f.frame, f.truth))
-                    },
-                    |_, _| Ok(()),
-                    &|| bar.inc(1),
-                )
-            })
-            .all_or_first_error()?;
-        bar.finish_and_clear();
-        all_timings.merge(&totals.timings);
-        let mut inputs = Vec::with_capacity(results.len());
-        for (i, (r, mut truth)) in results.into_iter().enumerate() {
-            if !args.kind.is_empty() {
-                truth.fruits.retain(|f| args.kind.contains(&f.kind));
-            }
-            inputs.push(FrameInput {
-                frame: frame_name(&plan.test, test_idx[i], several_test),
-                truth,
-                detections: r.detections,
-            });
-        }
-        let split_config = EvalConfig {
-            min_confidence: operating_confidence,
-            ..config
-        };
-        let report = evaluate(&inputs, &camera, &split_config)?;
+        let (record, inputs, timings) = pool.install(|| run.split(k, train_idx, test_idx))?;
+        all_timings.merge(&timings);
         if plan.protocol != Protocol::RandomSplits {
-            pooled_inputs.extend(inputs.into_iter().map(|f| (f, operating_confidence)));
+            let op = record.operating_confidence;
+            pooled_inputs.extend(inputs.into_iter().map(|f| (f, op)));
         }
-        let fmt = |v: Option<f64>| v.map_or_else(|| "n/a".into(), |v| format!("{v:.3}"));
-        eprintln!(
-            "split {}/{n_splits}: trained on {} frames in {:.1} s{}, tested on {}: AP {} (VOC11 {}), P {}, R {}",
-            k + 1,
-            train_idx.len(),
-            train_s,
-            operating_confidence.map_or(String::new(), |c| format!(" (operating confidence {c:.3})")),
-            test_idx.len(),
-            fmt(report.ap),
-            fmt(report.ap_voc11),
-            fmt(report.precision),
-            fmt(report.recall)
-        );
-        per_split.push(SplitRecord {
-            split: k,
-            train_frames: train_idx
-                .iter()
-                .map(|&i| frame_name(&plan.train, i, several_train))
-                .collect(),
-            test_frames: test_idx
-                .iter()
-                .map(|&i| frame_name(&plan.test, i, several_test))
-                .collect(),
-            train_ms_per_frame: 1e3 * train_s / train_idx.len().max(1) as f64,
-            operating_confidence,
-            detect_ms_per_frame: totals.ms_per_frame(),
-            stage_ms: totals
-                .timings
-                .entries()
-                .iter()
-                .map(|&(s, d, runs)| (s.to_owned(), 1e3 * d.as_secs_f64() / f64::from(runs.max(1))))
-                .collect(),
-            report,
-        });
+        per_split.push(record);
     }
 
     let pooled = pooled_report(pooled_inputs, &camera, &config)?;

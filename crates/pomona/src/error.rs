@@ -5,7 +5,15 @@ use pomona_io::DatasetError;
 use pomona_learn::ModelFileError;
 use pomona_pipeline::PipelineError;
 
-/// Why a detector could not be built or could not detect.
+/// Why a detector could not be built or could not detect. Every message names the pipeline,
+/// model file, parameter or dataset file at fault.
+///
+/// ```
+/// match pomona::Detector::builtin("apple-finder") {
+///     Err(pomona::Error::UnknownPipeline { known, .. }) => assert!(known.contains("shape-fit")),
+///     other => panic!("expected an unknown-pipeline error, got {other:?}"),
+/// }
+/// ```
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
     /// No pipeline has this name.

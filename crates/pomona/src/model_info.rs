@@ -11,7 +11,7 @@ use std::path::PathBuf;
 
 use pomona_learn::ModelFile;
 
-/// Where a model came from, for messages and reports.
+/// Where a model came from, for messages and reports (see [`ModelInfo`] for an example).
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum ModelSource {
     /// A model file on disk.
@@ -36,6 +36,15 @@ impl fmt::Display for ModelSource {
 }
 
 /// A loaded model's provenance and operating point.
+///
+/// ```
+/// let detector = pomona::Detector::builtin("shape-fit")?;
+/// let model = detector.model();
+/// assert_eq!(model.source, pomona::ModelSource::BuiltIn);
+/// assert_eq!(model.id.len(), 16);
+/// assert!(model.operating_confidence.is_some(), "built-in models are calibrated");
+/// # Ok::<(), pomona::Error>(())
+/// ```
 #[derive(Debug, Clone, PartialEq)]
 pub struct ModelInfo {
     /// Where it came from.

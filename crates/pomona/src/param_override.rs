@@ -16,7 +16,15 @@ use crate::Error;
 /// Keys listed in an unknown-key message before the rest are only counted.
 const MAX_LISTED: usize = 60;
 
-/// One stage-parameter override: a dotted key and its new value.
+/// One stage-parameter override: a dotted key and its new value. Give them to
+/// [`crate::DetectorBuilder::overrides`] (or one at a time with
+/// [`crate::DetectorBuilder::set`]).
+///
+/// ```
+/// let o: pomona::ParamOverride = "highlight.enabled=false".parse().unwrap();
+/// assert_eq!(o, pomona::ParamOverride::new("highlight.enabled", false));
+/// assert!("no-equals-sign".parse::<pomona::ParamOverride>().is_err());
+/// ```
 #[derive(Debug, Clone, PartialEq)]
 pub struct ParamOverride {
     /// Dotted path into `stage_params`, e.g. `msac.iterations`.
@@ -58,6 +66,11 @@ impl FromStr for ParamOverride {
 }
 
 /// The overrides as one JSON object (dotted keys kept as they are), for reports.
+///
+/// ```
+/// let json = pomona::overrides_to_json(&[pomona::ParamOverride::new("a.b", 1)]);
+/// assert_eq!(json.to_string(), r#"{"a.b":1}"#);
+/// ```
 pub fn overrides_to_json(overrides: &[ParamOverride]) -> Value {
     Value::Object(
         overrides
@@ -95,7 +108,13 @@ fn leaf_keys(v: &Value, prefix: &str, out: &mut Vec<String>) {
     }
 }
 
-/// Every settable key of `params` (dotted paths to non-object values).
+/// Every settable key of `params` (dotted paths to non-object values): what a model's
+/// `stage_params` offer to [`crate::DetectorBuilder::set`].
+///
+/// ```
+/// let params = serde_json::json!({"msac": {"iterations": 500}, "pruning": true});
+/// assert_eq!(pomona::settable_keys(&params), ["msac.iterations", "pruning"]);
+/// ```
 pub fn settable_keys(params: &Value) -> Vec<String> {
     let mut keys = Vec::new();
     leaf_keys(params, "", &mut keys);
@@ -104,6 +123,16 @@ pub fn settable_keys(params: &Value) -> Vec<String> {
 
 /// Applies `overrides` in order to `params`; `what` names the parameters' owner in messages
 /// ("the model of `shape-fit` (the built-in model)").
+///
+/// ```
+/// let mut params = serde_json::json!({"msac": {"iterations": 500}});
+/// let set = [pomona::ParamOverride::new("msac.iterations", 100)];
+/// pomona::apply_overrides(&mut params, &set, "my model")?;
+/// assert_eq!(params["msac"]["iterations"], 100);
+/// let typo = [pomona::ParamOverride::new("msac.iteration", 100)];
+/// assert!(pomona::apply_overrides(&mut params, &typo, "my model").is_err());
+/// # Ok::<(), pomona::Error>(())
+/// ```
 ///
 /// # Errors
 /// [`Error::UnknownParameter`] for a key that does not exist (the message lists the keys that

@@ -9,6 +9,11 @@ use pomona_pipeline::Pipeline;
 use crate::Error;
 
 /// Every registered pipeline, in the order `pomona demo` runs them.
+///
+/// ```
+/// let names: Vec<&str> = pomona::pipelines().iter().map(|p| p.name()).collect();
+/// assert_eq!(names, ["shape-fit", "symmetry", "viewer-pose"]);
+/// ```
 pub fn pipelines() -> Vec<Box<dyn Pipeline>> {
     vec![
         Box::new(pomona_shapefit::ShapeFitPipeline::default()),
@@ -18,6 +23,13 @@ pub fn pipelines() -> Vec<Box<dyn Pipeline>> {
 }
 
 /// The names of `pipelines`, comma-separated (for messages).
+///
+/// ```
+/// assert_eq!(
+///     pomona::pipeline_names(&pomona::pipelines()),
+///     "shape-fit, symmetry, viewer-pose"
+/// );
+/// ```
 pub fn pipeline_names(pipelines: &[Box<dyn Pipeline>]) -> String {
     if pipelines.is_empty() {
         return "none are registered yet".to_owned();
@@ -29,7 +41,14 @@ pub fn pipeline_names(pipelines: &[Box<dyn Pipeline>]) -> String {
         .join(", ")
 }
 
-/// Finds the pipeline called `name` in `pipelines`.
+/// Finds the pipeline called `name` in `pipelines` (a list of your own, or [`pipelines`]).
+///
+/// ```
+/// let all = pomona::pipelines();
+/// assert!(pomona::find_pipeline(&all, "symmetry")?.needs_color() == false);
+/// assert!(pomona::find_pipeline(&all, "symetry").is_err());
+/// # Ok::<(), pomona::Error>(())
+/// ```
 ///
 /// # Errors
 /// [`Error::UnknownPipeline`], listing the known names.
@@ -46,7 +65,14 @@ pub fn find_pipeline<'a>(
     }
 }
 
-/// The registered pipeline called `name`.
+/// The registered pipeline called `name` (to train with, for example; to detect, use
+/// [`crate::Detector::builtin`]).
+///
+/// ```
+/// let shape_fit = pomona::pipeline("shape-fit")?;
+/// assert!(shape_fit.default_model().is_some());
+/// # Ok::<(), pomona::Error>(())
+/// ```
 ///
 /// # Errors
 /// [`Error::UnknownPipeline`], listing the registered names.

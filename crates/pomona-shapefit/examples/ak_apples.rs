@@ -18,9 +18,13 @@ use pomona_pipeline::{DatasetFrames, FrameSource, Pipeline, StageTimings, TrainO
 use pomona_shapefit::ShapeFitPipeline;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let root = std::env::args()
-        .nth(1)
+    let mut args = std::env::args().skip(1);
+    let root = args
+        .next()
         .unwrap_or_else(|| "../shared/data/ak-apples".into());
+    if let Some(extra) = args.next() {
+        return Err(format!("unexpected argument `{extra}`; usage: ak_apples [DATASET]").into());
+    }
     let all = DatasetFrames::new(vec![Dataset::open(&root)?]);
     let mut pipeline = ShapeFitPipeline::default();
     pipeline.params.shapes.shapes = pomona_consensus::ShapeChoice::Sphere;

@@ -25,25 +25,18 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut pipeline_early_stop = None;
     let args: Vec<String> = std::env::args().skip(1).collect();
     let arg = |i: usize, default: &str| args.get(i).cloned().unwrap_or_else(|| default.to_owned());
-    let fruit = match arg(0, "pepper").as_str() {
-        "mixed" => FruitChoice::Mixed,
-        "eggplant" => FruitChoice::Only(FruitKind::Eggplant),
-        "guava" => FruitChoice::Only(FruitKind::Guava),
-        "apple" => FruitChoice::Only(FruitKind::Apple),
-        "orange" => FruitChoice::Only(FruitKind::Orange),
-        _ => FruitChoice::Only(FruitKind::Pepper),
-    };
-    let noise = match arg(3, "tof").as_str() {
-        "none" => NoiseModel::None,
-        "low" => NoiseModel::Low,
-        _ => NoiseModel::Tof,
-    };
+    let fruit: FruitChoice = arg(0, "pepper").parse()?;
+    let noise: NoiseModel = arg(3, "tof").parse()?;
+    if args.len() > 4 {
+        return Err(format!("unexpected arguments after the fourth: {:?}", &args[4..]).into());
+    }
     if let Ok(c) = std::env::var("EARLY_STOP") {
         pipeline_early_stop = Some(c.parse::<f64>()?);
     }
-    let max_points: Option<usize> = std::env::var("GPCD_POINTS")
-        .ok()
-        .and_then(|s| s.parse().ok());
+    let max_points: Option<usize> = match std::env::var("GPCD_POINTS") {
+        Ok(s) => Some(s.parse().map_err(|e| format!("GPCD_POINTS={s}: {e}"))?),
+        Err(_) => None,
+    };
     let n_train: usize = arg(1, "40").parse()?;
     let n_test: usize = arg(2, "20").parse()?;
     let spec = SceneSpec {
@@ -74,15 +67,25 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     if pipeline_early_stop.is_some() {
         pipeline.params.shapes.msac.early_stop_confidence = pipeline_early_stop;
     }
-    if std::env::var("LABEL_RULE").is_ok_and(|r| r == "mask-majority") {
-        pipeline.params.label_rule = pomona_shapefit::LabelRule::MaskMajority;
+    match std::env::var("LABEL_RULE").as_deref() {
+        Err(_) => {}
+        Ok("mask-majority") => {
+            pipeline.params.label_rule = pomona_shapefit::LabelRule::MaskMajority
+        }
+        Ok(other) => {
+            return Err(format!("LABEL_RULE={other}: only `mask-majority` is known").into())
+        }
     }
-    if std::env::var("CLASS_WEIGHTS").is_ok_and(|r| r == "equal") {
-        pipeline.params.class_weights = pomona_learn::ClassWeights::Fixed {
-            positive: 1.0,
-            negative: 1.0,
-        };
-        pipeline.params.cv_metric = pomona_learn::CvMetric::Accuracy;
+    match std::env::var("CLASS_WEIGHTS").as_deref() {
+        Err(_) => {}
+        Ok("equal") => {
+            pipeline.params.class_weights = pomona_learn::ClassWeights::Fixed {
+                positive: 1.0,
+                negative: 1.0,
+            };
+            pipeline.params.cv_metric = pomona_learn::CvMetric::Accuracy;
+        }
+        Ok(other) => return Err(format!("CLASS_WEIGHTS={other}: only `equal` is known").into()),
     }
     if let Ok(m) = std::env::var("MAX_SHAPES") {
         pipeline.params.shapes.limits.max_shapes = m.parse()?;

@@ -55,11 +55,16 @@ impl FrameSource for WithoutColor<'_> {
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let mut args = std::env::args().skip(1);
     let dir = std::path::PathBuf::from(
-        std::env::args()
-            .nth(1)
+        args.next()
             .unwrap_or_else(|| "crates/pomona-shapefit/models".into()),
     );
+    if let Some(extra) = args.next() {
+        return Err(
+            format!("unexpected argument `{extra}`; usage: train_default_model [DIR]").into(),
+        );
+    }
     let rendered = ChainedFrames(
         CAMERAS
             .iter()

@@ -51,6 +51,7 @@
 mod backdrop;
 mod background;
 mod blush;
+mod by_name;
 mod camera_preset;
 mod dataset;
 mod depth_noise;

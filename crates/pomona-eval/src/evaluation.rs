@@ -45,7 +45,8 @@ fn ratio(num: usize, den: usize) -> Option<f64> {
 /// Evaluates `frames` seen by `camera` (used to project detections for 2D-box truth).
 ///
 /// # Errors
-/// [`EvalError::InvalidParameter`] for an invalid `config`.
+/// [`EvalError::InvalidParameter`] for an invalid `config`; [`EvalError::MissingConfidence`]
+/// when `config` thresholds confidence and a detection has none.
 pub fn evaluate(
     frames: &[FrameInput],
     camera: &PinholeCamera,
@@ -62,14 +63,33 @@ pub fn evaluate(
             });
         }
     }
-    let mut per_frame = Vec::with_capacity(frames.len());
-    let mut scored = Vec::new();
-    let mut center_errors = Vec::new();
-    let mut diameter_errors = Vec::new();
-    let (mut fruits, mut ignored, mut tp_total, mut fp_total) = (0, 0, 0, 0);
-    let mut incomplete = Vec::new();
-
+    let mut tally = Tally::default();
     for input in frames {
+        tally.add(input, camera, config);
+    }
+    Ok(tally.into_report(config))
+}
+
+/// Counts over frames, before they become a report.
+#[derive(Default)]
+struct Tally {
+    per_frame: Vec<FrameReport>,
+    /// Every matched or unmatched detection's score and whether it is a true positive (the PR
+    /// curve ranks all of them, whatever the threshold).
+    scored: Vec<(f64, bool)>,
+    center_errors: Vec<f64>,
+    diameter_errors: Vec<f64>,
+    fruits: usize,
+    ignored: usize,
+    tp: usize,
+    fp: usize,
+    /// Frames whose truth is incomplete.
+    incomplete: Vec<String>,
+}
+
+impl Tally {
+    /// Matches one frame and adds its counts.
+    fn add(&mut self, input: &FrameInput, camera: &PinholeCamera, config: &EvalConfig) {
         let m = match_frame(&input.truth, &input.detections, camera, config);
         let counted = m.counted_truth();
         let (mut tp, mut fp) = (0, 0);
@@ -80,28 +100,28 @@ pub fn evaluate(
                     diameter_error_m,
                     ..
                 } => {
-                    scored.push((det.score, true));
+                    self.scored.push((det.score, true));
                     if config.keeps(det) {
                         tp += 1;
-                        center_errors.extend(center_error_m);
-                        diameter_errors.extend(diameter_error_m);
+                        self.center_errors.extend(center_error_m);
+                        self.diameter_errors.extend(diameter_error_m);
                     }
                 }
                 DetectionOutcome::FalsePositive => {
-                    scored.push((det.score, false));
+                    self.scored.push((det.score, false));
                     fp += usize::from(config.keeps(det));
                 }
                 DetectionOutcome::Ignored => {}
             }
         }
         if !input.truth.complete {
-            incomplete.push(input.frame.clone());
+            self.incomplete.push(input.frame.clone());
         }
-        fruits += counted;
-        ignored += m.truth.len() - counted;
-        tp_total += tp;
-        fp_total += fp;
-        per_frame.push(FrameReport {
+        self.fruits += counted;
+        self.ignored += m.truth.len() - counted;
+        self.tp += tp;
+        self.fp += fp;
+        self.per_frame.push(FrameReport {
             frame: input.frame.clone(),
             complete: input.truth.complete,
             fruits: counted,
@@ -118,89 +138,100 @@ pub fn evaluate(
         });
     }
 
-    let mut null_reasons = BTreeMap::new();
-    let precision_reason = if !incomplete.is_empty() {
-        let shown: Vec<&str> = incomplete.iter().take(5).map(String::as_str).collect();
-        let more = if incomplete.len() > 5 { ", ..." } else { "" };
+    /// Why precision (and AP) cannot be measured: some truth is incomplete.
+    fn incomplete_reason(&self) -> Option<String> {
+        if self.incomplete.is_empty() {
+            return None;
+        }
+        let shown: Vec<&str> = self.incomplete.iter().take(5).map(String::as_str).collect();
+        let more = if self.incomplete.len() > 5 {
+            ", ..."
+        } else {
+            ""
+        };
         Some(format!(
             "{} frame(s) have incomplete truth (\"complete\": false), so unannotated fruit \
              would count as false positives: {}{more}",
-            incomplete.len(),
+            self.incomplete.len(),
             shown.join(", ")
         ))
-    } else {
-        None
-    };
-    let precision = match &precision_reason {
-        Some(r) => {
-            null_reasons.insert("precision".into(), r.clone());
-            None
-        }
-        None => {
-            let p = ratio(tp_total, tp_total + fp_total);
-            if p.is_none() {
-                null_reasons.insert(
-                    "precision".into(),
-                    format!(
-                        "no detection reaches the operating threshold ({})",
-                        config.operating_point()
-                    ),
-                );
+    }
+
+    /// The report, with a reason for every figure that is `None`.
+    fn into_report(mut self, config: &EvalConfig) -> EvalReport {
+        let mut null_reasons = BTreeMap::new();
+        let incomplete = self.incomplete_reason();
+        let precision = match &incomplete {
+            Some(r) => {
+                null_reasons.insert("precision".into(), r.clone());
+                None
             }
-            p
+            None => {
+                let p = ratio(self.tp, self.tp + self.fp);
+                if p.is_none() {
+                    null_reasons.insert(
+                        "precision".into(),
+                        format!(
+                            "no detection reaches the operating threshold ({})",
+                            config.operating_point()
+                        ),
+                    );
+                }
+                p
+            }
+        };
+        let curve = match (&incomplete, self.fruits) {
+            (Some(r), _) => {
+                null_reasons.insert("ap".into(), r.clone());
+                None
+            }
+            (None, 0) => {
+                null_reasons.insert("ap".into(), "no counted truth fruit".into());
+                None
+            }
+            (None, n) => Some(PrCurve::new(&self.scored, n)),
+        };
+        let recall = ratio(self.tp, self.fruits);
+        if recall.is_none() {
+            null_reasons.insert("recall".into(), "no counted truth fruit".into());
         }
-    };
-    let curve = match (&precision_reason, fruits) {
-        (Some(r), _) => {
-            null_reasons.insert("ap".into(), r.clone());
-            None
+        let center_mean = mean(&self.center_errors);
+        let center_median = median(&mut self.center_errors);
+        if center_mean.is_none() {
+            null_reasons.insert(
+                "center_error_m".into(),
+                "no true positive with a 3D truth centre at the threshold".into(),
+            );
         }
-        (None, 0) => {
-            null_reasons.insert("ap".into(), "no counted truth fruit".into());
-            None
+        let diameter = mean(&self.diameter_errors);
+        if diameter.is_none() {
+            null_reasons.insert(
+                "diameter_error_m".into(),
+                "no true positive where both detection and truth have a diameter".into(),
+            );
         }
-        (None, n) => Some(PrCurve::new(&scored, n)),
-    };
-    let recall = ratio(tp_total, fruits);
-    if recall.is_none() {
-        null_reasons.insert("recall".into(), "no counted truth fruit".into());
+        EvalReport {
+            frames: self.per_frame.len(),
+            fruits: self.fruits,
+            ignored: self.ignored,
+            tolerance_m: config.tolerance_m,
+            ap_voc11: curve.as_ref().map(PrCurve::ap_voc11),
+            ap: curve.as_ref().map(PrCurve::ap_all_points),
+            precision,
+            recall,
+            threshold: config.threshold,
+            min_confidence: config.min_confidence,
+            center_error_m: CenterError {
+                median: center_median,
+                mean: center_mean,
+            },
+            diameter_error_m: DiameterError { mean_abs: diameter },
+            per_frame: self.per_frame,
+            min_visibility: config.min_visibility,
+            true_positives: self.tp,
+            false_positives: self.fp,
+            null_reasons,
+            pr_curve: curve,
+        }
     }
-    let center_mean = mean(&center_errors);
-    let center_median = median(&mut center_errors);
-    if center_mean.is_none() {
-        null_reasons.insert(
-            "center_error_m".into(),
-            "no true positive with a 3D truth centre at the threshold".into(),
-        );
-    }
-    let diameter = mean(&diameter_errors);
-    if diameter.is_none() {
-        null_reasons.insert(
-            "diameter_error_m".into(),
-            "no true positive where both detection and truth have a diameter".into(),
-        );
-    }
-    Ok(EvalReport {
-        frames: frames.len(),
-        fruits,
-        ignored,
-        tolerance_m: config.tolerance_m,
-        ap_voc11: curve.as_ref().map(PrCurve::ap_voc11),
-        ap: curve.as_ref().map(PrCurve::ap_all_points),
-        precision,
-        recall,
-        threshold: config.threshold,
-        min_confidence: config.min_confidence,
-        center_error_m: CenterError {
-            median: center_median,
-            mean: center_mean,
-        },
-        diameter_error_m: DiameterError { mean_abs: diameter },
-        per_frame,
-        min_visibility: config.min_visibility,
-        true_positives: tp_total,
-        false_positives: fp_total,
-        null_reasons,
-        pr_curve: curve,
-    })
 }

@@ -74,9 +74,31 @@ pub fn render_view(
     camera.validate()?;
     let view = View::new(camera, camera_from_scene);
     let (w, h) = (camera.width as usize, camera.height as usize);
-    let n = w * h;
+    let z = z_buffer(scene, &view, w, h);
+    let (mut rgb_linear, surfaces) = shade(scene, &view, &z);
+    if let Some(effects) = &scene.image_effects {
+        effects.apply(&mut rgb_linear, w, h);
+    }
+    let color = encode_color(scene, camera, &rgb_linear, noise_stream)?;
+    let depth_image = noisy_depth(scene, camera, &surfaces, noise_stream)?;
+    let (truth, mask) = truth_and_mask(scene, camera, camera_from_scene, &z)?;
+    let frame = RgbdFrame::new(*camera, depth_image, Some(color))?;
+    Ok(RenderedFrame { frame, truth, mask })
+}
 
-    // 1. z-buffer.
+/// The nearest surface along each pixel's ray.
+struct ZBuffer {
+    width: usize,
+    /// Ray parameter of the nearest hit per pixel (infinite where nothing is hit).
+    depth: Vec<f64>,
+    hits: Vec<Hit>,
+    /// Per fruit: pixels its surface covers with nothing in front (for visibility).
+    alone: Vec<usize>,
+}
+
+/// Step 1: ray-casts the backdrop, stems, leaves and fruit, keeping the nearest hit per pixel.
+fn z_buffer(scene: &Scene, view: &View<'_>, w: usize, h: usize) -> ZBuffer {
+    let n = w * h;
     let mut depth = vec![f64::INFINITY; n];
     let mut hits = vec![Hit::Nothing; n];
     let full = Some((0, w - 1, 0, h - 1));
@@ -122,8 +144,19 @@ pub fn render_view(
             }
         });
     }
+    ZBuffer {
+        width: w,
+        depth,
+        hits,
+        alone,
+    }
+}
 
-    // 2. shading.
+/// Step 2: linear radiance per pixel (sun with optional cast shadows, sky light) and what the
+/// depth sensor's noise model needs to know about each surface.
+fn shade(scene: &Scene, view: &View<'_>, z: &ZBuffer) -> (Vec<[f64; 3]>, Vec<SurfaceSample>) {
+    let n = z.depth.len();
+    let full = Some((0, z.width - 1, 0, n / z.width - 1));
     let mut rgb_linear = vec![[0.0f64; 3]; n];
     let mut surfaces = vec![
         SurfaceSample {
@@ -136,14 +169,15 @@ pub fn render_view(
     ];
     let shadows = scene.shadows.then(|| ShadowGrid::new(scene));
     view.each_pixel(full, |i, o, d| {
-        let t = depth[i];
+        let t = z.depth[i];
         let p = o + d * t;
         // Time-of-flight sensors see in the near infrared, where living plant tissue reflects
         // strongly whatever its visible colour (a dark purple eggplant is bright at 850 nm), so
         // plant surfaces get a floor on the amplitude that drives dropouts; the backdrop keeps
         // its visible luminance.
-        let plant = !matches!(hits[i], Hit::Backdrop | Hit::Nothing);
-        let (normal, material) = match hits[i] {
+        let hit = z.hits[i];
+        let plant = !matches!(hit, Hit::Backdrop | Hit::Nothing);
+        let (normal, material) = match hit {
             Hit::Nothing => {
                 if let Some(sky) = scene.backdrop.sky_radiance(d) {
                     rgb_linear[i] = sky;
@@ -175,7 +209,7 @@ pub fn render_view(
         rgb_linear[i] = match &shadows {
             None => scene.light.shade(&material, &normal, &to_viewer),
             Some(grid) => {
-                let skip = match hits[i] {
+                let skip = match hit {
                     Hit::Leaf(k, _) => Some(Occluder::Leaf(k)),
                     Hit::Stem(k) => Some(Occluder::Stem(k)),
                     Hit::Fruit(k) => Some(Occluder::Fruit(k)),
@@ -195,28 +229,45 @@ pub fn render_view(
             z: t,
             amplitude: nir_reflectance(&material, plant) * cos_incidence,
             cos_incidence,
-            no_return: matches!(hits[i], Hit::Backdrop) && !scene.backdrop.returns_depth(),
+            no_return: matches!(hit, Hit::Backdrop) && !scene.backdrop.returns_depth(),
         };
     });
-    if let Some(effects) = &scene.image_effects {
-        effects.apply(&mut rgb_linear, w, h);
-    }
+    (rgb_linear, surfaces)
+}
+
+/// The 8-bit colour image: gamma-encoded radiance plus sensor noise (noise stream
+/// `2 * noise_stream`).
+fn encode_color(
+    scene: &Scene,
+    camera: &PinholeCamera,
+    rgb_linear: &[[f64; 3]],
+    noise_stream: u64,
+) -> Result<ColorImage, SynthError> {
     let mut noise_rng = sub_rng(scene.noise_seed, 2 * noise_stream);
     let gamma = GammaTable::new();
     let sigma = scene.light.image_noise_sigma;
     let mut normal = NormalSampler::default();
-    let mut rgb = Vec::with_capacity(3 * n);
-    for px in &rgb_linear {
+    let mut rgb = Vec::with_capacity(3 * rgb_linear.len());
+    for px in rgb_linear {
         for &c in px {
             let value = gamma.encode(c) + sigma * normal.sample(&mut noise_rng);
             rgb.push(value.round().clamp(0.0, 255.0) as u8);
         }
     }
-    let color = ColorImage::from_rgb(camera.width, camera.height, rgb)?;
+    Ok(ColorImage::from_rgb(camera.width, camera.height, rgb)?)
+}
 
-    // 3. depth noise.
+/// Step 3: the depth image through the scene's sensor noise model (noise stream
+/// `2 * noise_stream + 1`), cut at the scene's maximum depth.
+fn noisy_depth(
+    scene: &Scene,
+    camera: &PinholeCamera,
+    surfaces: &[SurfaceSample],
+    noise_stream: u64,
+) -> Result<DepthImage, SynthError> {
+    let w = camera.width as usize;
     let mut depth_rng = sub_rng(scene.noise_seed, 2 * noise_stream + 1);
-    let mut depth_m = scene.noise.apply(&surfaces, w, camera.fx, &mut depth_rng);
+    let mut depth_m = scene.noise.apply(surfaces, w, camera.fx, &mut depth_rng);
     if scene.max_depth_m.is_finite() {
         for z in &mut depth_m {
             if f64::from(*z) > scene.max_depth_m {
@@ -224,12 +275,24 @@ pub fn render_view(
             }
         }
     }
-    let depth_image = DepthImage::from_meters(camera.width, camera.height, depth_m)?;
+    Ok(DepthImage::from_meters(
+        camera.width,
+        camera.height,
+        depth_m,
+    )?)
+}
 
-    // 4. truth and mask.
+/// Step 4: truth of every visible fruit (in the camera frame) and the instance mask.
+fn truth_and_mask(
+    scene: &Scene,
+    camera: &PinholeCamera,
+    camera_from_scene: &Isometry3<f64>,
+    z: &ZBuffer,
+) -> Result<(FrameTruth, InstanceMask), SynthError> {
+    let w = z.width;
     let mut visible = vec![0usize; scene.fruits.len()];
     let mut boxes = vec![(usize::MAX, usize::MAX, 0usize, 0usize); scene.fruits.len()];
-    for (i, hit) in hits.iter().enumerate() {
+    for (i, hit) in z.hits.iter().enumerate() {
         if let Hit::Fruit(k) = hit {
             let k = *k as usize;
             let (u, v) = (i % w, i / w);
@@ -254,12 +317,13 @@ pub fn render_view(
             bbox_px: Some(PixelBox::new(
                 b.0 as f64, b.1 as f64, b.2 as f64, b.3 as f64,
             )?),
-            visibility: Some(visible[k] as f64 / alone[k].max(visible[k]) as f64),
+            visibility: Some(visible[k] as f64 / z.alone[k].max(visible[k]) as f64),
             extra: serde_json::Map::new(),
         });
         mask_id[k] = fruits.len() as u16;
     }
-    let ids = hits
+    let ids = z
+        .hits
         .iter()
         .map(|hit| match hit {
             Hit::Fruit(k) => mask_id[*k as usize],
@@ -267,16 +331,12 @@ pub fn render_view(
         })
         .collect();
     let mask = InstanceMask::from_ids(camera.width, camera.height, ids)?;
-    let frame = RgbdFrame::new(*camera, depth_image, Some(color))?;
-    Ok(RenderedFrame {
-        frame,
-        truth: FrameTruth {
-            complete: true,
-            fruits,
-            extra: scene.truth_extra.clone(),
-        },
-        mask,
-    })
+    let truth = FrameTruth {
+        complete: true,
+        fruits,
+        extra: scene.truth_extra.clone(),
+    };
+    Ok((truth, mask))
 }
 
 /// Leaf colour with a lighter midrib and slightly darker margins.

@@ -640,29 +640,16 @@ impl WideSampler<'_> {
         leaves: &mut Vec<Leaf>,
         stems: &mut Vec<Stem>,
     ) -> Backdrop {
-        let facing = |rng: &mut SynthRng, ground: f64| {
-            let (e1, _) = self.horizontal_basis();
-            let n = -Vector3::z()
-                + self.up.into_inner() * uniform(rng, 0.0, ground)
-                + e1 * uniform(rng, -0.15, 0.15);
-            Unit::new_normalize(n)
-        };
-        let plane = |z: f64, normal, kind, seed| Backdrop {
-            point: Point3::new(0.0, 0.0, z),
-            normal,
-            texture_seed: seed,
-            kind,
-        };
         match background {
             Background::Soil => {
                 let z = (self.row + uniform(rng, 0.3, 1.2)).max(canopy_back + 0.05);
-                let n = facing(rng, 0.6);
-                plane(z, n, BackdropKind::Soil, rng.gen())
+                let n = self.backdrop_normal(rng, 0.6);
+                backdrop_plane(z, n, BackdropKind::Soil, rng.gen())
             }
             Background::Cloth => {
                 let z = (self.row + uniform(rng, 0.15, 0.6)).max(canopy_back + 0.03);
-                let n = facing(rng, 0.2);
-                plane(z, n, BackdropKind::Cloth, rng.gen())
+                let n = self.backdrop_normal(rng, 0.2);
+                backdrop_plane(z, n, BackdropKind::Cloth, rng.gen())
             }
             Background::Sky => {
                 let b = uniform(rng, 0.7, 1.4);
@@ -672,7 +659,7 @@ impl WideSampler<'_> {
                     uniform(rng, 0.45, 0.6) * b,
                     uniform(rng, 0.8, 1.0) * b,
                 ];
-                plane(
+                backdrop_plane(
                     100.0,
                     Unit::new_normalize(-Vector3::z()),
                     BackdropKind::Sky {
@@ -683,77 +670,109 @@ impl WideSampler<'_> {
                     rng.gen(),
                 )
             }
-            Background::SecondRow => {
-                let near = WIDE_SECOND_ROW_M
-                    .0
-                    .max(canopy_back + 0.1)
-                    .min(WIDE_SECOND_ROW_M.1 - 0.2);
-                let cam = &self.spec.camera;
-                let mid = 0.5 * (near + WIDE_SECOND_ROW_M.1);
-                let area = (cam.width as f64 * mid / cam.fx) * (cam.height as f64 * mid / cam.fy);
-                let length = uniform(rng, 0.08, 0.15);
-                let count = ((uniform(rng, 0.8, 2.0) * area / (0.3 * length * length)) as usize)
-                    .clamp(50, 800);
-                let haze = uniform(rng, 0.7, 1.0);
-                for _ in 0..count {
-                    let z = uniform(rng, near, WIDE_SECOND_ROW_M.1);
-                    let (u, v) = self.random_pixel(rng, 0.05);
-                    let mut leaf = self.leaf(rng, self.point_at(u, v, z), length);
-                    leaf.material = leaf.material.tinted([haze, haze, haze * 1.1]);
-                    if !cuts_fruit(&leaf, fruits) {
-                        leaves.push(leaf);
-                    }
-                }
-                let z = uniform(rng, WIDE_SECOND_ROW_M.1 + 0.2, WIDE_MAX_DEPTH_M - 0.3);
-                let n = facing(rng, 0.5);
-                plane(z, n, BackdropKind::Soil, rng.gen())
-            }
-            Background::Greenhouse => {
-                let z = (self.row + uniform(rng, 1.0, 2.5))
-                    .max(canopy_back + 0.3)
-                    .min(WIDE_MAX_DEPTH_M - 0.3);
-                let n = facing(rng, 0.1);
-                let metal = |rng: &mut SynthRng| {
-                    let g = uniform(rng, 0.35, 0.75);
-                    Material {
-                        albedo: [g, g, 0.98 * g],
-                        specular: uniform(rng, 0.2, 0.6),
-                        shininess: uniform(rng, 20.0, 60.0),
-                    }
-                };
-                let (e1, _) = self.horizontal_basis();
-                for _ in 0..rng.gen_range(1..=3) {
-                    let zp = uniform(rng, canopy_back.min(z - 0.1), z - 0.05);
-                    let u = uniform(rng, 0.0, self.spec.camera.width as f64);
-                    let c = self.point_at(u, 0.5 * self.spec.camera.height as f64, zp);
-                    let up = self.up.into_inner();
-                    let post = Stem {
-                        start: c - up * 3.0,
-                        end: c + up * 3.0,
-                        radius_m: uniform(rng, 0.02, 0.05),
-                        material: metal(rng),
-                    };
-                    if clear_of(&post, fruits) {
-                        stems.push(post);
-                    }
-                }
-                for _ in 0..rng.gen_range(1..=2) {
-                    let zp = uniform(rng, canopy_back.min(z - 0.1), z - 0.05);
-                    let v = uniform(rng, 0.4, 1.1) * self.spec.camera.height as f64;
-                    let c = self.point_at(0.5 * self.spec.camera.width as f64, v, zp);
-                    let pipe = Stem {
-                        start: c - e1 * 4.0,
-                        end: c + e1 * 4.0,
-                        radius_m: uniform(rng, 0.02, 0.03),
-                        material: metal(rng),
-                    };
-                    if clear_of(&pipe, fruits) {
-                        stems.push(pipe);
-                    }
-                }
-                plane(z, n, BackdropKind::Plastic, rng.gen())
+            Background::SecondRow => self.second_row(rng, canopy_back, fruits, leaves),
+            Background::Greenhouse => self.greenhouse(rng, canopy_back, fruits, stems),
+        }
+    }
+
+    /// A backdrop normal facing the camera, tilted up by up to `ground` (towards the ground
+    /// plane) and a little sideways.
+    fn backdrop_normal(&self, rng: &mut SynthRng, ground: f64) -> Unit<Vector3<f64>> {
+        let (e1, _) = self.horizontal_basis();
+        let n = -Vector3::z()
+            + self.up.into_inner() * uniform(rng, 0.0, ground)
+            + e1 * uniform(rng, -0.15, 0.15);
+        Unit::new_normalize(n)
+    }
+
+    /// A far second row of hazy leaves in front of soil.
+    fn second_row(
+        &self,
+        rng: &mut SynthRng,
+        canopy_back: f64,
+        fruits: &[FruitBody],
+        leaves: &mut Vec<Leaf>,
+    ) -> Backdrop {
+        let near = WIDE_SECOND_ROW_M
+            .0
+            .max(canopy_back + 0.1)
+            .min(WIDE_SECOND_ROW_M.1 - 0.2);
+        let cam = &self.spec.camera;
+        let mid = 0.5 * (near + WIDE_SECOND_ROW_M.1);
+        let area = (cam.width as f64 * mid / cam.fx) * (cam.height as f64 * mid / cam.fy);
+        let length = uniform(rng, 0.08, 0.15);
+        let count =
+            ((uniform(rng, 0.8, 2.0) * area / (0.3 * length * length)) as usize).clamp(50, 800);
+        let haze = uniform(rng, 0.7, 1.0);
+        for _ in 0..count {
+            let z = uniform(rng, near, WIDE_SECOND_ROW_M.1);
+            let (u, v) = self.random_pixel(rng, 0.05);
+            let mut leaf = self.leaf(rng, self.point_at(u, v, z), length);
+            leaf.material = leaf.material.tinted([haze, haze, haze * 1.1]);
+            if !cuts_fruit(&leaf, fruits) {
+                leaves.push(leaf);
             }
         }
+        let z = uniform(rng, WIDE_SECOND_ROW_M.1 + 0.2, WIDE_MAX_DEPTH_M - 0.3);
+        let n = self.backdrop_normal(rng, 0.5);
+        backdrop_plane(z, n, BackdropKind::Soil, rng.gen())
+    }
+
+    /// Greenhouse plastic behind metal posts and pipes.
+    fn greenhouse(
+        &self,
+        rng: &mut SynthRng,
+        canopy_back: f64,
+        fruits: &[FruitBody],
+        stems: &mut Vec<Stem>,
+    ) -> Backdrop {
+        let z = (self.row + uniform(rng, 1.0, 2.5))
+            .max(canopy_back + 0.3)
+            .min(WIDE_MAX_DEPTH_M - 0.3);
+        let n = self.backdrop_normal(rng, 0.1);
+        let metal = |rng: &mut SynthRng| {
+            let g = uniform(rng, 0.35, 0.75);
+            Material {
+                albedo: [g, g, 0.98 * g],
+                specular: uniform(rng, 0.2, 0.6),
+                shininess: uniform(rng, 20.0, 60.0),
+            }
+        };
+        let (e1, _) = self.horizontal_basis();
+        let up = self.up.into_inner();
+        let (width, height) = (
+            self.spec.camera.width as f64,
+            self.spec.camera.height as f64,
+        );
+        for _ in 0..rng.gen_range(1..=3) {
+            let zp = uniform(rng, canopy_back.min(z - 0.1), z - 0.05);
+            let u = uniform(rng, 0.0, width);
+            let c = self.point_at(u, 0.5 * height, zp);
+            let post = Stem {
+                start: c - up * 3.0,
+                end: c + up * 3.0,
+                radius_m: uniform(rng, 0.02, 0.05),
+                material: metal(rng),
+            };
+            if clear_of(&post, fruits) {
+                stems.push(post);
+            }
+        }
+        for _ in 0..rng.gen_range(1..=2) {
+            let zp = uniform(rng, canopy_back.min(z - 0.1), z - 0.05);
+            let v = uniform(rng, 0.4, 1.1) * height;
+            let c = self.point_at(0.5 * width, v, zp);
+            let pipe = Stem {
+                start: c - e1 * 4.0,
+                end: c + e1 * 4.0,
+                radius_m: uniform(rng, 0.02, 0.03),
+                material: metal(rng),
+            };
+            if clear_of(&pipe, fruits) {
+                stems.push(pipe);
+            }
+        }
+        backdrop_plane(z, n, BackdropKind::Plastic, rng.gen())
     }
 
     /// The sun and sky light, and their record.
@@ -889,4 +908,19 @@ fn wide_colour(rng: &mut SynthRng, kind: FruitKind) -> (Material, Option<Blush>)
         shininess: ripe.shininess * uniform(rng, 0.5, 2.0),
     };
     (material, blush)
+}
+
+/// A backdrop plane at depth `z` (on the optical axis) with `normal`.
+fn backdrop_plane(
+    z: f64,
+    normal: Unit<Vector3<f64>>,
+    kind: BackdropKind,
+    texture_seed: u64,
+) -> Backdrop {
+    Backdrop {
+        point: Point3::new(0.0, 0.0, z),
+        normal,
+        texture_seed,
+        kind,
+    }
 }

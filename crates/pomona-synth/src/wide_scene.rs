@@ -138,37 +138,8 @@ pub(crate) fn sample_wide(spec: &SceneSpec, rng: &mut SynthRng) -> Scene {
     let (fruits, clusters) = w.sample_fruits(rng, kind, &mut stems);
     let canopy_density = uniform(rng, WIDE_CANOPY_DENSITY.0, WIDE_CANOPY_DENSITY.1);
     let front_fraction = uniform(rng, WIDE_FRONT_LEAF_FRACTION.0, WIDE_FRONT_LEAF_FRACTION.1);
-    let front_depth = uniform(rng, WIDE_FRONT_DEPTH_M.0, WIDE_FRONT_DEPTH_M.1);
-    let behind_depth = uniform(rng, WIDE_BEHIND_DEPTH_M.0, WIDE_BEHIND_DEPTH_M.1);
-    let layer_front = fruits
-        .iter()
-        .map(|f| f.center.z - f.bounding_radius_m())
-        .fold(row - WIDE_FRUIT_LAYER_HALF_DEPTH_M, f64::min);
-    let layer_back = fruits
-        .iter()
-        .map(|f| f.center.z + f.bounding_radius_m())
-        .fold(row + WIDE_FRUIT_LAYER_HALF_DEPTH_M, f64::max);
-    let canopy_back = layer_back + behind_depth;
-    let mut leaves = w.sample_canopy(
-        rng,
-        &fruits,
-        canopy_density,
-        front_fraction,
-        (layer_front - front_depth, layer_front, canopy_back),
-    );
-    for f in &fruits {
-        w.sample_occluding_leaves(rng, f, &fruits, &mut leaves);
-    }
-    let mut stalks = Vec::new();
-    for _ in 0..rng.gen_range(WIDE_STALKS.0..=WIDE_STALKS.1) {
-        stalks.extend(w.sample_stalk(rng, &fruits, canopy_back));
-    }
-    stems.extend(stalks.iter().cloned());
-    for _ in 0..rng.gen_range(WIDE_BRANCHES.0..=WIDE_BRANCHES.1) {
-        if let Some(branch) = w.sample_branch(rng, &fruits, &stalks) {
-            stems.push(branch);
-        }
-    }
+    let (mut leaves, canopy_back) =
+        w.sample_vegetation(rng, &fruits, canopy_density, front_fraction, &mut stems);
     let backdrop = w.sample_background(
         rng,
         background,
@@ -628,6 +599,52 @@ impl WideSampler<'_> {
                 stems.push(petiole);
             }
         }
+    }
+
+    /// The canopy around the fruit layer (leaves in front of, among and behind the fruit, leaves
+    /// hiding each fruit), stalks and branches; returns the leaves and the depth of the canopy's
+    /// back, and adds stalks and branches to `stems`.
+    fn sample_vegetation(
+        &self,
+        rng: &mut SynthRng,
+        fruits: &[FruitBody],
+        canopy_density: f64,
+        front_fraction: f64,
+        stems: &mut Vec<Stem>,
+    ) -> (Vec<Leaf>, f64) {
+        let row = self.row;
+        let front_depth = uniform(rng, WIDE_FRONT_DEPTH_M.0, WIDE_FRONT_DEPTH_M.1);
+        let behind_depth = uniform(rng, WIDE_BEHIND_DEPTH_M.0, WIDE_BEHIND_DEPTH_M.1);
+        let layer_front = fruits
+            .iter()
+            .map(|f| f.center.z - f.bounding_radius_m())
+            .fold(row - WIDE_FRUIT_LAYER_HALF_DEPTH_M, f64::min);
+        let layer_back = fruits
+            .iter()
+            .map(|f| f.center.z + f.bounding_radius_m())
+            .fold(row + WIDE_FRUIT_LAYER_HALF_DEPTH_M, f64::max);
+        let canopy_back = layer_back + behind_depth;
+        let mut leaves = self.sample_canopy(
+            rng,
+            fruits,
+            canopy_density,
+            front_fraction,
+            (layer_front - front_depth, layer_front, canopy_back),
+        );
+        for f in fruits {
+            self.sample_occluding_leaves(rng, f, fruits, &mut leaves);
+        }
+        let mut stalks = Vec::new();
+        for _ in 0..rng.gen_range(WIDE_STALKS.0..=WIDE_STALKS.1) {
+            stalks.extend(self.sample_stalk(rng, fruits, canopy_back));
+        }
+        stems.extend(stalks.iter().cloned());
+        for _ in 0..rng.gen_range(WIDE_BRANCHES.0..=WIDE_BRANCHES.1) {
+            if let Some(branch) = self.sample_branch(rng, fruits, &stalks) {
+                stems.push(branch);
+            }
+        }
+        (leaves, canopy_back)
     }
 
     /// The backdrop of `background`, adding second-row leaves or greenhouse structure.

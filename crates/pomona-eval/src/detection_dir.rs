@@ -27,8 +27,18 @@ fn read_one(path: &Path, stem: &str) -> Result<FrameDetections, EvalError> {
         path: path.to_owned(),
         source,
     })?;
+    parse_detections(&text, path, stem)
+}
+
+/// Parses the text of the detection file `path` of frame `stem` and checks it (`path` only
+/// names the file in errors).
+pub(crate) fn parse_detections(
+    text: &str,
+    path: &Path,
+    stem: &str,
+) -> Result<FrameDetections, EvalError> {
     let d: FrameDetections =
-        serde_json::from_str(&text).map_err(|source| EvalError::DetectionJson {
+        serde_json::from_str(text).map_err(|source| EvalError::DetectionJson {
             path: path.to_owned(),
             source,
         })?;

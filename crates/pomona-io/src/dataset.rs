@@ -209,9 +209,7 @@ impl Dataset {
             return Ok(None);
         }
         let text = std::fs::read_to_string(&path).map_err(|e| DatasetError::io(&path, e))?;
-        serde_json::from_str(&text)
-            .map(Some)
-            .map_err(|source| DatasetError::Json { path, source })
+        parse_truth(&text, &path).map(Some)
     }
 
     /// Reads a frame's instance mask; `None` when the frame has none.
@@ -226,4 +224,12 @@ impl Dataset {
         }
         read_mask_png(&path, self.size()).map(Some)
     }
+}
+
+/// Parses the text of a truth file; `path` names it in errors.
+pub(crate) fn parse_truth(text: &str, path: &Path) -> Result<FrameTruth, DatasetError> {
+    serde_json::from_str(text).map_err(|source| DatasetError::Json {
+        path: path.to_owned(),
+        source,
+    })
 }

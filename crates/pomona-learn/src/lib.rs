@@ -37,6 +37,8 @@ mod error;
 mod folds;
 mod grid_search;
 mod kernel_cache;
+#[doc(hidden)]
+pub mod fuzzing;
 mod model_file;
 mod platt;
 mod samples;

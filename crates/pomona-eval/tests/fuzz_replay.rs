@@ -15,7 +15,10 @@ fn here() -> PathBuf {
 
 #[test]
 fn corpus_and_regressions_replay_without_panics() {
-    let corpus = replay_dir(&here().join("../../fuzz/corpus").join(TARGET), detection_json);
+    let corpus = replay_dir(
+        &here().join("../../fuzz/corpus").join(TARGET),
+        detection_json,
+    );
     let regressions = replay_dir(
         &here().join("tests/fuzz_regressions").join(TARGET),
         detection_json,
@@ -35,7 +38,9 @@ fn seed_parses() {
 #[test]
 #[ignore = "writes the seed input into fuzz/corpus/"]
 fn write_seed() {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fuzz/corpus").join(TARGET);
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../fuzz/corpus")
+        .join(TARGET);
     std::fs::create_dir_all(&dir).unwrap();
     std::fs::write(dir.join("seed.json"), SEED).unwrap();
 }

@@ -237,7 +237,11 @@ pub fn seeds() -> Vec<(&'static str, String, Vec<u8>)> {
     let (with_color, depth_only) = seed_datasets();
     seeds.push(("dataset", "seed-rgbd.bin".into(), with_color));
     seeds.push(("dataset", "seed-depth-only.bin".into(), depth_only));
-    seeds.push(("truth_json", "seed-truth.json".into(), SEED_TRUTH.as_bytes().to_vec()));
+    seeds.push((
+        "truth_json",
+        "seed-truth.json".into(),
+        SEED_TRUTH.as_bytes().to_vec(),
+    ));
     seeds
 }
 
@@ -267,7 +271,9 @@ fn seed_datasets() -> (Vec<u8>, Vec<u8>) {
     let fail = |e: &dyn std::fmt::Display| -> ! { panic!("seed dataset: {e}") };
     let camera = PinholeCamera::new(4, 3, 10.0, 10.0, 1.5, 1.0).unwrap_or_else(|e| fail(&e));
     let writer = DatasetWriter::create(dir.path(), &camera, 0.001).unwrap_or_else(|e| fail(&e));
-    let raw: Vec<u16> = (0..12).map(|k| if k == 5 { 0 } else { 500 + 10 * k }).collect();
+    let raw: Vec<u16> = (0..12)
+        .map(|k| if k == 5 { 0 } else { 500 + 10 * k })
+        .collect();
     let depth = DepthImage::from_u16(4, 3, &raw, 0.001).unwrap_or_else(|e| fail(&e));
     writer.write_depth("f", &depth).unwrap_or_else(|e| fail(&e));
     let color = ColorImage::filled(4, 3, [200, 30, 20]);
@@ -295,7 +301,10 @@ pub fn replay_dir(dir: &Path, entry: impl Fn(&[u8]) + std::panic::RefUnwindSafe)
         return 0;
     };
     let mut files: Vec<_> = listing
-        .map(|e| e.unwrap_or_else(|e| panic!("{}: {e}", dir.display())).path())
+        .map(|e| {
+            e.unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
+                .path()
+        })
         .filter(|p| p.is_file())
         .collect();
     files.sort();

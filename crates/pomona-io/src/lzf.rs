@@ -353,10 +353,27 @@ mod tests {
             })
         ));
         assert!(matches!(
-            decompress(&[], 1),
+            decompress_into(&[], &mut [0]),
             Err(LzfError::OutputUnderrun { .. })
         ));
         assert_eq!(decompress(&[], 0).unwrap(), Vec::<u8>::new());
+        // A length no input of this size can produce is refused before allocating.
+        assert!(matches!(
+            decompress(&[], 1),
+            Err(LzfError::ImplausibleLength {
+                expected: 1,
+                input: 0
+            })
+        ));
+        assert!(matches!(
+            decompress(&c, usize::MAX),
+            Err(LzfError::ImplausibleLength { .. })
+        ));
+        let longest = c.len() * MAX_EXPANSION_RATIO;
+        assert!(matches!(
+            decompress(&c, longest),
+            Err(LzfError::OutputUnderrun { .. })
+        ));
     }
 
     #[test]

@@ -291,7 +291,9 @@ pub enum PcdError {
     },
     /// Decoding would allocate more than the reader's budget for a file of this size (see
     /// [`crate::read_budget`]): the header declares far more data than the file can hold.
-    #[error("decoding needs {needed} bytes, over the budget of {budget} bytes for a file this size")]
+    #[error(
+        "decoding needs {needed} bytes, over the budget of {budget} bytes for a file this size"
+    )]
     OverBudget {
         /// Bytes the decoded data would take.
         needed: u64,

@@ -61,7 +61,9 @@ pub fn seed() -> String {
         .and_then(|p| p.fit(&data))
         .unwrap_or_else(|e| fail(&e));
     let mut model = ModelFile::new(PIPELINE, serde_json::json!({"window": 3}), &classifier);
-    let scores: Vec<f64> = (0..20).map(|i| f64::from(i) - 9.5 + f64::from(i % 4)).collect();
+    let scores: Vec<f64> = (0..20)
+        .map(|i| f64::from(i) - 9.5 + f64::from(i % 4))
+        .collect();
     let is_true: Vec<bool> = (0..20).map(|i| i >= 10).collect();
     let calibration = ScoreCalibration::fit(&scores, &is_true, 10, OperatingPoint::MaxF1);
     model.calibration = Some(calibration.unwrap_or_else(|e| fail(&e)));

@@ -35,10 +35,10 @@
 
 mod error;
 mod folds;
-mod grid_search;
-mod kernel_cache;
 #[doc(hidden)]
 pub mod fuzzing;
+mod grid_search;
+mod kernel_cache;
 mod model_file;
 mod platt;
 mod samples;

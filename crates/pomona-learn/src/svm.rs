@@ -363,9 +363,7 @@ impl RbfSvm {
         if self.coef.len().checked_mul(self.n_features) != Some(self.support_vectors.len()) {
             return bad("support vector array does not match coefficient count");
         }
-        let counted = self
-            .n_support_negative
-            .checked_add(self.n_support_positive);
+        let counted = self.n_support_negative.checked_add(self.n_support_positive);
         if counted != Some(self.coef.len()) {
             return bad("support vector counts do not add up");
         }

@@ -17,7 +17,10 @@ fn here() -> PathBuf {
 #[test]
 fn corpus_and_regressions_replay_without_panics() {
     let corpus = replay_dir(&here().join("../../fuzz/corpus").join(TARGET), model_json);
-    let regressions = replay_dir(&here().join("tests/fuzz_regressions").join(TARGET), model_json);
+    let regressions = replay_dir(
+        &here().join("tests/fuzz_regressions").join(TARGET),
+        model_json,
+    );
     println!("{TARGET}: {corpus} corpus inputs, {regressions} regression inputs");
     assert!(corpus > 0, "no corpus for fuzz target {TARGET}");
 }

@@ -408,7 +408,13 @@ fn decode(
         PcdEncoding::Binary => points.saturating_mul(point_size),
         // Each value takes at least one character and one separator (the last may end the file).
         PcdEncoding::Ascii => points
-            .saturating_mul(2 * header.fields.iter().map(|f| u64::from(f.count)).sum::<u64>())
+            .saturating_mul(
+                2 * header
+                    .fields
+                    .iter()
+                    .map(|f| u64::from(f.count))
+                    .sum::<u64>(),
+            )
             .saturating_sub(1),
         // Checked against the declared sizes below.
         PcdEncoding::BinaryCompressed => 8,

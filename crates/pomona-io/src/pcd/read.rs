@@ -435,8 +435,7 @@ fn decode(
             decode_columns(header, &plan, body, points as usize, false)
         }
         PcdEncoding::BinaryCompressed => {
-            let body = decompress_body(header, data, input_len)?;
-            check_budget(columns.saturating_add(body.len() as u64), input_len)?;
+            let body = decompress_body(header, data, columns, input_len)?;
             decode_columns(header, &plan, &body, points as usize, true)
         }
         PcdEncoding::Ascii => {
@@ -455,8 +454,14 @@ fn check_budget(needed: u64, input_len: u64) -> Result<(), PcdError> {
     }
 }
 
-/// Checks the size pair of a `binary_compressed` payload and decompresses it.
-fn decompress_body(header: &PcdHeader, data: &[u8], input_len: u64) -> Result<Vec<u8>, PcdError> {
+/// Checks the size pair of a `binary_compressed` payload, then that the decompressed body plus
+/// the `columns` bytes it decodes to fit the budget, and decompresses it.
+fn decompress_body(
+    header: &PcdHeader,
+    data: &[u8],
+    columns: u64,
+    input_len: u64,
+) -> Result<Vec<u8>, PcdError> {
     let points = header.points;
     let needed = points.saturating_mul(header.point_size());
     // The caller checked that the two size words are present.
@@ -484,9 +489,7 @@ fn decompress_body(header: &PcdHeader, data: &[u8], input_len: u64) -> Result<Ve
             uncompressed,
         });
     }
-    // The body is checked against the budget by the caller, with the columns it decodes to;
-    // checking it alone first keeps the decompression itself within the budget.
-    check_budget(uncompressed, input_len)?;
+    check_budget(columns.saturating_add(uncompressed), input_len)?;
     let payload = &data[8..8 + compressed as usize];
     Ok(lzf::decompress(payload, uncompressed as usize)?)
 }

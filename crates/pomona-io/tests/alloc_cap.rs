@@ -10,6 +10,9 @@
 //!
 //! Run: `cargo test -p pomona-io --test alloc_cap` (the table is printed either way).
 
+// A test without the harness: `main` is test code, where unwrapping is the assertion.
+#![allow(clippy::unwrap_used)]
+
 use std::alloc::System;
 use std::io::Write as _;
 use std::path::{Path, PathBuf};

@@ -7,6 +7,9 @@
 //!
 //! Run: `cargo test -p pomona-learn --test model_alloc_cap`.
 
+// A test without the harness: `main` is test code, where unwrapping is the assertion.
+#![allow(clippy::unwrap_used)]
+
 use std::alloc::System;
 
 use cap::Cap;

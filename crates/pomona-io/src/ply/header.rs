@@ -119,8 +119,6 @@ pub struct PlyHeader {
     pub obj_info: Vec<String>,
 }
 
-///
-
 impl PlyHeader {
     /// Parses the header at the start of `bytes`; returns it and the offset where the data starts
     /// (just after the `end_header` line's newline).

@@ -235,8 +235,6 @@ pub fn read_ply_file(path: impl AsRef<Path>) -> Result<PointCloud, PlyError> {
         .map_err(|e| e.with_path(path))
 }
 
-/// Writes `cloud` as a PLY 1.0 file with one `vertex` element and no faces.
-
 #[cfg(test)]
 mod tests {
     use super::*;

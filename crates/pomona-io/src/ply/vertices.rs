@@ -7,6 +7,7 @@ use super::rows::Num;
 use super::{PlyElement, PlyEncoding, PlyError, PlyPropertyKind, PlyType};
 use crate::pcd::clip;
 
+/// Vertex property indices that map to cloud attributes.
 #[derive(Debug, Default)]
 pub(super) struct VertexPlan {
     pub(super) xyz: [Option<usize>; 3],

@@ -9,6 +9,8 @@ use super::{PlyEncoding, PlyError};
 use crate::atomic_write::write_atomically;
 use crate::cloud_file::push_f32;
 
+/// Writes `cloud` as a PLY 1.0 file with one `vertex` element and no faces.
+///
 /// Vertex properties: `float x y z`; `uchar red green blue` when the cloud has colours; `float nx
 /// ny nz` with normals; `float intensity` with intensities; `uint label` with labels.
 ///

@@ -4,10 +4,10 @@
 //!
 //! `cargo test -p pomona-eval --test fuzz_replay -- --ignored write_seed` (re)writes the seed.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use pomona_eval::fuzzing::{detection_json, SEED, TARGET};
-use pomona_io::fuzzing::replay_dir;
+use pomona_io::fuzzing::replay_target;
 
 fn here() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -15,16 +15,7 @@ fn here() -> PathBuf {
 
 #[test]
 fn corpus_and_regressions_replay_without_panics() {
-    let corpus = replay_dir(
-        &here().join("../../fuzz/corpus").join(TARGET),
-        detection_json,
-    );
-    let regressions = replay_dir(
-        &here().join("tests/fuzz_regressions").join(TARGET),
-        detection_json,
-    );
-    println!("{TARGET}: {corpus} corpus inputs, {regressions} regression inputs");
-    assert!(corpus > 0, "no corpus for fuzz target {TARGET}");
+    replay_target(&here(), TARGET, detection_json);
 }
 
 #[test]
@@ -38,9 +29,7 @@ fn seed_parses() {
 #[test]
 #[ignore = "writes the seed input into fuzz/corpus/"]
 fn write_seed() {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../fuzz/corpus")
-        .join(TARGET);
+    let dir = here().join("../../fuzz/corpus").join(TARGET);
     std::fs::create_dir_all(&dir).unwrap();
     std::fs::write(dir.join("seed.json"), SEED).unwrap();
 }

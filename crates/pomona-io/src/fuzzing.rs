@@ -37,43 +37,58 @@ pub fn run(target: &str, data: &[u8]) {
 /// Reads `data` as a PCD file; a cloud that reads is written in every encoding and must read
 /// back with the same points.
 pub fn pcd(data: &[u8]) {
-    let Ok(cloud) = read_pcd(data) else {
-        return;
-    };
-    for encoding in [
-        PcdEncoding::Ascii,
-        PcdEncoding::Binary,
-        PcdEncoding::BinaryCompressed,
-    ] {
-        let mut out = Vec::new();
-        if let Err(e) = write_pcd(&cloud, &mut out, encoding) {
-            panic!("a cloud read from PCD cannot be written as {encoding}: {e}");
-        }
-        match read_pcd(&out) {
-            Ok(back) => assert_same_points(&cloud, &back, "PCD", &encoding.to_string()),
-            Err(e) => panic!("PCD written as {encoding} does not read back: {e}"),
-        }
+    if let Ok(cloud) = read_pcd(data) {
+        let encodings = [
+            PcdEncoding::Ascii,
+            PcdEncoding::Binary,
+            PcdEncoding::BinaryCompressed,
+        ];
+        round_trip(
+            &cloud,
+            "PCD",
+            encodings,
+            |c, out, e| write_pcd(c, out, e),
+            read_pcd,
+        );
     }
 }
 
 /// Reads `data` as a PLY file; a cloud that reads is written in every encoding and must read
 /// back with the same points.
 pub fn ply(data: &[u8]) {
-    let Ok(cloud) = read_ply(data) else {
-        return;
-    };
-    for encoding in [
-        PlyEncoding::Ascii,
-        PlyEncoding::BinaryLittleEndian,
-        PlyEncoding::BinaryBigEndian,
-    ] {
+    if let Ok(cloud) = read_ply(data) {
+        let encodings = [
+            PlyEncoding::Ascii,
+            PlyEncoding::BinaryLittleEndian,
+            PlyEncoding::BinaryBigEndian,
+        ];
+        round_trip(
+            &cloud,
+            "PLY",
+            encodings,
+            |c, out, e| write_ply(c, out, e),
+            read_ply,
+        );
+    }
+}
+
+/// Writes `cloud` in each encoding and reads it back; panics when either fails or the points
+/// change.
+fn round_trip<E: std::fmt::Display + Copy, Err: std::fmt::Display>(
+    cloud: &PointCloud,
+    format: &str,
+    encodings: [E; 3],
+    write: impl Fn(&PointCloud, &mut Vec<u8>, E) -> Result<(), Err>,
+    read: impl Fn(&[u8]) -> Result<PointCloud, Err>,
+) {
+    for encoding in encodings {
         let mut out = Vec::new();
-        if let Err(e) = write_ply(&cloud, &mut out, encoding) {
-            panic!("a cloud read from PLY cannot be written as {encoding}: {e}");
+        if let Err(e) = write(cloud, &mut out, encoding) {
+            panic!("a cloud read from {format} cannot be written as {encoding}: {e}");
         }
-        match read_ply(&out) {
-            Ok(back) => assert_same_points(&cloud, &back, "PLY", &encoding.to_string()),
-            Err(e) => panic!("PLY written as {encoding} does not read back: {e}"),
+        match read(&out) {
+            Ok(back) => assert_same_points(cloud, &back, format, &encoding.to_string()),
+            Err(e) => panic!("{format} written as {encoding} does not read back: {e}"),
         }
     }
 }
@@ -288,6 +303,27 @@ fn seed_datasets() -> (Vec<u8>, Vec<u8>) {
         dataset_input(&camera, &depth, &color),
         dataset_input(&camera, &depth, &[]),
     )
+}
+
+/// Replays fuzz target `target` of the crate at `crate_dir`: every file of the repository's
+/// `fuzz/corpus/<target>/` and of the crate's `tests/fuzz_regressions/<target>/` through
+/// `entry`. Prints the counts and returns the corpus count.
+///
+/// # Panics
+/// As [`replay_dir`], and when the corpus is empty (a replay that runs nothing proves nothing).
+pub fn replay_target(
+    crate_dir: &Path,
+    target: &str,
+    entry: impl Fn(&[u8]) + std::panic::RefUnwindSafe + Copy,
+) -> usize {
+    let corpus = replay_dir(&crate_dir.join("../../fuzz/corpus").join(target), entry);
+    let regressions = replay_dir(
+        &crate_dir.join("tests/fuzz_regressions").join(target),
+        entry,
+    );
+    println!("{target}: {corpus} corpus inputs, {regressions} regression inputs");
+    assert!(corpus > 0, "no corpus for fuzz target {target}");
+    corpus
 }
 
 /// Runs `entry` on every file in `dir` (none when it does not exist) and returns how many it

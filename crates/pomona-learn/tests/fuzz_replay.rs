@@ -6,7 +6,7 @@
 
 use std::path::{Path, PathBuf};
 
-use pomona_io::fuzzing::replay_dir;
+use pomona_io::fuzzing::replay_target;
 use pomona_learn::fuzzing::{model_json, seed, PIPELINE, TARGET};
 use pomona_learn::ModelFile;
 
@@ -16,13 +16,7 @@ fn here() -> PathBuf {
 
 #[test]
 fn corpus_and_regressions_replay_without_panics() {
-    let corpus = replay_dir(&here().join("../../fuzz/corpus").join(TARGET), model_json);
-    let regressions = replay_dir(
-        &here().join("tests/fuzz_regressions").join(TARGET),
-        model_json,
-    );
-    println!("{TARGET}: {corpus} corpus inputs, {regressions} regression inputs");
-    assert!(corpus > 0, "no corpus for fuzz target {TARGET}");
+    replay_target(&here(), TARGET, model_json);
 }
 
 #[test]

@@ -9,6 +9,7 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use pomona_core::FrameDetections;
+use pomona_io::read_budget::{read_json_text, MAX_JSON_FILE_BYTES};
 use pomona_io::Dataset;
 
 use crate::EvalError;
@@ -23,12 +24,22 @@ pub struct DetectionSet {
 }
 
 fn read_one(path: &Path, stem: &str) -> Result<FrameDetections, EvalError> {
-    let text = std::fs::read_to_string(path).map_err(|source| EvalError::Io {
+    let text = read_json_text(path, MAX_JSON_FILE_BYTES).map_err(|source| EvalError::Io {
         path: path.to_owned(),
         source,
     })?;
+    parse_detections(&text, path, stem)
+}
+
+/// Parses the text of the detection file `path` of frame `stem` and checks it (`path` only
+/// names the file in errors).
+pub(crate) fn parse_detections(
+    text: &str,
+    path: &Path,
+    stem: &str,
+) -> Result<FrameDetections, EvalError> {
     let d: FrameDetections =
-        serde_json::from_str(&text).map_err(|source| EvalError::DetectionJson {
+        serde_json::from_str(text).map_err(|source| EvalError::DetectionJson {
             path: path.to_owned(),
             source,
         })?;
@@ -60,7 +71,8 @@ pub const FAILURES_FILE: &str = "failures.json";
 /// skipped).
 ///
 /// # Errors
-/// [`EvalError::Io`] for an unreadable folder or file, [`EvalError::DetectionJson`],
+/// [`EvalError::Io`] for an unreadable folder or file (or one over
+/// [`pomona_io::read_budget::MAX_JSON_FILE_BYTES`]), [`EvalError::DetectionJson`],
 /// [`EvalError::FrameMismatch`], [`EvalError::NonFiniteDetection`], and
 /// [`EvalError::UnknownFrame`] for a file whose frame is not in `dataset`.
 pub fn load_detections(dir: &Path, dataset: &Dataset) -> Result<DetectionSet, EvalError> {

@@ -21,6 +21,8 @@ mod error;
 mod eval_config;
 mod evaluation;
 mod frame_matching;
+#[doc(hidden)]
+pub mod fuzzing;
 mod pr_curve;
 mod pr_plot;
 mod report;

@@ -28,10 +28,13 @@ impl CameraFile {
     /// Reads and validates a camera file.
     ///
     /// # Errors
-    /// [`DatasetError::Io`] when it cannot be read, [`DatasetError::Json`] when it is not the
+    /// [`DatasetError::Io`] when it cannot be read or is over
+    /// [`crate::read_budget::MAX_JSON_FILE_BYTES`], [`DatasetError::Json`] when it is not the
     /// expected JSON, [`DatasetError::InvalidCamera`] when a value is not finite and positive.
     pub fn read(path: &Path) -> Result<Self, DatasetError> {
-        let text = std::fs::read_to_string(path).map_err(|e| DatasetError::io(path, e))?;
+        let text =
+            crate::read_budget::read_json_text(path, crate::read_budget::MAX_JSON_FILE_BYTES)
+                .map_err(|e| DatasetError::io(path, e))?;
         let file: Self = serde_json::from_str(&text).map_err(|source| DatasetError::Json {
             path: path.to_owned(),
             source,

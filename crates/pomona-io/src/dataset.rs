@@ -17,6 +17,7 @@ use std::path::{Path, PathBuf};
 use pomona_core::{ColorImage, DepthImage, FrameTruth, InstanceMask, PinholeCamera, RgbdFrame};
 
 use crate::image_file::{read_color_image, read_depth_png, read_mask_png};
+use crate::read_budget::{read_json_text, MAX_JSON_FILE_BYTES};
 use crate::{CameraFile, DatasetError};
 
 const DEPTH_EXTENSIONS: &[&str] = &["png"];
@@ -200,7 +201,8 @@ impl Dataset {
     /// Reads a frame's ground truth; `None` when the frame has no truth file.
     ///
     /// # Errors
-    /// [`DatasetError::UnknownFrame`], [`DatasetError::Io`], [`DatasetError::Json`] (which also
+    /// [`DatasetError::UnknownFrame`], [`DatasetError::Io`] (also for a file over
+    /// [`crate::read_budget::MAX_JSON_FILE_BYTES`]), [`DatasetError::Json`] (which also
     /// covers impossible values such as a zero axis or an inverted box).
     pub fn load_truth(&self, frame: &str) -> Result<Option<FrameTruth>, DatasetError> {
         self.depth_path(frame)?;
@@ -208,10 +210,9 @@ impl Dataset {
         if !path.is_file() {
             return Ok(None);
         }
-        let text = std::fs::read_to_string(&path).map_err(|e| DatasetError::io(&path, e))?;
-        serde_json::from_str(&text)
-            .map(Some)
-            .map_err(|source| DatasetError::Json { path, source })
+        let text =
+            read_json_text(&path, MAX_JSON_FILE_BYTES).map_err(|e| DatasetError::io(&path, e))?;
+        parse_truth(&text, &path).map(Some)
     }
 
     /// Reads a frame's instance mask; `None` when the frame has none.
@@ -226,4 +227,12 @@ impl Dataset {
         }
         read_mask_png(&path, self.size()).map(Some)
     }
+}
+
+/// Parses the text of a truth file; `path` names it in errors.
+pub(crate) fn parse_truth(text: &str, path: &Path) -> Result<FrameTruth, DatasetError> {
+    serde_json::from_str(text).map_err(|source| DatasetError::Json {
+        path: path.to_owned(),
+        source,
+    })
 }

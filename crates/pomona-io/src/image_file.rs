@@ -1,27 +1,45 @@
 //! Decoding and encoding the dataset's images (PNG, JPEG) into core types.
 //!
 //! Decoding checks the header (size, sample type) *before* allocating pixel memory, so a
-//! corrupt or hostile file cannot make us allocate more than the camera's image size.
+//! corrupt or hostile file cannot make us allocate more than the camera's image size, nor more
+//! than the read budget of a file of its size ([`crate::read_budget`]: a few kilobytes of
+//! deflate cannot declare gigabytes of pixels).
 
 use std::path::Path;
 
 use image::codecs::png::{CompressionType, FilterType, PngEncoder};
-use image::{ColorType, DynamicImage, ImageDecoder, ImageEncoder, ImageReader};
+use image::error::{LimitError, LimitErrorKind};
+use image::{ColorType, DynamicImage, ImageDecoder, ImageEncoder, ImageError, ImageReader, Limits};
 use pomona_core::{ColorImage, DepthImage, InstanceMask};
 
 use crate::atomic_write::write_atomically;
+use crate::read_budget::{decode_budget_bytes, over_budget};
 use crate::DatasetError;
 
 /// Opens an image and checks that its size is `expected` (width, height), returning the decoder.
-fn open_checked(path: &Path, expected: (u32, u32)) -> Result<impl ImageDecoder, DatasetError> {
+/// Opens the image at `path`, checks its size against `expected`, and checks that decoding it
+/// (the decoder's pixels plus `out_bytes_per_pixel` for the caller's own copy) fits the read
+/// budget of a file of its size (see [`crate::read_budget`]); the decoder is limited to the same
+/// budget for its own buffers.
+fn open_checked(
+    path: &Path,
+    expected: (u32, u32),
+    out_bytes_per_pixel: u64,
+) -> Result<impl ImageDecoder, DatasetError> {
     let image_err = |source| DatasetError::Image {
         path: path.to_owned(),
         source,
     };
-    let reader = ImageReader::open(path)
+    let file_len = std::fs::metadata(path)
+        .map_err(|e| DatasetError::io(path, e))?
+        .len();
+    let mut reader = ImageReader::open(path)
         .map_err(|e| DatasetError::io(path, e))?
         .with_guessed_format()
         .map_err(|e| DatasetError::io(path, e))?;
+    let mut limits = Limits::default();
+    limits.max_alloc = Some(decode_budget_bytes(file_len));
+    reader.limits(limits);
     let decoder = reader.into_decoder().map_err(image_err)?;
     let (width, height) = decoder.dimensions();
     if (width, height) != expected {
@@ -33,12 +51,25 @@ fn open_checked(path: &Path, expected: (u32, u32)) -> Result<impl ImageDecoder, 
             expected_height: expected.1,
         });
     }
+    let pixels = u64::from(width) * u64::from(height);
+    let needed = decoder
+        .total_bytes()
+        .saturating_add(pixels.saturating_mul(out_bytes_per_pixel));
+    if over_budget(needed, file_len).is_some() {
+        return Err(image_err(ImageError::Limits(LimitError::from_kind(
+            LimitErrorKind::InsufficientMemory,
+        ))));
+    }
     Ok(decoder)
 }
 
-/// Reads a 16-bit single-channel image of the expected size as raw values.
-fn read_u16_plane(path: &Path, expected: (u32, u32)) -> Result<Vec<u16>, DatasetError> {
-    let decoder = open_checked(path, expected)?;
+/// Decodes a 16-bit single-channel image; `out_bytes_per_pixel` as in [`open_checked`].
+fn read_u16_plane(
+    path: &Path,
+    expected: (u32, u32),
+    out_bytes_per_pixel: u64,
+) -> Result<Vec<u16>, DatasetError> {
+    let decoder = open_checked(path, expected, out_bytes_per_pixel)?;
     let color = decoder.color_type();
     if color != ColorType::L16 {
         return Err(DatasetError::DepthNotSixteenBit {
@@ -63,7 +94,8 @@ pub fn read_depth_png(
     expected: (u32, u32),
     unit_m: f64,
 ) -> Result<DepthImage, DatasetError> {
-    let raw = read_u16_plane(path, expected)?;
+    // The depth image keeps an f32 per pixel.
+    let raw = read_u16_plane(path, expected, 4)?;
     DepthImage::from_u16(expected.0, expected.1, &raw, unit_m).map_err(|source| {
         DatasetError::Core {
             path: path.to_owned(),
@@ -77,7 +109,8 @@ pub fn read_depth_png(
 /// # Errors
 /// As [`read_depth_png`].
 pub fn read_mask_png(path: &Path, expected: (u32, u32)) -> Result<InstanceMask, DatasetError> {
-    let ids = read_u16_plane(path, expected)?;
+    // The mask keeps the decoded ids.
+    let ids = read_u16_plane(path, expected, 0)?;
     InstanceMask::from_ids(expected.0, expected.1, ids).map_err(|source| DatasetError::Core {
         path: path.to_owned(),
         source,
@@ -89,7 +122,8 @@ pub fn read_mask_png(path: &Path, expected: (u32, u32)) -> Result<InstanceMask, 
 /// # Errors
 /// [`DatasetError::SizeMismatch`], [`DatasetError::Image`], [`DatasetError::Io`].
 pub fn read_color_image(path: &Path, expected: (u32, u32)) -> Result<ColorImage, DatasetError> {
-    let decoder = open_checked(path, expected)?;
+    // Converting to 8-bit RGB may copy the decoded pixels.
+    let decoder = open_checked(path, expected, 3)?;
     let image = DynamicImage::from_decoder(decoder).map_err(|source| DatasetError::Image {
         path: path.to_owned(),
         source,

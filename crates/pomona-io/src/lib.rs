@@ -16,10 +16,13 @@ pub mod cloud_file;
 mod dataset;
 mod dataset_writer;
 mod error;
+#[doc(hidden)]
+pub mod fuzzing;
 mod image_file;
 pub mod lzf;
 pub mod pcd;
 pub mod ply;
+pub mod read_budget;
 
 pub use camera_file::CameraFile;
 pub use cloud_file::{read_cloud, write_cloud, CloudFileError, CloudFormat};

@@ -62,6 +62,14 @@ pub enum LzfError {
         /// Bytes actually left after the control byte.
         available: usize,
     },
+    /// The expected length is more than the input can decode to (checked before allocating).
+    #[error("{input} bytes of LZF data cannot decode to the expected {expected} bytes")]
+    ImplausibleLength {
+        /// The expected decompressed length.
+        expected: usize,
+        /// Length of the compressed input.
+        input: usize,
+    },
     /// A back-reference points before the start of the output.
     #[error(
         "LZF back-reference at input byte {at} reaches {distance} bytes back but only {produced} \
@@ -79,13 +87,21 @@ pub enum LzfError {
 
 /// Decompresses an LZF stream that must decode to exactly `expected_len` bytes.
 ///
-/// Allocates exactly `expected_len` bytes (the caller is responsible for bounding it, e.g. by
-/// [`MAX_EXPANSION_RATIO`] times the input length) and nothing else.
+/// Allocates exactly `expected_len` bytes and nothing else, and only after checking that
+/// `input` could decode to that many (at most [`MAX_EXPANSION_RATIO`] times its length); callers
+/// bound `expected_len` further when they need to (PCD keeps it within its read budget).
 ///
 /// # Errors
-/// [`LzfError`] when the stream is truncated, references data before its start, or decodes to a
+/// [`LzfError::ImplausibleLength`] when `input` is too short to decode to `expected_len` bytes;
+/// otherwise [`LzfError`] when the stream is truncated, references data before its start, or decodes to a
 /// length other than `expected_len`.
 pub fn decompress(input: &[u8], expected_len: usize) -> Result<Vec<u8>, LzfError> {
+    if expected_len > input.len().saturating_mul(MAX_EXPANSION_RATIO) {
+        return Err(LzfError::ImplausibleLength {
+            expected: expected_len,
+            input: input.len(),
+        });
+    }
     let mut out = vec![0_u8; expected_len];
     decompress_into(input, &mut out)?;
     Ok(out)
@@ -337,10 +353,27 @@ mod tests {
             })
         ));
         assert!(matches!(
-            decompress(&[], 1),
+            decompress_into(&[], &mut [0]),
             Err(LzfError::OutputUnderrun { .. })
         ));
         assert_eq!(decompress(&[], 0).unwrap(), Vec::<u8>::new());
+        // A length no input of this size can produce is refused before allocating.
+        assert!(matches!(
+            decompress(&[], 1),
+            Err(LzfError::ImplausibleLength {
+                expected: 1,
+                input: 0
+            })
+        ));
+        assert!(matches!(
+            decompress(&c, usize::MAX),
+            Err(LzfError::ImplausibleLength { .. })
+        ));
+        let longest = c.len() * MAX_EXPANSION_RATIO;
+        assert!(matches!(
+            decompress(&c, longest),
+            Err(LzfError::OutputUnderrun { .. })
+        ));
     }
 
     #[test]

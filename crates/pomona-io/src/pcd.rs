@@ -289,6 +289,17 @@ pub enum PcdError {
         /// The value read.
         value: f64,
     },
+    /// Decoding would allocate more than the reader's budget for a file of this size (see
+    /// [`crate::read_budget`]): the header declares far more data than the file can hold.
+    #[error(
+        "decoding needs {needed} bytes, over the budget of {budget} bytes for a file this size"
+    )]
+    OverBudget {
+        /// Bytes the decoded data would take.
+        needed: u64,
+        /// The budget ([`crate::read_budget::decode_budget_bytes`] of the input size).
+        budget: u64,
+    },
     /// The cloud is too large to be described by a PCD header (`WIDTH` and compressed sizes are
     /// 32-bit).
     #[error("cloud too large for PCD: {0}")]

@@ -35,9 +35,12 @@
 
 mod error;
 mod folds;
+#[doc(hidden)]
+pub mod fuzzing;
 mod grid_search;
 mod kernel_cache;
 mod model_file;
+mod model_head;
 mod platt;
 mod samples;
 mod scaler;
@@ -50,7 +53,9 @@ pub use folds::stratified_folds;
 pub use grid_search::{
     CvMetric, GridAxis, GridCell, GridSearchParams, GridSearchResult, ValidGridSearch,
 };
-pub use model_file::{ModelFile, MODEL_FORMAT, MODEL_VERSION};
+pub use model_file::{
+    ModelFile, MAX_MODEL_FILE_BYTES, MAX_STAGE_PARAMS_BYTES, MODEL_FORMAT, MODEL_VERSION,
+};
 pub use platt::PlattSigmoid;
 pub use samples::{Samples, TrainingSet};
 pub use scaler::MinMaxScaler;

@@ -15,14 +15,28 @@
 
 use std::path::Path;
 
+use pomona_io::read_budget::read_json_text;
+
 use serde::{Deserialize, Serialize};
 
+use serde_json::value::RawValue;
+
+use crate::model_head::{ModelHead, Peek};
 use crate::{MinMaxScaler, ModelFileError, RbfSvm, ScoreCalibration, SvmClassifier};
 
 /// Value of the `format` key.
 pub const MODEL_FORMAT: &str = "pomona-model";
 /// Format version this build writes and reads.
 pub const MODEL_VERSION: u32 = 1;
+
+/// Largest model file read (the built-in models are under 3 MB); together with
+/// [`MAX_STAGE_PARAMS_BYTES`] it keeps the memory a hostile model file can claim within a small
+/// multiple of its size (see `pomona_io::read_budget`).
+pub const MAX_MODEL_FILE_BYTES: u64 = 16 << 20;
+
+/// Largest `stage_params` object read: it is parsed into a generic JSON value, which takes up
+/// to about 25 times its text.
+pub const MAX_STAGE_PARAMS_BYTES: usize = 1 << 20;
 
 /// Contents of a model file.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -85,15 +99,17 @@ impl ModelFile {
     /// Reads a model file and checks it was made for `pipeline` by this format version.
     ///
     /// # Errors
-    /// [`ModelFileError::Io`], [`ModelFileError::Json`], [`ModelFileError::NotAModel`],
-    /// [`ModelFileError::Version`], [`ModelFileError::Pipeline`], [`ModelFileError::Invalid`];
-    /// each names the file.
+    /// [`ModelFileError::Io`] (also for a file over [`MAX_MODEL_FILE_BYTES`]),
+    /// [`ModelFileError::Json`], [`ModelFileError::NotAModel`], [`ModelFileError::Version`],
+    /// [`ModelFileError::Pipeline`], [`ModelFileError::Invalid`] (also for `stage_params` over
+    /// [`MAX_STAGE_PARAMS_BYTES`]); each names the file.
     pub fn load(path: impl AsRef<Path>, pipeline: &str) -> Result<Self, ModelFileError> {
         let path = path.as_ref();
-        let text = std::fs::read_to_string(path).map_err(|source| ModelFileError::Io {
-            path: path.to_owned(),
-            source,
-        })?;
+        let text =
+            read_json_text(path, MAX_MODEL_FILE_BYTES).map_err(|source| ModelFileError::Io {
+                path: path.to_owned(),
+                source,
+            })?;
         Self::from_json(&text, path, pipeline)
     }
 
@@ -130,15 +146,14 @@ impl ModelFile {
             path: path.to_owned(),
             source,
         };
-        let value: serde_json::Value = serde_json::from_str(text).map_err(json_err)?;
-        let format = value.get("format").and_then(|f| f.as_str());
-        if format != Some(MODEL_FORMAT) {
+        let head: ModelHead = serde_json::from_str(text).map_err(json_err)?;
+        if head.format.as_ref().and_then(Peek::as_str) != Some(MODEL_FORMAT) {
             return Err(ModelFileError::NotAModel {
                 path: path.to_owned(),
-                found: value.get("format").map(|f| f.to_string()),
+                found: head.format.as_ref().map(Peek::describe),
             });
         }
-        let version = value.get("version").and_then(serde_json::Value::as_u64);
+        let version = head.version.as_ref().and_then(Peek::as_u64);
         if version != Some(u64::from(MODEL_VERSION)) {
             return Err(ModelFileError::Version {
                 path: path.to_owned(),
@@ -146,7 +161,7 @@ impl ModelFile {
                 supported: MODEL_VERSION,
             });
         }
-        let found = value.get("pipeline").and_then(|p| p.as_str()).unwrap_or("");
+        let found = head.pipeline.as_ref().and_then(Peek::as_str).unwrap_or("");
         if found != pipeline {
             return Err(ModelFileError::Pipeline {
                 path: path.to_owned(),
@@ -154,8 +169,9 @@ impl ModelFile {
                 expected: pipeline.to_owned(),
             });
         }
-        // Parse from the text, not the Value, so numbers keep their exact decimal form.
-        let model: Self = serde_json::from_str(text).map_err(json_err)?;
+        // Parse from the text, not a generic value, so numbers keep their exact decimal form.
+        let wire: ModelWire = serde_json::from_str(text).map_err(json_err)?;
+        let model = wire.into_model(path)?;
         let invalid = |source| ModelFileError::Invalid {
             path: path.to_owned(),
             source,
@@ -172,5 +188,49 @@ impl ModelFile {
             }
         }
         Ok(model)
+    }
+}
+
+/// A model file as parsed: `stage_params` kept as text until its size is checked.
+#[derive(Deserialize)]
+struct ModelWire<'a> {
+    format: String,
+    version: u32,
+    pipeline: String,
+    #[serde(borrow)]
+    stage_params: &'a RawValue,
+    scaler: Option<MinMaxScaler>,
+    svm: RbfSvm,
+    #[serde(default)]
+    calibration: Option<ScoreCalibration>,
+}
+
+impl ModelWire<'_> {
+    /// The model, once `stage_params` is known to be small enough to parse.
+    fn into_model(self, path: &Path) -> Result<ModelFile, ModelFileError> {
+        let raw = self.stage_params.get();
+        let invalid = |reason: String| ModelFileError::Invalid {
+            path: path.to_owned(),
+            source: crate::LearnError::InconsistentModel(reason),
+        };
+        if raw.len() > MAX_STAGE_PARAMS_BYTES {
+            return Err(invalid(format!(
+                "stage_params of {} bytes is over the {MAX_STAGE_PARAMS_BYTES}-byte limit",
+                raw.len()
+            )));
+        }
+        let stage_params = serde_json::from_str(raw).map_err(|source| ModelFileError::Json {
+            path: path.to_owned(),
+            source,
+        })?;
+        Ok(ModelFile {
+            format: self.format,
+            version: self.version,
+            pipeline: self.pipeline,
+            stage_params,
+            scaler: self.scaler,
+            svm: self.svm,
+            calibration: self.calibration,
+        })
     }
 }

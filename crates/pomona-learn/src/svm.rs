@@ -360,10 +360,11 @@ impl RbfSvm {
         if self.n_features == 0 {
             return bad("zero features");
         }
-        if self.support_vectors.len() != self.coef.len() * self.n_features {
+        if self.coef.len().checked_mul(self.n_features) != Some(self.support_vectors.len()) {
             return bad("support vector array does not match coefficient count");
         }
-        if self.n_support_negative + self.n_support_positive != self.coef.len() {
+        let counted = self.n_support_negative.checked_add(self.n_support_positive);
+        if counted != Some(self.coef.len()) {
             return bad("support vector counts do not add up");
         }
         let finite = self.gamma.is_finite()

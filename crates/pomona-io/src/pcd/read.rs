@@ -21,7 +21,7 @@ pub fn read_pcd(bytes: &[u8]) -> Result<PointCloud, PcdError> {
         .iter()
         .filter(|&&b| b == b'\n')
         .count();
-    decode(&header, data, first_data_line)
+    decode(&header, data, first_data_line, bytes.len() as u64)
 }
 
 /// Reads the PCD file at `path` (entirely into memory).
@@ -191,6 +191,16 @@ impl Plan {
         ]
         .into_iter()
         .filter_map(|(s, r)| s.map(|s| (s, r)))
+    }
+
+    /// Bytes the decoded columns take per point.
+    fn column_bytes_per_point(&self) -> u64 {
+        let size = |present: bool, bytes: usize| if present { bytes as u64 } else { 0 };
+        size(true, std::mem::size_of::<Point3<f32>>())
+            + size(self.rgb.is_some(), std::mem::size_of::<[u8; 3]>())
+            + size(self.label.is_some(), std::mem::size_of::<u32>())
+            + size(self.nx.is_some(), std::mem::size_of::<Vector3<f32>>())
+            + size(self.intensity.is_some(), std::mem::size_of::<f32>())
     }
 
     fn role(&self, field: usize) -> Option<Role> {
@@ -384,60 +394,104 @@ impl Columns {
     }
 }
 
-fn decode(header: &PcdHeader, data: &[u8], first_line: usize) -> Result<PointCloud, PcdError> {
+fn decode(
+    header: &PcdHeader,
+    data: &[u8],
+    first_line: usize,
+    input_len: u64,
+) -> Result<PointCloud, PcdError> {
     let plan = Plan::new(header)?;
     let points = header.points;
     let point_size = header.point_size();
     let available = data.len() as u64;
-    let needed = points.saturating_mul(point_size);
+    let needed = match header.encoding {
+        PcdEncoding::Binary => points.saturating_mul(point_size),
+        // Each value takes at least one character and one separator (the last may end the file).
+        PcdEncoding::Ascii => points
+            .saturating_mul(
+                2 * header
+                    .fields
+                    .iter()
+                    .map(|f| u64::from(f.count))
+                    .sum::<u64>(),
+            )
+            .saturating_sub(1),
+        // Checked against the declared sizes below.
+        PcdEncoding::BinaryCompressed => 8,
+    };
+    if needed > available {
+        return Err(PcdError::Truncated {
+            points,
+            needed,
+            available,
+        });
+    }
+    let columns = points.saturating_mul(plan.column_bytes_per_point());
     match header.encoding {
         PcdEncoding::Binary => {
-            if needed > available {
-                return Err(PcdError::Truncated {
-                    points,
-                    needed,
-                    available,
-                });
-            }
+            check_budget(columns, input_len)?;
             // Fits: it is at most the input length.
             let body = &data[..needed as usize];
             decode_columns(header, &plan, body, points as usize, false)
         }
         PcdEncoding::BinaryCompressed => {
-            let (Some(c), Some(u)) = (data.get(0..4), data.get(4..8)) else {
-                return Err(PcdError::Truncated {
-                    points,
-                    needed: 8,
-                    available,
-                });
-            };
-            let compressed = u64::from(u32::from_le_bytes(le(c)));
-            let uncompressed = u64::from(u32::from_le_bytes(le(u)));
-            if uncompressed != needed {
-                return Err(PcdError::CompressedSizeMismatch {
-                    declared: uncompressed,
-                    expected: needed,
-                });
-            }
-            if compressed > available - 8 {
-                return Err(PcdError::Truncated {
-                    points,
-                    needed: compressed + 8,
-                    available,
-                });
-            }
-            if uncompressed > compressed * lzf::MAX_EXPANSION_RATIO as u64 {
-                return Err(PcdError::ImplausibleCompression {
-                    compressed,
-                    uncompressed,
-                });
-            }
-            let payload = &data[8..8 + compressed as usize];
-            let body = lzf::decompress(payload, uncompressed as usize)?;
+            let body = decompress_body(header, data, columns, input_len)?;
             decode_columns(header, &plan, &body, points as usize, true)
         }
-        PcdEncoding::Ascii => decode_ascii(header, &plan, data, first_line),
+        PcdEncoding::Ascii => {
+            check_budget(columns, input_len)?;
+            decode_ascii(header, &plan, data, first_line)
+        }
     }
+}
+
+/// Fails with [`PcdError::OverBudget`] when `needed` decoded bytes exceed the budget of an
+/// input of `input_len` bytes.
+fn check_budget(needed: u64, input_len: u64) -> Result<(), PcdError> {
+    match crate::read_budget::over_budget(needed, input_len) {
+        Some(budget) => Err(PcdError::OverBudget { needed, budget }),
+        None => Ok(()),
+    }
+}
+
+/// Checks the size pair of a `binary_compressed` payload, then that the decompressed body plus
+/// the `columns` bytes it decodes to fit the budget, and decompresses it.
+fn decompress_body(
+    header: &PcdHeader,
+    data: &[u8],
+    columns: u64,
+    input_len: u64,
+) -> Result<Vec<u8>, PcdError> {
+    let points = header.points;
+    let needed = points.saturating_mul(header.point_size());
+    // The caller checked that the two size words are present.
+    let available = data.len() as u64;
+    let c = data.get(0..4).unwrap_or_default();
+    let u = data.get(4..8).unwrap_or_default();
+    let compressed = u64::from(u32::from_le_bytes(le(c)));
+    let uncompressed = u64::from(u32::from_le_bytes(le(u)));
+    if uncompressed != needed {
+        return Err(PcdError::CompressedSizeMismatch {
+            declared: uncompressed,
+            expected: needed,
+        });
+    }
+    if compressed > available.saturating_sub(8) {
+        return Err(PcdError::Truncated {
+            points,
+            needed: compressed + 8,
+            available,
+        });
+    }
+    if uncompressed > compressed * lzf::MAX_EXPANSION_RATIO as u64 {
+        return Err(PcdError::ImplausibleCompression {
+            compressed,
+            uncompressed,
+        });
+    }
+    check_budget(columns.saturating_add(uncompressed), input_len)?;
+    let payload = &data[8..8 + compressed as usize];
+    Ok(lzf::decompress(payload, uncompressed as usize)?)
 }
 
 /// Decodes `n` points from `body`, which holds exactly `n × point size` bytes, point-major
@@ -473,69 +527,47 @@ fn decode_ascii(
     first_line: usize,
 ) -> Result<PointCloud, PcdError> {
     let points = header.points;
+    // Bounded by the point size, which the header keeps within u32.
     let tokens_per_point: usize = header.fields.iter().map(|f| f.count as usize).sum();
-    // Each value takes at least one character and one separator (the very last may end the file).
-    let min_bytes = points
-        .saturating_mul(2 * tokens_per_point as u64)
-        .saturating_sub(1);
-    let available = data.len() as u64;
-    if min_bytes > available {
-        return Err(PcdError::Truncated {
-            points,
-            needed: min_bytes,
-            available,
-        });
-    }
     let n = points as usize;
     let mut cols = Columns::new(plan, n);
-    // For each token position: (field index, role if kept).
-    let mut layout = Vec::with_capacity(tokens_per_point);
-    for (i, f) in header.fields.iter().enumerate() {
-        let role = plan.role(i);
-        for _ in 0..f.count {
-            layout.push((i, role));
-        }
-    }
+    // The role of each field (not of each token: a field's COUNT may be huge).
+    let roles: Vec<Option<Role>> = (0..header.fields.len()).map(|i| plan.role(i)).collect();
     let mut found = 0_usize;
-    let mut toks: Vec<&[u8]> = Vec::with_capacity(tokens_per_point);
     for (line_idx, line) in data.split(|&b| b == b'\n').enumerate() {
         if found == n {
             break;
         }
         let line_no = first_line + line_idx;
-        toks.clear();
-        toks.extend(
+        let tokens = || {
             line.split(|b| b.is_ascii_whitespace())
-                .filter(|t| !t.is_empty()),
-        );
-        if toks.is_empty() {
+                .filter(|t| !t.is_empty())
+        };
+        let count = tokens().count();
+        if count == 0 {
             continue;
         }
-        if toks.len() != tokens_per_point {
+        if count != tokens_per_point {
             return Err(PcdError::AsciiValueCount {
                 line: line_no,
                 expected: tokens_per_point,
-                found: toks.len(),
+                found: count,
             });
         }
-        for (&tok, &(fi, role)) in toks.iter().zip(&layout) {
-            let field = &header.fields[fi];
-            let text = std::str::from_utf8(tok).ok();
-            let value = text.and_then(|t| {
-                if role == Some(Role::Rgb) && field.scalar == PcdScalar::F32 {
-                    parse_packed_float(t)
-                } else {
-                    Num::parse(t, field.scalar)
-                }
-            });
-            let Some(value) = value else {
-                return Err(PcdError::AsciiBadNumber {
+        let token_fields = header
+            .fields
+            .iter()
+            .zip(&roles)
+            .flat_map(|(f, &role)| std::iter::repeat_n((f, role), f.count as usize));
+        for (tok, (field, role)) in tokens().zip(token_fields) {
+            let value = parse_ascii_value(tok, field.scalar, role).ok_or_else(|| {
+                PcdError::AsciiBadNumber {
                     line: line_no,
                     field: clip(&field.name),
                     token: clip(&String::from_utf8_lossy(tok)),
                     ty: field.scalar.to_string(),
-                });
-            };
+                }
+            })?;
             if let Some(role) = role {
                 cols.set(role, found, value)?;
             }
@@ -549,6 +581,16 @@ fn decode_ascii(
         });
     }
     cols.into_cloud(header)
+}
+
+/// Parses one ascii token of a field of type `scalar` with `role`.
+fn parse_ascii_value(tok: &[u8], scalar: PcdScalar, role: Option<Role>) -> Option<Num> {
+    let text = std::str::from_utf8(tok).ok()?;
+    if role == Some(Role::Rgb) && scalar == PcdScalar::F32 {
+        parse_packed_float(text)
+    } else {
+        Num::parse(text, scalar)
+    }
 }
 
 /// An ascii packed colour of a float-typed `rgb`/`rgba` field: current PCL writes the 32 bits as

@@ -30,7 +30,7 @@ pub use camera::PinholeCamera;
 pub use cloud::{CloudLayout, PointCloud};
 pub use color_image::ColorImage;
 pub use depth_image::DepthImage;
-pub use detection::{Detection, FrameDetections};
+pub use detection::{Detection, FrameDetections, SYMMETRY_PLANE_PIPELINES};
 pub use error::CoreError;
 pub use frame::RgbdFrame;
 pub use instance_mask::InstanceMask;

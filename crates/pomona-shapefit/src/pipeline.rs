@@ -593,7 +593,7 @@ pub struct ShapeFitDetector {
 }
 
 fn detection(c: &Candidate, shape: &Shape, score: f64, camera: &PinholeCamera) -> Detection {
-    let (center_m, axis) = match shape {
+    let (center_m, fruit_axis) = match shape {
         Shape::Sphere(s) => (s.center, None),
         Shape::Cylinder(cy) => (cy.midpoint(), Some(cy.axis)),
     };
@@ -608,7 +608,8 @@ fn detection(c: &Candidate, shape: &Shape, score: f64, camera: &PinholeCamera) -
         center_m,
         score,
         diameter_m: Some(2.0 * shape.radius_m()),
-        axis,
+        fruit_axis,
+        symmetry_plane_normal: None,
         bbox_px: PixelBox::new(lo.0, lo.1, hi.0, hi.1).ok(),
         kind: None,
         support_points: Some(c.points.len()),

@@ -11,6 +11,7 @@ use pomona_learn::{MinMaxScaler, RbfSvm, SvmClassifier};
 use serde::{Deserialize, Serialize};
 
 use crate::error::{check_at_least, check_positive, SymmetryError};
+use crate::CentreRefinementParams;
 
 /// Which reference frame a box's features are expressed in (the swappable stage).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -371,6 +372,10 @@ pub struct StageParams {
     /// Fixed-frame pre-filter before the symmetry search (absent in older models: off).
     #[serde(default)]
     pub cascade: CascadeParams,
+    /// Centre refinement and diameter of merged detections (absent in older models: the
+    /// defaults, on; detection-time only, so older models gain it without retraining).
+    #[serde(default)]
+    pub refinement: CentreRefinementParams,
 }
 
 impl StageParams {
@@ -390,6 +395,7 @@ impl StageParams {
                 enabled: true,
                 ..CascadeParams::default()
             },
+            refinement: CentreRefinementParams::default(),
         }
     }
 

@@ -37,19 +37,11 @@ pub struct Detection {
     pub diameter_m: Option<f64>,
     /// The fruit's long axis (unit; sign arbitrary), when the method estimates one (shape-fit:
     /// the fitted cylinder's axis).
-    #[serde(
-        default,
-        with = "unit_axis",
-        skip_serializing_if = "Option::is_none"
-    )]
+    #[serde(default, with = "unit_axis", skip_serializing_if = "Option::is_none")]
     pub fruit_axis: Option<Unit<Vector3<f64>>>,
     /// Normal (unit; sign arbitrary) of the fruit's reflection-symmetry plane, perpendicular to
     /// the fruit axis, when the method estimates one (symmetry pipeline).
-    #[serde(
-        default,
-        with = "unit_axis",
-        skip_serializing_if = "Option::is_none"
-    )]
+    #[serde(default, with = "unit_axis", skip_serializing_if = "Option::is_none")]
     pub symmetry_plane_normal: Option<Unit<Vector3<f64>>>,
     /// Image-space box, when the method has one.
     #[serde(default)]
@@ -152,17 +144,22 @@ impl From<FrameDetectionsFile> for FrameDetections {
         let detections = file
             .detections
             .into_iter()
-            .map(|DetectionFile { mut detection, axis }| {
-                let slot = if plane_normal {
-                    &mut detection.symmetry_plane_normal
-                } else {
-                    &mut detection.fruit_axis
-                };
-                if slot.is_none() {
-                    *slot = axis;
-                }
-                detection
-            })
+            .map(
+                |DetectionFile {
+                     mut detection,
+                     axis,
+                 }| {
+                    let slot = if plane_normal {
+                        &mut detection.symmetry_plane_normal
+                    } else {
+                        &mut detection.fruit_axis
+                    };
+                    if slot.is_none() {
+                        *slot = axis;
+                    }
+                    detection
+                },
+            )
             .collect();
         Self {
             frame: file.frame,
@@ -219,11 +216,19 @@ mod tests {
         let y = Some(Vector3::y_axis());
         for pipeline in ["shape-fit", "someone-elses-detector"] {
             let d = &old_file(pipeline, "").detections[0];
-            assert_eq!((d.fruit_axis, d.symmetry_plane_normal), (y, None), "{pipeline}");
+            assert_eq!(
+                (d.fruit_axis, d.symmetry_plane_normal),
+                (y, None),
+                "{pipeline}"
+            );
         }
         for pipeline in SYMMETRY_PLANE_PIPELINES {
             let d = &old_file(pipeline, "").detections[0];
-            assert_eq!((d.fruit_axis, d.symmetry_plane_normal), (None, y), "{pipeline}");
+            assert_eq!(
+                (d.fruit_axis, d.symmetry_plane_normal),
+                (None, y),
+                "{pipeline}"
+            );
         }
         // A new key beside the old one wins; the old one fills only the pipeline's own slot.
         let d = &old_file("symmetry", r#", "symmetry_plane_normal": [1, 0, 0]"#).detections[0];
@@ -231,8 +236,14 @@ mod tests {
         assert_eq!(d.fruit_axis, None);
         // Re-written, the file carries only the new key.
         let json = serde_json::to_string(&old_file("symmetry", "")).unwrap();
-        assert!(json.contains(r#""symmetry_plane_normal":[0.0,1.0,0.0]"#), "{json}");
-        assert!(!json.contains(r#""axis""#) && !json.contains("fruit_axis"), "{json}");
+        assert!(
+            json.contains(r#""symmetry_plane_normal":[0.0,1.0,0.0]"#),
+            "{json}"
+        );
+        assert!(
+            !json.contains(r#""axis""#) && !json.contains("fruit_axis"),
+            "{json}"
+        );
     }
 
     #[test]

@@ -214,10 +214,21 @@ mod tests {
         let linear = color_moments(&colors, HueStatistics::Linear);
         let circular = color_moments(&colors, HueStatistics::Circular);
         assert!((linear[0] - 0.5).abs() < 0.05, "{linear:?}");
-        assert!(hue_difference(circular[0], 0.0).abs() < 1e-9, "{circular:?}");
-        assert!(linear[3] > 0.2 && circular[3] < 1e-3, "hh {} {}", linear[3], circular[3]);
+        assert!(
+            hue_difference(circular[0], 0.0).abs() < 1e-9,
+            "{circular:?}"
+        );
+        assert!(
+            linear[3] > 0.2 && circular[3] < 1e-3,
+            "hh {} {}",
+            linear[3],
+            circular[3]
+        );
         assert_eq!(linear[1..3], circular[1..3]);
-        assert_eq!((linear[6], linear[7], linear[8]), (circular[6], circular[7], circular[8]));
+        assert_eq!(
+            (linear[6], linear[7], linear[8]),
+            (circular[6], circular[7], circular[8])
+        );
         // Hues away from 0 give the same moments either way.
         let green = [[0, 200, 30], [10, 220, 0], [0, 180, 60]];
         let (a, b) = (

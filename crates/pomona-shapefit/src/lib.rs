@@ -32,10 +32,10 @@ pub mod stages;
 pub use candidate::Candidate;
 pub use color_model::{ColorBayes, ColorBayesParams, ColorHistograms, ColorLut};
 pub use gpcd::{gpcd, GpcdParams, HueStatistics, GPCD_LEN};
-/// Re-exported from pomona-core, where the one RGB → HSV conversion lives.
-pub use pomona_core::rgb_to_hsv;
 pub use params::{CoaxialMergeParams, LabelRule, ShapeFitParams};
 pub use pipeline::{ShapeFitDetector, ShapeFitPipeline, ShapeFitStageParams, PIPELINE_NAME};
+/// Re-exported from pomona-core, where the one RGB → HSV conversion lives.
+pub use pomona_core::rgb_to_hsv;
 pub use radius_calibration::{fit_center_fixed_radius, RadiusCalibration, MIN_CALIBRATION_SAMPLES};
 pub use region_growing::{grow_regions, MinFruitArea, RegionGrowingParams};
 pub use size_prior::{

@@ -16,8 +16,8 @@ use crate::stages::{
     ClassifierStage, ColorMaskStage, DescriptorStage, RegionGrowingStage, ShapeStage,
 };
 use crate::{
-    Candidate, CoaxialMergeParams, ColorBayes, ColorHistograms, ColorLut, LabelRule, RadiusCalibration, ShapeFitParams,
-    SizePrior, SizePriorMode,
+    Candidate, CoaxialMergeParams, ColorBayes, ColorHistograms, ColorLut, LabelRule,
+    RadiusCalibration, ShapeFitParams, SizePrior, SizePriorMode,
 };
 
 /// Name of the pipeline on the command line and in model files.
@@ -775,7 +775,10 @@ mod tests {
             .map(|k| k.0)
             .collect();
         assert_eq!(kept, vec![1, 2]);
-        assert_eq!(merge_overlapping(&c, &[1.0, 2.0, 0.5, 0.1], 0.0, &coaxial).len(), 4);
+        assert_eq!(
+            merge_overlapping(&c, &[1.0, 2.0, 0.5, 0.1], 0.0, &coaxial).len(),
+            4
+        );
     }
 
     fn piece(lo: f64, hi: f64) -> Candidate {
@@ -811,7 +814,10 @@ mod tests {
             max_gap_radii: 1.0,
             ..coaxial
         };
-        assert_eq!(merge_overlapping(&c, &[2.0, 1.0, 0.5], 0.03, &strict).len(), 3);
+        assert_eq!(
+            merge_overlapping(&c, &[2.0, 1.0, 0.5], 0.03, &strict).len(),
+            3
+        );
     }
 
     fn frame(truth_json: &str) -> LabelledFrame {

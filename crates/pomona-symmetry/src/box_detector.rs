@@ -26,8 +26,8 @@ use crate::merge::Merge;
 use crate::scene_cloud::CloudStage;
 use crate::sliding_box::BoxCut;
 use crate::{
-    BoxPatch, FrameKind, FrameResult, Highlights, LocalFrame, PruningState, SceneCloud,
-    ScoredBox, StageParams, Stages,
+    BoxPatch, FrameKind, FrameResult, Highlights, LocalFrame, PruningState, SceneCloud, ScoredBox,
+    StageParams, Stages,
 };
 
 /// A trained `symmetry` or `viewer-pose` detector.

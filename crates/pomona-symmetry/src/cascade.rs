@@ -31,7 +31,10 @@ impl Stage<Vec<BoxPatch>, Vec<BoxPatch>> for Cascade<'_> {
 
 impl Cascade<'_> {
     /// The patches that pass, in order, each with its fixed-frame features.
-    pub(crate) fn gate(&self, patches: Vec<BoxPatch>) -> Result<Vec<(BoxPatch, Vec<f64>)>, PipelineError> {
+    pub(crate) fn gate(
+        &self,
+        patches: Vec<BoxPatch>,
+    ) -> Result<Vec<(BoxPatch, Vec<f64>)>, PipelineError> {
         let features: Vec<Option<Vec<f64>>> = patches
             .par_iter()
             .map(|p| {

@@ -22,9 +22,7 @@
 //! thread count.
 
 use nalgebra::Point3;
-use pomona_consensus::{
-    Acceptance, Consensus, MsacParams, Sphere, SphereEstimatorParams,
-};
+use pomona_consensus::{Acceptance, Consensus, MsacParams, Sphere, SphereEstimatorParams};
 use pomona_pipeline::{PipelineError, Stage};
 use serde::{Deserialize, Serialize};
 
@@ -149,7 +147,13 @@ impl CentreRefinement {
             max_normal_deviation_rad: None,
         }
         .check()
-        .map_err(|_| invalid("refinement.radius_range_m", lo, "must satisfy 0 <= min < max"))?;
+        .map_err(|_| {
+            invalid(
+                "refinement.radius_range_m",
+                lo,
+                "must satisfy 0 <= min < max",
+            )
+        })?;
         if !hi.is_finite() {
             return bad("refinement.radius_range_m", hi, "max must be finite");
         }
@@ -225,8 +229,12 @@ impl CentreRefinement {
         let sphere = fit.model;
         let inliers = fit.inliers.len();
         let (lo, hi) = p.radius_range_m;
-        let mean_range_m =
-            fit.inliers.iter().map(|&i| points[i].coords.norm()).sum::<f64>() / inliers.max(1) as f64;
+        let mean_range_m = fit
+            .inliers
+            .iter()
+            .map(|&i| points[i].coords.norm())
+            .sum::<f64>()
+            / inliers.max(1) as f64;
         let believable = inliers >= p.min_inliers
             && inliers as f64 >= p.min_inlier_fraction * points.len() as f64
             && sphere.is_finite()
@@ -276,11 +284,18 @@ mod tests {
         let mut points = Vec::new();
         for v in 0..240 {
             for u in 0..320 {
-                let d = camera.back_project(u as f64, v as f64, 1.0).coords.normalize();
+                let d = camera
+                    .back_project(u as f64, v as f64, 1.0)
+                    .coords
+                    .normalize();
                 // |t d − c|² = r²
                 let b = d.dot(&c.coords);
                 let disc = b * b - (c.coords.norm_squared() - r_m * r_m);
-                let t = if disc >= 0.0 { b - disc.sqrt() } else { 2.0 / d.z };
+                let t = if disc >= 0.0 {
+                    b - disc.sqrt()
+                } else {
+                    2.0 / d.z
+                };
                 points.push(Point3::from(d * t));
             }
         }
@@ -349,10 +364,7 @@ mod tests {
                 min_inlier_fraction: 1.5,
                 ..d
             },
-            CentreRefinementParams {
-                iterations: 0,
-                ..d
-            },
+            CentreRefinementParams { iterations: 0, ..d },
         ] {
             assert!(CentreRefinement::new(p).is_err(), "{p:?}");
         }

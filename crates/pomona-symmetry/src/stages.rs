@@ -7,8 +7,8 @@ use nalgebra::Point3;
 use rayon::prelude::*;
 
 use crate::{
-    BoxPatch, CentreRefinement, FeatureStage, FixedFrame, FrameKind, FrameStage, HighlightDetector, NormalStage,
-    ReferenceFrame, SceneCloud, SlidingBox, StageParams, SymmetryError, SymmetryFrame,
+    BoxPatch, CentreRefinement, FeatureStage, FixedFrame, FrameKind, FrameStage, HighlightDetector,
+    NormalStage, ReferenceFrame, SceneCloud, SlidingBox, StageParams, SymmetryError, SymmetryFrame,
     SymmetryPlaneSearch, ViewerFrame,
 };
 

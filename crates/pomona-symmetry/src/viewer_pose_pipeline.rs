@@ -4,8 +4,7 @@
 
 use pomona_learn::ModelFile;
 use pomona_pipeline::{
-    params_from_json, params_to_json, Detector, FrameSource, Pipeline, PipelineError,
-    TrainOptions,
+    params_from_json, params_to_json, Detector, FrameSource, Pipeline, PipelineError, TrainOptions,
 };
 
 use crate::training::train;

@@ -229,13 +229,17 @@ mod tests {
             (linear[6], linear[7], linear[8]),
             (circular[6], circular[7], circular[8])
         );
-        // Hues away from 0 give the same moments either way.
+        // Hues away from 0 give nearly the same moments either way (the circular mean of a
+        // narrow spread is within its cube of the arithmetic mean).
         let green = [[0, 200, 30], [10, 220, 0], [0, 180, 60]];
         let (a, b) = (
             color_moments(&green, HueStatistics::Linear),
             color_moments(&green, HueStatistics::Circular),
         );
-        assert!(a.iter().zip(&b).all(|(x, y)| (x - y).abs() < 1e-12));
+        assert!(
+            a.iter().zip(&b).all(|(x, y)| (x - y).abs() < 1e-4),
+            "{a:?} {b:?}"
+        );
     }
 
     fn sphere_cap(n: usize, radius: f64) -> (Vec<Point3<f64>>, Normals) {

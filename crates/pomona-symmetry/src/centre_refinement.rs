@@ -28,8 +28,8 @@ use serde::{Deserialize, Serialize};
 
 use crate::{SceneCloud, ScoredBox, SymmetryError};
 
-/// Parameters of [`CentreRefinement`] (stored in the model as `refinement`; models written
-/// before it existed, and keys missing from it, read the defaults).
+/// Parameters of [`CentreRefinement`] (stored in the model as `refinement`; keys missing from the
+/// block read the defaults, a model without the block runs with refinement off, as before).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct CentreRefinementParams {
@@ -40,7 +40,9 @@ pub struct CentreRefinementParams {
     pub search_radius_m: f64,
     /// Points gathered per detection at most (the pixel grid is thinned evenly).
     pub max_points: usize,
-    /// Accepted sphere radii `(min, max)`, metres: the fruit-size prior.
+    /// Accepted sphere radii `(min, max)`, metres: the fruit-size prior (at most half the 12 cm
+    /// box, which is sized to hold the largest fruit; larger spheres were fits to a fruit with
+    /// the leaves around it and moved borderline detections off their fruit).
     pub radius_range_m: (f64, f64),
     /// A point within this distance of the sphere is an inlier, metres.
     pub inlier_threshold_m: f64,
@@ -56,13 +58,24 @@ pub struct CentreRefinementParams {
     pub seed: u64,
 }
 
+impl CentreRefinementParams {
+    /// The defaults with refinement off: what a model without a `refinement` block, and the
+    /// `viewer-pose` pipeline, run with.
+    pub fn disabled() -> Self {
+        Self {
+            enabled: false,
+            ..Self::default()
+        }
+    }
+}
+
 impl Default for CentreRefinementParams {
     fn default() -> Self {
         Self {
             enabled: true,
             search_radius_m: 0.07,
             max_points: 600,
-            radius_range_m: (0.015, 0.075),
+            radius_range_m: (0.015, 0.06),
             inlier_threshold_m: 0.005,
             iterations: 300,
             min_inliers: 30,

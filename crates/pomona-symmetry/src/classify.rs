@@ -30,32 +30,17 @@ impl Stage<&[Option<Vec<f64>>], Vec<Option<f64>>> for Classify<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use pomona_learn::RbfSvm;
-    use rand::{Rng, SeedableRng};
-    use rand_chacha::ChaCha8Rng;
+    use pomona_learn::{SvmParams, TrainingSet};
 
     /// Scores line up with the described boxes; undescribed boxes get none.
     #[test]
     fn scores_line_up_with_described_boxes() {
-        let mut rng = ChaCha8Rng::seed_from_u64(5);
-        let n = 10;
-        let n_sv = 37;
-        let classifier = SvmClassifier {
-            scaler: None,
-            svm: RbfSvm {
-                n_features: n,
-                gamma: 0.05,
-                rho: 0.3,
-                support_vectors: (0..n * n_sv).map(|_| rng.gen_range(-1.0..1.0)).collect(),
-                coef: (0..n_sv).map(|i| if i < 20 { -0.7 } else { 0.9 }).collect(),
-                n_support_negative: 20,
-                n_support_positive: n_sv - 20,
-                probability: None,
-            },
-            info: None,
-        };
+        let rows: Vec<Vec<f64>> = (0..20).map(|i| vec![i as f64, (i % 3) as f64]).collect();
+        let labels: Vec<bool> = (0..20).map(|i| i >= 10).collect();
+        let data = TrainingSet::from_rows(&rows, labels).unwrap();
+        let classifier = SvmParams::default().check().unwrap().fit(&data).unwrap();
         let features: Vec<Option<Vec<f64>>> = (0..29)
-            .map(|i| (i % 4 != 1).then(|| (0..n).map(|_| rng.gen_range(-1.0..1.0)).collect()))
+            .map(|i| (i % 4 != 1).then(|| vec![(i % 20) as f64 + 0.5, 1.0]))
             .collect();
         let scores = Classify {
             classifier: &classifier,

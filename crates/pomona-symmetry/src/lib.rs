@@ -27,6 +27,7 @@
 //! line on stderr per detector).
 
 mod box_detector;
+mod box_pipeline;
 mod cascade;
 mod centre_refinement;
 mod classify;

@@ -214,15 +214,8 @@ mod tests {
         }))
         .unwrap();
         let det = Detection {
-            center_m: Point3::new(0.25, 0.0, 1.0),
-            score: 1.5,
             diameter_m: Some(0.1),
-            axis: None,
-            bbox_px: None,
-            kind: None,
-            support_points: None,
-            fit_rms_m: None,
-            confidence: None,
+            ..Detection::new(Point3::new(0.25, 0.0, 1.0), 1.5)
         };
         let out = draw_overlay(&img, &cam, Some(&truth), &[det], 0.5, "test").unwrap();
         // Truth circle: centre (100, 75), radius 200 · 0.1 / 1 = 20 px → (120, 75) is on it.

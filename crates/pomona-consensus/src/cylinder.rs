@@ -7,6 +7,12 @@
 //! `o`; the radius is the mean in-plane distance of the two points from `o`. Parallel normals
 //! (a plane, or both points on one generator line) give no axis and the sample is rejected.
 //!
+//! Departure from seed 002 (documented in docs/learning-and-evaluation.md): the paper, after
+//! Schnabel et al., sets the radius to the first point's distance from `o`. Averaging both
+//! points is symmetric in the sample order and halves the noise of one hypothesis; MSAC's
+//! refit on the inliers sets the radius a model is reported with, so only which hypotheses are
+//! tried differs.
+//!
 //! Schnabel et al. accept a point when it is within ε of the surface *and* its normal is within α
 //! of the surface normal. The geometric [`Cylinder`] only knows the distance; the angular test
 //! lives in [`CylinderEstimator::residual`] (an infinite residual when the normal deviates by more

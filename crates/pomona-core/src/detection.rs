@@ -1,9 +1,27 @@
 //! What a detector reports: one record per fruit found, one file per frame.
+//!
+//! Two direction fields say different things and never share one key: `fruit_axis` is the
+//! fruit's long axis (shape-fit's cylinders), `symmetry_plane_normal` the normal of the fruit's
+//! reflection-symmetry plane (symmetry pipeline), which is perpendicular to the fruit axis.
+//!
+//! ## Files written before the split
+//! Older detection files carry a single `axis` whose meaning depended on the pipeline that wrote
+//! it: `shape-fit` wrote the cylinder axis, `symmetry` the symmetry-plane normal (`viewer-pose`
+//! wrote none). A detection alone cannot tell which, so the mapping is done when a whole
+//! [`FrameDetections`] is read, from its recorded `pipeline`: files of the pipelines named in
+//! [`SYMMETRY_PLANE_PIPELINES`] read `axis` as `symmetry_plane_normal`, every other file
+//! (shape-fit, or a detector outside Pomona following the old documentation, "symmetry axis")
+//! as `fruit_axis`. A new key present beside `axis` wins. New files never write `axis`.
 
 use nalgebra::{Point3, Unit, Vector3};
 use serde::{Deserialize, Serialize};
 
+use crate::truth::unit_axis;
 use crate::PixelBox;
+
+/// Pipelines whose detection files written before `fruit_axis`/`symmetry_plane_normal` existed
+/// stored the symmetry-plane normal under `axis` (see the module docs).
+pub const SYMMETRY_PLANE_PIPELINES: [&str; 2] = ["symmetry", "viewer-pose"];
 
 /// A detected fruit. Higher `score` means more confident; scores are comparable only within one
 /// model (they are SVM decision values or similar, not probabilities). `confidence`, when
@@ -17,9 +35,14 @@ pub struct Detection {
     /// Estimated diameter, metres, when the method measures size.
     #[serde(default)]
     pub diameter_m: Option<f64>,
-    /// Estimated symmetry axis, when the method estimates one.
-    #[serde(default, with = "crate::truth::unit_axis")]
-    pub axis: Option<Unit<Vector3<f64>>>,
+    /// The fruit's long axis (unit; sign arbitrary), when the method estimates one (shape-fit:
+    /// the fitted cylinder's axis).
+    #[serde(default, with = "unit_axis", skip_serializing_if = "Option::is_none")]
+    pub fruit_axis: Option<Unit<Vector3<f64>>>,
+    /// Normal (unit; sign arbitrary) of the fruit's reflection-symmetry plane, perpendicular to
+    /// the fruit axis, when the method estimates one (symmetry pipeline).
+    #[serde(default, with = "unit_axis", skip_serializing_if = "Option::is_none")]
+    pub symmetry_plane_normal: Option<Unit<Vector3<f64>>>,
     /// Image-space box, when the method has one.
     #[serde(default)]
     pub bbox_px: Option<PixelBox>,
@@ -41,6 +64,32 @@ pub struct Detection {
 }
 
 impl Detection {
+    /// A detection with only a centre and a score; every optional field is `None` (set the ones
+    /// the method estimates with struct update syntax).
+    ///
+    /// ```
+    /// use pomona_core::{nalgebra::Point3, Detection};
+    /// let d = Detection {
+    ///     diameter_m: Some(0.08),
+    ///     ..Detection::new(Point3::new(0.0, 0.1, 0.7), 1.5)
+    /// };
+    /// assert_eq!(d.fruit_axis, None);
+    /// ```
+    pub fn new(center_m: Point3<f64>, score: f64) -> Self {
+        Self {
+            center_m,
+            score,
+            diameter_m: None,
+            fruit_axis: None,
+            symmetry_plane_normal: None,
+            bbox_px: None,
+            kind: None,
+            support_points: None,
+            fit_rms_m: None,
+            confidence: None,
+        }
+    }
+
     /// Whether the detection has a calibrated confidence of at least `min_confidence` (one
     /// without a confidence never has).
     pub fn confidence_at_least(&self, min_confidence: f64) -> bool {
@@ -48,8 +97,10 @@ impl Detection {
     }
 }
 
-/// All detections of one frame (`<out>/<frame>.json`).
+/// All detections of one frame (`<out>/<frame>.json`). Reading accepts the older single `axis`
+/// key (see the module docs).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(from = "FrameDetectionsFile")]
 pub struct FrameDetections {
     /// Frame stem the detections belong to.
     pub frame: String,
@@ -70,6 +121,60 @@ pub struct FrameDetections {
     pub model_id: Option<String>,
 }
 
+/// A detection as read from a file: the current fields plus the older `axis`.
+#[derive(Deserialize)]
+struct DetectionFile {
+    #[serde(flatten)]
+    detection: Detection,
+    #[serde(default, with = "unit_axis")]
+    axis: Option<Unit<Vector3<f64>>>,
+}
+
+/// [`FrameDetections`] as read from a file.
+#[derive(Deserialize)]
+struct FrameDetectionsFile {
+    frame: String,
+    pipeline: String,
+    detections: Vec<DetectionFile>,
+    #[serde(default)]
+    operating_confidence: Option<f64>,
+    #[serde(default)]
+    min_confidence: Option<f64>,
+}
+
+impl From<FrameDetectionsFile> for FrameDetections {
+    fn from(file: FrameDetectionsFile) -> Self {
+        let plane_normal = SYMMETRY_PLANE_PIPELINES.contains(&file.pipeline.as_str());
+        let detections = file
+            .detections
+            .into_iter()
+            .map(
+                |DetectionFile {
+                     mut detection,
+                     axis,
+                 }| {
+                    let slot = if plane_normal {
+                        &mut detection.symmetry_plane_normal
+                    } else {
+                        &mut detection.fruit_axis
+                    };
+                    if slot.is_none() {
+                        *slot = axis;
+                    }
+                    detection
+                },
+            )
+            .collect();
+        Self {
+            frame: file.frame,
+            pipeline: file.pipeline,
+            detections,
+            operating_confidence: file.operating_confidence,
+            min_confidence: file.min_confidence,
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -83,7 +188,8 @@ mod tests {
                 center_m: Point3::new(0.1, -0.2, 0.7),
                 score: 1.25,
                 diameter_m: Some(0.08),
-                axis: Some(Vector3::y_axis()),
+                fruit_axis: Some(Vector3::y_axis()),
+                symmetry_plane_normal: None,
                 bbox_px: Some(PixelBox::new(1.0, 2.0, 3.0, 4.0).unwrap()),
                 kind: None,
                 support_points: None,
@@ -96,6 +202,59 @@ mod tests {
         };
         let json = serde_json::to_string(&d).unwrap();
         assert!(json.contains(r#""center_m":[0.1,-0.2,0.7]"#));
+        assert!(!json.contains("symmetry_plane_normal") && !json.contains(r#""axis""#));
         assert_eq!(serde_json::from_str::<FrameDetections>(&json).unwrap(), d);
+    }
+
+    /// An old file of `pipeline` with one detection whose `axis` is `[0, 2, 0]`.
+    fn old_file(pipeline: &str, extra: &str) -> FrameDetections {
+        serde_json::from_str(&format!(
+            r#"{{"frame": "7", "pipeline": "{pipeline}", "detections": [{{"center_m": [0, 0, 1],
+                "score": 1.0, "diameter_m": null, "axis": [0, 2, 0], "bbox_px": null,
+                "kind": null, "support_points": null, "fit_rms_m": null{extra}}}]}}"#
+        ))
+        .unwrap()
+    }
+
+    #[test]
+    fn old_axis_key_maps_by_the_recorded_pipeline() {
+        let y = Some(Vector3::y_axis());
+        for pipeline in ["shape-fit", "someone-elses-detector"] {
+            let d = &old_file(pipeline, "").detections[0];
+            assert_eq!(
+                (d.fruit_axis, d.symmetry_plane_normal),
+                (y, None),
+                "{pipeline}"
+            );
+        }
+        for pipeline in SYMMETRY_PLANE_PIPELINES {
+            let d = &old_file(pipeline, "").detections[0];
+            assert_eq!(
+                (d.fruit_axis, d.symmetry_plane_normal),
+                (None, y),
+                "{pipeline}"
+            );
+        }
+        // A new key beside the old one wins; the old one fills only the pipeline's own slot.
+        let d = &old_file("symmetry", r#", "symmetry_plane_normal": [1, 0, 0]"#).detections[0];
+        assert_eq!(d.symmetry_plane_normal, Some(Vector3::x_axis()));
+        assert_eq!(d.fruit_axis, None);
+        // Re-written, the file carries only the new key.
+        let json = serde_json::to_string(&old_file("symmetry", "")).unwrap();
+        assert!(
+            json.contains(r#""symmetry_plane_normal":[0.0,1.0,0.0]"#),
+            "{json}"
+        );
+        assert!(
+            !json.contains(r#""axis""#) && !json.contains("fruit_axis"),
+            "{json}"
+        );
+    }
+
+    #[test]
+    fn old_zero_axis_is_still_rejected() {
+        let text = r#"{"frame": "7", "pipeline": "shape-fit", "detections": [{"center_m": [0, 0, 1],
+            "score": 1.0, "axis": [0, 0, 0]}]}"#;
+        assert!(serde_json::from_str::<FrameDetections>(text).is_err());
     }
 }

@@ -5,7 +5,8 @@
 //! what a detector found (detections).
 //!
 //! This crate has no I/O and no algorithms beyond the geometry that *defines* the types
-//! (back-projection and projection). Reading files lives in `pomona-io`; detectors live above it.
+//! (back-projection and projection) and the colour space the detectors share (RGB → HSV and
+//! circular hue statistics, [`rgb_to_hsv`]). Reading files lives in `pomona-io`; detectors live above it.
 //! Keeping the bottom layer small means every algorithm crate can depend on it without pulling in
 //! image codecs or file formats.
 //!
@@ -22,6 +23,7 @@ mod depth_image;
 mod detection;
 mod error;
 mod frame;
+mod hsv;
 mod instance_mask;
 mod pixel_box;
 mod truth;
@@ -30,9 +32,10 @@ pub use camera::PinholeCamera;
 pub use cloud::{CloudLayout, PointCloud};
 pub use color_image::ColorImage;
 pub use depth_image::DepthImage;
-pub use detection::{Detection, FrameDetections};
+pub use detection::{Detection, FrameDetections, SYMMETRY_PLANE_PIPELINES};
 pub use error::CoreError;
 pub use frame::RgbdFrame;
+pub use hsv::{circular_mean_hue, hue_difference, rgb_to_hsv};
 pub use instance_mask::InstanceMask;
 pub use pixel_box::PixelBox;
 pub use truth::{FrameTruth, FruitTruth};

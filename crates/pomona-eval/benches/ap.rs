@@ -45,21 +45,16 @@ fn frames() -> Vec<FrameInput> {
                 .map(|k| {
                     let near = fruits[k % 20].center_m.unwrap();
                     let jitter = if k % 3 == 0 { 0.02 } else { 0.3 };
+                    let center_m = near
+                        + pomona_core::nalgebra::Vector3::new(
+                            jitter * (rng.next() - 0.5),
+                            jitter * (rng.next() - 0.5),
+                            jitter * (rng.next() - 0.5),
+                        );
+                    let score = rng.next() * 4.0 - 2.0;
                     Detection {
-                        center_m: near
-                            + pomona_core::nalgebra::Vector3::new(
-                                jitter * (rng.next() - 0.5),
-                                jitter * (rng.next() - 0.5),
-                                jitter * (rng.next() - 0.5),
-                            ),
-                        score: rng.next() * 4.0 - 2.0,
                         diameter_m: Some(0.07 + 0.02 * rng.next()),
-                        axis: None,
-                        bbox_px: None,
-                        kind: None,
-                        support_points: None,
-                        fit_rms_m: None,
-                        confidence: None,
+                        ..Detection::new(center_m, score)
                     }
                 })
                 .collect();

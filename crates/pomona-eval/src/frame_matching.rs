@@ -102,13 +102,7 @@ fn reach(
 /// let truth: FrameTruth = serde_json::from_str(
 ///     r#"{"complete": true, "fruits": [{"id": "1", "kind": "pepper", "center_m": [0, 0, 1]}]}"#,
 /// ).unwrap();
-/// let det = |z: f64, score: f64| Detection {
-///     center_m: Point3::new(0.0, 0.0, z), score, diameter_m: None, axis: None, bbox_px: None,
-///     kind: None,
-///     support_points: None,
-///     fit_rms_m: None,
-///     confidence: None,
-/// };
+/// let det = |z: f64, score: f64| Detection::new(Point3::new(0.0, 0.0, z), score);
 /// let cam = PinholeCamera::new(640, 480, 500.0, 500.0, 319.5, 239.5).unwrap();
 /// let m = match_frame(&truth, &[det(1.03, 0.5), det(1.01, 2.0)], &cam, &EvalConfig::default());
 /// // The higher score is matched first and takes the fruit; the other is a duplicate.

@@ -34,17 +34,7 @@ fn truth(complete: bool, fruits: Vec<FruitTruth>) -> FrameTruth {
 }
 
 fn det(center: [f64; 3], score: f64) -> Detection {
-    Detection {
-        center_m: Point3::from(center),
-        score,
-        diameter_m: None,
-        axis: None,
-        bbox_px: None,
-        kind: None,
-        support_points: None,
-        fit_rms_m: None,
-        confidence: None,
-    }
+    Detection::new(Point3::from(center), score)
 }
 
 fn frame(name: &str, t: FrameTruth, d: Vec<Detection>) -> FrameInput {

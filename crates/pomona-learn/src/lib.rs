@@ -12,7 +12,8 @@
 //!   LIBSVM's shrinking heuristic, a kernel-column cache and per-class penalties `C₊`, `C₋` for
 //!   imbalanced data. On the golden cases of `tests/svm_golden.rs` its decision values equal
 //!   scikit-learn's (LIBSVM's) to 1e-13;
-//! * decision values as detection scores, optional Platt probabilities (the improved algorithm of
+//! * decision values as detection scores (one sample, or a detector's candidates in parallel
+//!   blocks with [`SvmClassifier::decision_values`], the batched RBF kernel every detector uses), optional Platt probabilities (the improved algorithm of
 //!   Lin, Lin & Weng 2007, as in LIBSVM);
 //! * [`GridSearchParams`] — stratified k-fold cross-validated search over `log2 C` × `log2 γ`
 //!   (LIBSVM's `grid.py` defaults, then a finer pass around the best cell), deterministic for a
@@ -33,6 +34,7 @@
 //! assert_eq!(model.predict_one(&[17.0]).unwrap(), true);
 //! ```
 
+mod batched_decision;
 mod error;
 mod folds;
 #[doc(hidden)]
@@ -48,6 +50,7 @@ mod score_calibration;
 mod smo;
 mod svm;
 
+pub use batched_decision::DECISION_BLOCK;
 pub use error::{LearnError, ModelFileError};
 pub use folds::stratified_folds;
 pub use grid_search::{

@@ -36,7 +36,8 @@ pub trait Detector: Send + Sync {
 pub struct TrainOptions {
     /// Seed for every random choice (sampling, folds, consensus).
     pub seed: u64,
-    /// Cross-validation folds for the classifier's grid search.
+    /// Cross-validation folds for the classifier's grid search (default 5; seed 002 used 10, see
+    /// docs/learning-and-evaluation.md for why the default stays 5).
     pub folds: usize,
     /// Whether to run the full LIBSVM grid search (slow) or a narrower default grid.
     pub full_grid: bool,

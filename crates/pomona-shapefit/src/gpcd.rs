@@ -11,6 +11,13 @@
 //!   bin), so it encodes size as well as shape; RGB-D depth is metric, and fruit size is among the
 //!   best cues against leaves.
 //!
+//! * Hue is circular, and red fruit straddle hue 0: an arithmetic mean of hues 0.98 and 0.02 is
+//!   0.5 (cyan). Seed 002 does not say how it averages hue. [`HueStatistics::Circular`] takes
+//!   the circular mean and wrapped hue deviations for the covariance terms; the default stays
+//!   [`HueStatistics::Linear`] because the built-in models were trained with it (changing it
+//!   changes the descriptor, so a model must be retrained with the same setting; the setting
+//!   is stored in the model).
+//!
 //! Pairs: with more than `max_points` points, an evenly strided subset is used (deterministic,
 //! no RNG); all ordered pairs of that subset vote. The module tests check that subsampling barely
 //! moves the descriptor.
@@ -18,7 +25,7 @@
 use pomona_core::nalgebra::{Point3, Unit, Vector3};
 use serde::{Deserialize, Serialize};
 
-use crate::rgb_to_hsv;
+use pomona_core::{circular_mean_hue, hue_difference, rgb_to_hsv};
 
 /// Length of the descriptor.
 pub const GPCD_LEN: usize = 27 + 9 + 30;
@@ -30,6 +37,23 @@ pub struct GpcdParams {
     pub max_points: usize,
     /// Upper end of the D2 histogram, metres.
     pub d2_max_m: f64,
+    /// How the hue mean and the hue terms of the covariance are taken (absent in older model
+    /// files: `linear`, what they were trained with).
+    #[serde(default)]
+    pub hue_statistics: HueStatistics,
+}
+
+/// Hue statistics of the colour moments (see the module docs).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum HueStatistics {
+    /// Arithmetic mean and differences of hue, as if hue were not circular (the built-in
+    /// models' setting; red hues either side of 0 average to cyan).
+    #[default]
+    Linear,
+    /// Circular mean of hue and hue deviations wrapped to `[-0.5, 0.5)`; hues that cancel out
+    /// (no mean direction) fall back to the arithmetic mean.
+    Circular,
 }
 
 impl Default for GpcdParams {
@@ -37,6 +61,7 @@ impl Default for GpcdParams {
         Self {
             max_points: 200,
             d2_max_m: 0.25,
+            hue_statistics: HueStatistics::Linear,
         }
     }
 }
@@ -94,18 +119,35 @@ pub fn gpcd(
         *x /= f64::max(d2_votes, 1.0);
     }
     if !colors.is_empty() {
-        let hsv: Vec<[f64; 3]> = colors.iter().map(|&c| rgb_to_hsv(c)).collect();
-        let m = hsv.len() as f64;
-        let mean: [f64; 3] = std::array::from_fn(|c| hsv.iter().map(|x| x[c]).sum::<f64>() / m);
-        color[..3].copy_from_slice(&mean);
-        let pairs = [(0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2)];
-        for (k, (a, b)) in pairs.into_iter().enumerate() {
-            color[3 + k] = hsv
-                .iter()
-                .map(|x| (x[a] - mean[a]) * (x[b] - mean[b]))
-                .sum::<f64>()
-                / m;
-        }
+        color.copy_from_slice(&color_moments(colors, params.hue_statistics));
+    }
+    out
+}
+
+/// The nine colour values of the descriptor: HSV mean, then the covariance terms hh, hs, hv,
+/// ss, sv, vv. `colors` must not be empty.
+fn color_moments(colors: &[[u8; 3]], hue: HueStatistics) -> [f64; 9] {
+    let hsv: Vec<[f64; 3]> = colors.iter().map(|&c| rgb_to_hsv(c)).collect();
+    let m = hsv.len() as f64;
+    let mut mean: [f64; 3] = std::array::from_fn(|c| hsv.iter().map(|x| x[c]).sum::<f64>() / m);
+    let circular = hue == HueStatistics::Circular;
+    if circular {
+        let hues: Vec<f64> = hsv.iter().map(|x| x[0]).collect();
+        mean[0] = circular_mean_hue(&hues).unwrap_or(mean[0]);
+    }
+    let deviation = |x: &[f64; 3], c: usize| match c {
+        0 if circular => hue_difference(x[0], mean[0]),
+        _ => x[c] - mean[c],
+    };
+    let mut out = [0.0; 9];
+    out[..3].copy_from_slice(&mean);
+    let pairs = [(0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2)];
+    for (k, (a, b)) in pairs.into_iter().enumerate() {
+        out[3 + k] = hsv
+            .iter()
+            .map(|x| deviation(x, a) * deviation(x, b))
+            .sum::<f64>()
+            / m;
     }
     out
 }
@@ -163,6 +205,42 @@ mod tests {
     use super::*;
 
     type Normals = Vec<Option<Unit<Vector3<f64>>>>;
+
+    /// Red pixels either side of hue 0: the linear mean is cyan-ish (0.5), the circular one red
+    /// with a small hue variance; saturation and value terms agree.
+    #[test]
+    fn circular_hue_moments_keep_red_red() {
+        let colors = [[255, 0, 20], [255, 20, 0], [255, 0, 10], [255, 10, 0]];
+        let linear = color_moments(&colors, HueStatistics::Linear);
+        let circular = color_moments(&colors, HueStatistics::Circular);
+        assert!((linear[0] - 0.5).abs() < 0.05, "{linear:?}");
+        assert!(
+            hue_difference(circular[0], 0.0).abs() < 1e-9,
+            "{circular:?}"
+        );
+        assert!(
+            linear[3] > 0.2 && circular[3] < 1e-3,
+            "hh {} {}",
+            linear[3],
+            circular[3]
+        );
+        assert_eq!(linear[1..3], circular[1..3]);
+        assert_eq!(
+            (linear[6], linear[7], linear[8]),
+            (circular[6], circular[7], circular[8])
+        );
+        // Hues away from 0 give nearly the same moments either way (the circular mean of a
+        // narrow spread is within its cube of the arithmetic mean).
+        let green = [[0, 200, 30], [10, 220, 0], [0, 180, 60]];
+        let (a, b) = (
+            color_moments(&green, HueStatistics::Linear),
+            color_moments(&green, HueStatistics::Circular),
+        );
+        assert!(
+            a.iter().zip(&b).all(|(x, y)| (x - y).abs() < 1e-4),
+            "{a:?} {b:?}"
+        );
+    }
 
     fn sphere_cap(n: usize, radius: f64) -> (Vec<Point3<f64>>, Normals) {
         let centre = Point3::new(0.0, 0.0, 0.8);

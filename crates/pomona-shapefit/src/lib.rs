@@ -22,7 +22,6 @@
 mod candidate;
 mod color_model;
 mod gpcd;
-mod hsv;
 mod params;
 mod pipeline;
 mod radius_calibration;
@@ -32,10 +31,11 @@ pub mod stages;
 
 pub use candidate::Candidate;
 pub use color_model::{ColorBayes, ColorBayesParams, ColorHistograms, ColorLut};
-pub use gpcd::{gpcd, GpcdParams, GPCD_LEN};
-pub use hsv::rgb_to_hsv;
-pub use params::{LabelRule, ShapeFitParams};
+pub use gpcd::{gpcd, GpcdParams, HueStatistics, GPCD_LEN};
+pub use params::{CoaxialMergeParams, LabelRule, ShapeFitParams};
 pub use pipeline::{ShapeFitDetector, ShapeFitPipeline, ShapeFitStageParams, PIPELINE_NAME};
+/// Re-exported from pomona-core, where the one RGB → HSV conversion lives.
+pub use pomona_core::rgb_to_hsv;
 pub use radius_calibration::{fit_center_fixed_radius, RadiusCalibration, MIN_CALIBRATION_SAMPLES};
 pub use region_growing::{grow_regions, MinFruitArea, RegionGrowingParams};
 pub use size_prior::{

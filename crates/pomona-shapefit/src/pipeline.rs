@@ -16,8 +16,8 @@ use crate::stages::{
     ClassifierStage, ColorMaskStage, DescriptorStage, RegionGrowingStage, ShapeStage,
 };
 use crate::{
-    Candidate, ColorBayes, ColorHistograms, ColorLut, LabelRule, RadiusCalibration, ShapeFitParams,
-    SizePrior, SizePriorMode,
+    Candidate, CoaxialMergeParams, ColorBayes, ColorHistograms, ColorLut, LabelRule,
+    RadiusCalibration, ShapeFitParams, SizePrior, SizePriorMode,
 };
 
 /// Name of the pipeline on the command line and in model files.
@@ -512,6 +512,7 @@ impl Pipeline for ShapeFitPipeline {
                 svm: model.classifier(),
             },
             merge_radius_m: stage_params.params.merge_radius_m,
+            coaxial_merge: stage_params.params.coaxial_merge,
             calibration: stage_params.params.radius_calibration,
             sphere_range_m: stage_params.params.shapes.sphere.radius_range_m,
         }))
@@ -588,12 +589,13 @@ pub struct ShapeFitDetector {
     stages: Stages,
     classifier: ClassifierStage,
     merge_radius_m: f64,
+    coaxial_merge: CoaxialMergeParams,
     calibration: Option<RadiusCalibration>,
     sphere_range_m: (f64, f64),
 }
 
 fn detection(c: &Candidate, shape: &Shape, score: f64, camera: &PinholeCamera) -> Detection {
-    let (center_m, axis) = match shape {
+    let (center_m, fruit_axis) = match shape {
         Shape::Sphere(s) => (s.center, None),
         Shape::Cylinder(cy) => (cy.midpoint(), Some(cy.axis)),
     };
@@ -608,7 +610,8 @@ fn detection(c: &Candidate, shape: &Shape, score: f64, camera: &PinholeCamera) -
         center_m,
         score,
         diameter_m: Some(2.0 * shape.radius_m()),
-        axis,
+        fruit_axis,
+        symmetry_plane_normal: None,
         bbox_px: PixelBox::new(lo.0, lo.1, hi.0, hi.1).ok(),
         kind: None,
         support_points: Some(c.points.len()),
@@ -642,16 +645,16 @@ fn occupies(shape: &Shape, p: &Point3<f64>) -> bool {
     }
 }
 
-/// The union of two pieces of one long fruit: cylinders whose axes agree within 30°, whose
-/// midpoints are within 1.5 radii of each other's axis, and whose extents along the axis overlap
-/// or leave a gap of at most three radii (a leaf across an eggplant splits it this way). The
-/// bounds were set on the synthetic eggplant benchmark (20°/1/2 → 30°/1.5/3 raised precision
-/// from 0.725 to 0.769 at the same recall).
-fn coaxial_union(a: &Cylinder, b: &Cylinder) -> Option<Cylinder> {
+/// The union of two pieces of one long fruit: cylinders whose axes agree within
+/// `max_axis_angle_deg`, whose midpoints are within `max_axis_offset_radii` radii of each
+/// other's axis, and whose extents along the axis overlap or leave a gap of at most
+/// `max_gap_radii` radii (see [`CoaxialMergeParams`] for the defaults and where they come from).
+fn coaxial_union(a: &Cylinder, b: &Cylinder, rule: &CoaxialMergeParams) -> Option<Cylinder> {
     let radius = a.radius_m.max(b.radius_m);
-    if a.axis.dot(&b.axis).abs() < 30f64.to_radians().cos()
-        || a.distance_to_axis(&b.midpoint()) > 1.5 * radius
-        || b.distance_to_axis(&a.midpoint()) > 1.5 * radius
+    let max_offset_m = rule.max_axis_offset_radii * radius;
+    if a.axis.dot(&b.axis).abs() < rule.max_axis_angle_deg.to_radians().cos()
+        || a.distance_to_axis(&b.midpoint()) > max_offset_m
+        || b.distance_to_axis(&a.midpoint()) > max_offset_m
     {
         return None;
     }
@@ -659,7 +662,8 @@ fn coaxial_union(a: &Cylinder, b: &Cylinder) -> Option<Cylinder> {
     let along_a = |t: f64| (b.axis_point + b.axis.into_inner() * t - a.axis_point).dot(&a.axis);
     let (b0, b1) = (along_a(blo), along_a(bhi));
     let (blo, bhi) = (b0.min(b1), b0.max(b1));
-    if blo > ahi + 3.0 * radius || bhi < alo - 3.0 * radius {
+    let max_gap_m = rule.max_gap_radii * radius;
+    if blo > ahi + max_gap_m || bhi < alo - max_gap_m {
         return None;
     }
     Some(Cylinder {
@@ -671,13 +675,14 @@ fn coaxial_union(a: &Cylinder, b: &Cylinder) -> Option<Cylinder> {
 /// Two fruit cannot fill the same space. Scanning candidates by decreasing score, a candidate is
 /// dropped when its centre lies inside a kept one's shape, a kept centre lies inside its shape,
 /// or the centres are closer than `radius_m`; a cylinder that continues a kept cylinder
-/// ([`coaxial_union`]) extends it instead. Not in the paper, which counts split fruit as false
-/// positives (its Discussion); `radius_m <= 0` switches merging off. Returns the kept indices
-/// with their (possibly extended) shapes.
+/// ([`coaxial_union`] under `coaxial`) extends it instead. Not in the paper, which counts split
+/// fruit as false positives (its Discussion); `radius_m <= 0` switches merging off. Returns the
+/// kept indices with their (possibly extended) shapes.
 fn merge_overlapping(
     candidates: &[Candidate],
     scores: &[f64],
     radius_m: f64,
+    coaxial: &CoaxialMergeParams,
 ) -> Vec<(usize, Shape)> {
     let mut order: Vec<usize> = (0..candidates.len()).collect();
     if radius_m <= 0.0 {
@@ -693,7 +698,7 @@ fn merge_overlapping(
         let ci = si.center();
         for (_, sk) in kept.iter_mut() {
             if let (Shape::Cylinder(k), Shape::Cylinder(c)) = (&*sk, si) {
-                if let Some(union) = coaxial_union(k, c) {
+                if let Some(union) = coaxial_union(k, c, coaxial) {
                     *sk = Shape::Cylinder(union);
                     continue 'candidates;
                 }
@@ -725,7 +730,12 @@ impl Detector for ShapeFitDetector {
                 c.shape = cal.apply(&c.shape, &c.points, self.sphere_range_m);
             }
         }
-        let kept = merge_overlapping(&candidates, &scores, self.merge_radius_m);
+        let kept = merge_overlapping(
+            &candidates,
+            &scores,
+            self.merge_radius_m,
+            &self.coaxial_merge,
+        );
         Ok(kept
             .into_iter()
             .map(|(i, shape)| detection(&candidates[i], &shape, scores[i], frame.camera()))
@@ -759,12 +769,16 @@ mod tests {
             ball(0.3, 0.03),
             ball(0.32, 0.005),
         ];
-        let kept: Vec<usize> = merge_overlapping(&c, &[1.0, 2.0, 0.5, 0.1], 0.03)
+        let coaxial = CoaxialMergeParams::default();
+        let kept: Vec<usize> = merge_overlapping(&c, &[1.0, 2.0, 0.5, 0.1], 0.03, &coaxial)
             .into_iter()
             .map(|k| k.0)
             .collect();
         assert_eq!(kept, vec![1, 2]);
-        assert_eq!(merge_overlapping(&c, &[1.0, 2.0, 0.5, 0.1], 0.0).len(), 4);
+        assert_eq!(
+            merge_overlapping(&c, &[1.0, 2.0, 0.5, 0.1], 0.0, &coaxial).len(),
+            4
+        );
     }
 
     fn piece(lo: f64, hi: f64) -> Candidate {
@@ -787,13 +801,23 @@ mod tests {
     fn pieces_of_one_long_fruit_are_joined() {
         // Two pieces of one eggplant with a 40 mm gap (a leaf), and one 200 mm further on.
         let c = [piece(0.0, 0.06), piece(0.10, 0.15), piece(0.35, 0.40)];
-        let kept = merge_overlapping(&c, &[2.0, 1.0, 0.5], 0.03);
+        let coaxial = CoaxialMergeParams::default();
+        let kept = merge_overlapping(&c, &[2.0, 1.0, 0.5], 0.03, &coaxial);
         assert_eq!(kept.len(), 2);
         let Shape::Cylinder(joined) = &kept[0].1 else {
             panic!("not a cylinder")
         };
         assert_eq!(joined.extent_m, Some((0.0, 0.15)));
         assert!((joined.midpoint().y - 0.075).abs() < 1e-12);
+        // The 40 mm gap is 1.33 radii: a stricter gap bound keeps the pieces apart.
+        let strict = CoaxialMergeParams {
+            max_gap_radii: 1.0,
+            ..coaxial
+        };
+        assert_eq!(
+            merge_overlapping(&c, &[2.0, 1.0, 0.5], 0.03, &strict).len(),
+            3
+        );
     }
 
     fn frame(truth_json: &str) -> LabelledFrame {

@@ -190,9 +190,7 @@ impl<'a> Stage<&'a [Vec<f64>], Vec<f64>> for ClassifierStage {
     }
 
     fn run(&self, features: &'a [Vec<f64>]) -> Result<Vec<f64>, PipelineError> {
-        Ok(features
-            .iter()
-            .map(|f| self.svm.decision_value(f))
-            .collect::<Result<Vec<_>, _>>()?)
+        let rows: Vec<&[f64]> = features.iter().map(Vec::as_slice).collect();
+        Ok(self.svm.decision_values(&rows)?)
     }
 }

@@ -19,7 +19,7 @@
 
 use std::f64::consts::TAU;
 
-use pomona_core::{ColorImage, PinholeCamera, RgbdFrame};
+use pomona_core::{rgb_to_hsv, ColorImage, PinholeCamera, RgbdFrame};
 use pomona_pipeline::{PipelineError, Stage};
 
 use crate::{HighlightParams, SymmetryError};
@@ -98,12 +98,9 @@ impl HighlightDetector {
         let mut value = vec![0f32; w * h];
         let mut candidate = vec![false; w * h];
         for (i, px) in image.pixels().enumerate() {
-            let max = px.iter().copied().max().unwrap_or(0) as f32 / 255.0;
-            let min = px.iter().copied().min().unwrap_or(0) as f32 / 255.0;
-            let sat = if max > 0.0 { (max - min) / max } else { 0.0 };
-            value[i] = max;
-            candidate[i] = (max as f64) >= p.min_value
-                && (sat <= 0.0 || (max / sat) as f64 > p.ratio_threshold);
+            let [_, sat, max] = rgb_to_hsv(px);
+            value[i] = max as f32;
+            candidate[i] = max >= p.min_value && (sat <= 0.0 || max / sat > p.ratio_threshold);
         }
         let candidates = candidate.iter().filter(|&&c| c).count();
         // Orientations are read only on the circles around candidates, so they are computed

@@ -1,7 +1,7 @@
 //! Mean-shift merging of positive boxes (seed 001): every positive box centre climbs to the mode
 //! of the score-weighted density of positive centres (flat kernel of radius `bandwidth`), and
 //! boxes reaching the same mode (within half a bandwidth) become one detection at that mode
-//! carrying the best member's score and axis.
+//! carrying the best member's score and symmetry-plane normal.
 //!
 //! Weights are `score − min_score` (positive for every box passed in), so confident boxes pull
 //! harder. Seeds are processed in input order and modes merged greedily in that order:
@@ -49,7 +49,7 @@ pub fn mean_shift(
             Some((_, best)) => {
                 if seed.score > best.score {
                     best.score = seed.score;
-                    best.axis = seed.axis;
+                    best.symmetry_plane_normal = seed.symmetry_plane_normal;
                 }
             }
             None => modes.push((x, *seed)),
@@ -60,7 +60,7 @@ pub fn mean_shift(
         .map(|(m, b)| ScoredBox {
             center: m,
             score: b.score,
-            axis: b.axis,
+            symmetry_plane_normal: b.symmetry_plane_normal,
         })
         .collect()
 }
@@ -73,7 +73,7 @@ mod tests {
         ScoredBox {
             center: Point3::new(x, y, 1.0),
             score,
-            axis: None,
+            symmetry_plane_normal: None,
         }
     }
 

@@ -11,8 +11,9 @@ pub struct ScoredBox {
     pub center: Point3<f64>,
     /// SVM decision value.
     pub score: f64,
-    /// Axis estimate carried to the detection (the symmetry-plane normal), if any.
-    pub axis: Option<Unit<Vector3<f64>>>,
+    /// Symmetry-plane normal of the box's reference frame (symmetry frame only), carried to the
+    /// detection.
+    pub symmetry_plane_normal: Option<Unit<Vector3<f64>>>,
 }
 
 /// Keeps local maxima: sorted by score (descending, stable), a box survives when no kept box is
@@ -42,7 +43,7 @@ mod tests {
         ScoredBox {
             center: Point3::new(x, 0.0, 1.0),
             score,
-            axis: None,
+            symmetry_plane_normal: None,
         }
     }
 

@@ -8,6 +8,10 @@
 //! reflection to the nearest observed point plus `w` times the angle between the reflected and
 //! observed normals (Eq. 14). The best plane has the lowest mean score.
 //!
+//! Departure from seed 000 (kept; see the crate README): Eq. 14's partner `y` is the observed
+//! point closest to the reflection on *either* side of the plane, where the paper restricts it
+//! to the reflection's side.
+//!
 //! Speed: the coarse grid is built once per detector and scored with only `coarse_points`
 //! points; the best `coarse_keep` cells are re-scored with `score_points` points and the best is
 //! refined by halving the step around it (`refinements` rounds of 8 neighbours). With the

@@ -78,12 +78,15 @@ fn symmetry_pipeline_finds_peppers() {
     // A detector that scores boxes at random, or a broken frame/feature stage, stays far below.
     eprintln!("symmetry AP@50mm = {ap}");
     assert!(ap >= 0.6, "AP@50mm = {ap}");
-    // Detections carry a unit axis (the symmetry-plane normal).
+    // Detections carry the symmetry-plane normal and no fruit axis; refined ones a diameter.
     let dets = detector
         .detect(&test[0].frame, &mut StageTimings::default())
         .unwrap();
     assert!(!dets.is_empty());
-    assert!(dets.iter().all(|d| d.axis.is_some()));
+    assert!(dets
+        .iter()
+        .all(|d| d.symmetry_plane_normal.is_some() && d.fruit_axis.is_none()));
+    assert!(dets.iter().any(|d| d.diameter_m.is_some()));
     assert!(dets.windows(2).all(|w| w[0].score >= w[1].score));
 }
 
@@ -172,7 +175,9 @@ fn fixed_frame_ablation_runs_and_gives_no_axis() {
         .detect(&data().1[0].frame, &mut StageTimings::default())
         .unwrap();
     assert!(!dets.is_empty());
-    assert!(dets.iter().all(|d| d.axis.is_none()));
+    assert!(dets
+        .iter()
+        .all(|d| d.symmetry_plane_normal.is_none() && d.fruit_axis.is_none()));
 }
 
 #[test]

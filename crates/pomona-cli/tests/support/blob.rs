@@ -378,15 +378,9 @@ impl Detector for BlobDetector {
                 .all(|k| (k.center_m - c.center).norm() > self.params.nms_m)
             {
                 kept.push(Detection {
-                    center_m: c.center,
-                    score,
                     diameter_m: Some(c.diameter_m),
-                    axis: None,
                     bbox_px: c.bbox,
-                    kind: None,
-                    support_points: None,
-                    fit_rms_m: None,
-                    confidence: None,
+                    ..Detection::new(c.center, score)
                 });
             }
         }

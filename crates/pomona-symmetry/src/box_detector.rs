@@ -1,0 +1,239 @@
+//! The trained `symmetry` / `viewer-pose` detector ([`BoxDetector`]) and its detection path.
+//!
+//! Detection per frame (each step a [`Stage`] timed with [`run_stage`]):
+//! `highlight` (pruning mask, colour frames only) → `cloud` (points) → `sliding-box` (box
+//! candidates: early rejection and their pixels) → `normals` (only at those pixels) →
+//! `box-cut` (patches) → `cascade`
+//! (symmetry frame with `cascade.enabled` only: a fixed-frame SVM drops clearly negative boxes)
+//! → `reference-frame` → `features` → `classifier` (SVM decision value per box) → `merge`
+//! (3D NMS or mean shift) → `refine` (ours: sphere-fitted centre off the stride grid and a
+//! diameter, see [`crate::CentreRefinement`]).
+//!
+//! A detection's `symmetry_plane_normal` is the normal of its box's symmetry plane (symmetry
+//! frame only; fixed and viewer frames estimate no plane). No box detector estimates the fruit
+//! axis, so `fruit_axis` stays `None`.
+
+use std::sync::atomic::{AtomicBool, Ordering};
+
+use nalgebra::{Unit, Vector3};
+use pomona_core::{Detection, RgbdFrame};
+use pomona_learn::{ModelFile, SvmClassifier};
+use pomona_pipeline::{run_stage, Detector, PipelineError, StageTimings};
+
+use crate::cascade::Cascade;
+use crate::classify::Classify;
+use crate::merge::Merge;
+use crate::scene_cloud::CloudStage;
+use crate::sliding_box::BoxCut;
+use crate::{
+    BoxPatch, FrameKind, FrameResult, Highlights, LocalFrame, PruningState, SceneCloud, ScoredBox,
+    StageParams, Stages,
+};
+
+/// A trained `symmetry` or `viewer-pose` detector.
+pub struct BoxDetector {
+    name: &'static str,
+    stages: Stages,
+    classifier: SvmClassifier,
+    /// The cascade's fixed-frame classifier, when the cascade is on.
+    cascade: Option<SvmClassifier>,
+    warned_no_color: AtomicBool,
+}
+
+impl BoxDetector {
+    /// Builds the detector stored in `model` for pipeline `name`.
+    ///
+    /// # Errors
+    /// [`PipelineError::StageParams`] when the parameters do not parse,
+    /// [`PipelineError::InvalidParameter`] when they are invalid or do not match the classifier.
+    pub fn from_model(name: &'static str, model: &ModelFile) -> Result<Self, PipelineError> {
+        let params: StageParams = serde_json::from_value(model.stage_params.clone())
+            .map_err(|e| PipelineError::StageParams(e.to_string()))?;
+        let stages = Stages::new(&params)?;
+        let classifier = model.classifier();
+        if classifier.n_features() != stages.features.feature_len() {
+            return Err(PipelineError::InvalidParameter {
+                name: "histogram".into(),
+                reason: format!(
+                    "the classifier takes {} features, the histogram parameters give {}",
+                    classifier.n_features(),
+                    stages.features.feature_len()
+                ),
+            });
+        }
+        let cascade = match (&stages.cascade_features, &params.cascade.classifier) {
+            (None, _) => None,
+            (Some(fs), Some(c)) => {
+                let c = c.classifier();
+                if c.n_features() != fs.feature_len() {
+                    return Err(PipelineError::InvalidParameter {
+                        name: "cascade.classifier".into(),
+                        reason: format!(
+                            "takes {} features, the histogram parameters give {}",
+                            c.n_features(),
+                            fs.feature_len()
+                        ),
+                    });
+                }
+                Some(c)
+            }
+            (Some(_), None) => {
+                return Err(PipelineError::InvalidParameter {
+                    name: "cascade.classifier".into(),
+                    reason: "the cascade is enabled but the model holds no cascade classifier \
+                             (retrain, or set cascade.enabled to false)"
+                        .into(),
+                })
+            }
+        };
+        Ok(Self {
+            name,
+            stages,
+            classifier,
+            cascade,
+            warned_no_color: AtomicBool::new(false),
+        })
+    }
+
+    /// The stages (for benches and experiments).
+    pub fn stages(&self) -> &Stages {
+        &self.stages
+    }
+
+    /// Detects fruit in `frame` and reports how (pruning state, box counts).
+    ///
+    /// # Errors
+    /// Classifier errors (feature length mismatch, which `from_model` rules out).
+    pub fn detect_frame(
+        &self,
+        frame: &RgbdFrame,
+        timings: &mut StageTimings,
+    ) -> Result<FrameResult, PipelineError> {
+        let s = &self.stages;
+        let highlights: Option<Highlights> = run_stage(&s.highlight, frame, timings)?;
+        let pruning = self.pruning_state(highlights.as_ref());
+        // Normals only where some box reads them (exact; see `scene_cloud.rs`).
+        let (points, mut cloud) = run_stage(&CloudStage(&s.normals), frame, timings)?;
+        let mask = highlights.as_ref().map(|h| &h.mask);
+        let candidates = run_stage(&s.boxes, (&cloud, mask), timings)?;
+        cloud.normals = run_stage(&s.normals, (&points, candidates.as_slice()), timings)?;
+        let patches = run_stage(&BoxCut(&s.boxes), (&cloud, candidates.as_slice()), timings)?;
+        let boxes = patches.len();
+        let patches = match (&self.cascade, &s.cascade_features) {
+            (Some(classifier), Some(features)) => {
+                let cascade = Cascade {
+                    classifier,
+                    features,
+                    min_score: s.params.cascade.min_score,
+                };
+                run_stage(&cascade, patches, timings)?
+            }
+            _ => patches,
+        };
+        let positives = self.positive_boxes(&patches, timings)?;
+        let detections = self.merged_detections(&cloud, &positives, timings)?;
+        Ok(FrameResult {
+            detections,
+            pruning,
+            boxes,
+            searched: patches.len(),
+            positives: positives.len(),
+        })
+    }
+
+    /// The pruning outcome of a frame (and, once per detector, a note that a frame without
+    /// colour runs without pruning).
+    fn pruning_state(&self, highlights: Option<&Highlights>) -> PruningState {
+        let pruning = match (highlights, self.stages.params.highlight.enabled) {
+            (Some(h), _) => PruningState::Applied {
+                kept_fraction: h.mask.kept_fraction(),
+                markers: h.markers.len(),
+            },
+            (None, true) => PruningState::NoColor,
+            (None, false) => PruningState::Disabled,
+        };
+        if pruning == PruningState::NoColor && !self.warned_no_color.swap(true, Ordering::Relaxed) {
+            eprintln!(
+                "{}: frame has no colour image; highlight pruning is off (depth-only operation)",
+                self.name
+            );
+        }
+        pruning
+    }
+
+    /// Reference frame, features and decision value of every patch; the boxes scoring at least
+    /// `merging.min_score`.
+    fn positive_boxes(
+        &self,
+        patches: &[BoxPatch],
+        timings: &mut StageTimings,
+    ) -> Result<Vec<ScoredBox>, PipelineError> {
+        let s = &self.stages;
+        let frames = run_stage(&s.frames, patches, timings)?;
+        let features = run_stage(&s.features, (patches, frames.as_slice()), timings)?;
+        let classify = Classify {
+            classifier: &self.classifier,
+        };
+        let scores = run_stage(&classify, features.as_slice(), timings)?;
+        let min_score = s.params.merging.min_score;
+        Ok(patches
+            .iter()
+            .zip(&frames)
+            .zip(&scores)
+            .filter_map(|((p, f), sc)| {
+                let score = (*sc)?;
+                (score >= min_score).then(|| ScoredBox {
+                    center: p.center,
+                    score,
+                    symmetry_plane_normal: plane_normal_of(f.as_ref(), s.params.frame),
+                })
+            })
+            .collect())
+    }
+
+    /// Merged, refined detections, best first.
+    fn merged_detections(
+        &self,
+        cloud: &SceneCloud,
+        positives: &[ScoredBox],
+        timings: &mut StageTimings,
+    ) -> Result<Vec<Detection>, PipelineError> {
+        let s = &self.stages;
+        let merge = Merge {
+            kind: s.params.merge,
+            params: s.params.merging,
+        };
+        let merged = run_stage(&merge, positives, timings)?;
+        let refined = run_stage(&s.refinement, (cloud, merged.as_slice()), timings)?;
+        Ok(refined
+            .into_iter()
+            .map(|b| Detection {
+                diameter_m: b.diameter_m(),
+                symmetry_plane_normal: b.merged.symmetry_plane_normal,
+                ..Detection::new(b.center(), b.merged.score)
+            })
+            .collect())
+    }
+}
+
+/// The symmetry-plane normal of a symmetry frame. Fixed and viewer frames estimate no plane.
+fn plane_normal_of(frame: Option<&LocalFrame>, kind: FrameKind) -> Option<Unit<Vector3<f64>>> {
+    match kind {
+        FrameKind::Symmetry => frame.map(|f| f.normal),
+        FrameKind::Fixed | FrameKind::Viewer => None,
+    }
+}
+
+impl Detector for BoxDetector {
+    fn pipeline(&self) -> &'static str {
+        self.name
+    }
+
+    fn detect(
+        &self,
+        frame: &RgbdFrame,
+        timings: &mut StageTimings,
+    ) -> Result<Vec<Detection>, PipelineError> {
+        Ok(self.detect_frame(frame, timings)?.detections)
+    }
+}

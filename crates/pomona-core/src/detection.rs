@@ -140,6 +140,8 @@ struct FrameDetectionsFile {
     operating_confidence: Option<f64>,
     #[serde(default)]
     min_confidence: Option<f64>,
+    #[serde(default)]
+    model_id: Option<String>,
 }
 
 impl From<FrameDetectionsFile> for FrameDetections {
@@ -171,6 +173,7 @@ impl From<FrameDetectionsFile> for FrameDetections {
             detections,
             operating_confidence: file.operating_confidence,
             min_confidence: file.min_confidence,
+            model_id: file.model_id,
         }
     }
 }

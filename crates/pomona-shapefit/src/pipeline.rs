@@ -237,6 +237,50 @@ fn is_positive(
 }
 
 impl ShapeFitPipeline {
+    /// Training pass 1: the colour model (only when frames have colour) and the size prior
+    /// learnt from the truth diameters (when `size_prior` is `from-truth`).
+    fn colour_and_size_prior(
+        &self,
+        frames: &dyn FrameSource,
+        use_color: bool,
+    ) -> Result<(Option<ColorBayes>, Option<SizePrior>), PipelineError> {
+        let from_truth = self.params.size_prior == SizePriorMode::FromTruth;
+        if !use_color && !from_truth {
+            return Ok((None, None));
+        }
+        let refs = &self.params.reference_kinds;
+        let per_frame: Result<Vec<FramePrior>, PipelineError> = (0..frames.len())
+            .into_par_iter()
+            .map(|i| {
+                frames.load(i).map(|lf| {
+                    let h = use_color.then(|| color_histograms(&lf, self.params.color.bins, refs));
+                    (h, lf.truth.fruits)
+                })
+            })
+            .collect();
+        let mut total = ColorHistograms::new(self.params.color.bins);
+        let mut fruits = Vec::new();
+        for (h, f) in per_frame? {
+            if let Some(h) = h {
+                total.merge(&h);
+            }
+            fruits.extend(f);
+        }
+        let color_model = if use_color {
+            Some(ColorBayes::fit(&total, &self.params.color).ok_or_else(|| {
+                not_enough("colour training needs fruit and background pixels".into())
+            })?)
+        } else {
+            None
+        };
+        let prior = if from_truth {
+            SizePrior::from_truth(&fruits, refs)
+        } else {
+            None
+        };
+        Ok((color_model, prior))
+    }
+
     fn stages(
         &self,
         stage: &ShapeFitStageParams,
@@ -340,165 +384,27 @@ impl Pipeline for ShapeFitPipeline {
         options: &TrainOptions,
         progress: &(dyn Fn(usize, usize) + Sync),
     ) -> Result<ModelFile, PipelineError> {
-        let n = frames.len();
-        let not_enough = |reason: String| PipelineError::NotEnoughTrainingData {
-            pipeline: PIPELINE_NAME,
-            reason,
-        };
-        if n == 0 {
+        if frames.is_empty() {
             return Err(not_enough("no frames with truth".into()));
         }
-        // Pass 1: colour statistics (only if every frame has colour) and the size prior.
-        let first = frames.load(0)?;
-        let use_color = first.frame.color().is_some();
-        let from_truth = self.params.size_prior == SizePriorMode::FromTruth;
-        let mut color_model = None;
-        let mut prior = None;
-        if use_color || from_truth {
-            let refs = &self.params.reference_kinds;
-            let per_frame: Result<Vec<FramePrior>, PipelineError> = (0..n)
-                .into_par_iter()
-                .map(|i| {
-                    frames.load(i).map(|lf| {
-                        let h =
-                            use_color.then(|| color_histograms(&lf, self.params.color.bins, refs));
-                        (h, lf.truth.fruits)
-                    })
-                })
-                .collect();
-            let mut total = ColorHistograms::new(self.params.color.bins);
-            let mut fruits = Vec::new();
-            for (h, f) in per_frame? {
-                if let Some(h) = h {
-                    total.merge(&h);
-                }
-                fruits.extend(f);
-            }
-            if use_color {
-                color_model =
-                    Some(ColorBayes::fit(&total, &self.params.color).ok_or_else(|| {
-                        not_enough("colour training needs fruit and background pixels".into())
-                    })?);
-            }
-            if from_truth {
-                prior = SizePrior::from_truth(&fruits, refs);
-            }
-        }
+        let use_color = frames.load(0)?.frame.color().is_some();
+        let (color_model, prior) = self.colour_and_size_prior(frames, use_color)?;
         let mut params = self.params.clone();
         params.shapes.seed = options.seed;
         if let Some(prior) = &prior {
             prior.apply(&mut params);
         }
-        let stage_params = ShapeFitStageParams {
+        let mut stage_params = ShapeFitStageParams {
             params,
             color_model,
         };
         let stages = self.stages(&stage_params, use_color)?;
-
-        // Pass 2: candidates, descriptors and labels. With a colour model, candidates found
-        // without the colour mask are added too: the mask removes most leaves, so without them
-        // the classifier would see almost no negatives (none at all for clean, red fruit) and
-        // could not learn to reject the leaves that do pass the mask (green fruit among leaves).
-        let depth_only = ColorMaskStage {
-            lut: None,
-            ..stages.mask.clone()
-        };
-        let done = std::sync::atomic::AtomicUsize::new(0);
-        let per_frame: Result<Vec<LabelledFeatures>, PipelineError> = (0..n)
-            .into_par_iter()
-            .map(|i| {
-                let lf = frames.load(i)?;
-                if use_color && lf.frame.color().is_none() {
-                    return Err(PipelineError::MissingColor {
-                        pipeline: PIPELINE_NAME,
-                    });
-                }
-                let mut t = StageTimings::default();
-                let (mut candidates, mut features) = stages.candidates(&lf.frame, &mut t)?;
-                if use_color {
-                    let (c, f) = stages.candidates_with(&depth_only, &lf.frame, &mut t)?;
-                    candidates.extend(c);
-                    features.extend(f);
-                }
-                let lut = stages.mask.lut.as_ref();
-                let p = &stage_params.params;
-                let mut pairs = Vec::new();
-                let (features, labels) = candidates
-                    .iter()
-                    .zip(features)
-                    .filter_map(|(c, f)| {
-                        let color = mean_posterior(c, lut, &lf.frame);
-                        let l = label(c, &lf, p, color)?;
-                        if l {
-                            pairs.extend(radius_pair(c, &lf.truth, p));
-                        }
-                        Some((f, l))
-                    })
-                    .unzip();
-                progress(
-                    done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1,
-                    n,
-                );
-                Ok((features, labels, pairs))
-            })
-            .collect();
-        let (mut values, mut labels, mut pairs) = (Vec::new(), Vec::new(), Vec::new());
-        for (f, l, r) in per_frame? {
-            values.extend(f.into_iter().flatten());
-            labels.extend(l);
-            pairs.extend(r);
-        }
-        let mut stage_params = stage_params;
-        if from_truth {
+        let (values, labels, pairs) =
+            labelled_candidates(frames, &stages, &stage_params.params, use_color, progress)?;
+        if self.params.size_prior == SizePriorMode::FromTruth {
             stage_params.params.radius_calibration = RadiusCalibration::fit(&pairs);
         }
-        let (values, labels) = cap_negatives(
-            values,
-            labels,
-            stage_params.params.max_negatives_per_positive,
-            options.seed,
-        );
-        let positives = labels.iter().filter(|&&l| l).count();
-        if positives < 2 || labels.len() - positives < 2 {
-            return Err(not_enough(format!(
-                "{positives} positive and {} negative candidates",
-                labels.len() - positives
-            )));
-        }
-        let data = TrainingSet::new(Samples::new(crate::GPCD_LEN, values)?, labels)?;
-        let (log2_c, log2_gamma) = if options.full_grid {
-            let d = GridSearchParams::default();
-            (d.log2_c, d.log2_gamma)
-        } else {
-            (
-                GridAxis {
-                    start: -1.0,
-                    stop: 11.0,
-                    step: 2.0,
-                },
-                GridAxis {
-                    start: 1.0,
-                    stop: -9.0,
-                    step: 2.0,
-                },
-            )
-        };
-        let search = GridSearchParams {
-            log2_c,
-            log2_gamma,
-            folds: options.folds,
-            fine: options.full_grid,
-            seed: options.seed,
-            metric: stage_params.params.cv_metric,
-            base: SvmParams::default()
-                .class_weights(stage_params.params.class_weights)
-                .seed(options.seed),
-        }
-        .check()?
-        .fit(&data)?;
-        let stage_json = serde_json::to_value(&stage_params)
-            .map_err(|e| PipelineError::StageParams(e.to_string()))?;
-        Ok(ModelFile::new(PIPELINE_NAME, stage_json, &search.model))
+        fit_classifier(stage_params, values, labels, options)
     }
 
     fn load(&self, model: &ModelFile) -> Result<Box<dyn Detector>, PipelineError> {
@@ -561,6 +467,135 @@ fn cap_negatives(
 }
 
 /// One frame's colour counts (with colour) and annotated fruit, for the colour model and the
+/// The error for training data that gives nothing to learn from.
+fn not_enough(reason: String) -> PipelineError {
+    PipelineError::NotEnoughTrainingData {
+        pipeline: PIPELINE_NAME,
+        reason,
+    }
+}
+
+/// Training pass 2: every frame's candidates, their descriptors and labels, and the (fitted,
+/// true) radius pairs of positives. With a colour model, candidates found without the colour
+/// mask are added too: the mask removes most leaves, so without them the classifier would see
+/// almost no negatives (none at all for clean, red fruit) and could not learn to reject the
+/// leaves that do pass the mask (green fruit among leaves).
+fn labelled_candidates(
+    frames: &dyn FrameSource,
+    stages: &Stages,
+    params: &ShapeFitParams,
+    use_color: bool,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<LabelledFeatures, PipelineError> {
+    let n = frames.len();
+    let depth_only = ColorMaskStage {
+        lut: None,
+        ..stages.mask.clone()
+    };
+    let done = std::sync::atomic::AtomicUsize::new(0);
+    let per_frame: Result<Vec<LabelledFeatures>, PipelineError> = (0..n)
+        .into_par_iter()
+        .map(|i| {
+            let lf = frames.load(i)?;
+            if use_color && lf.frame.color().is_none() {
+                return Err(PipelineError::MissingColor {
+                    pipeline: PIPELINE_NAME,
+                });
+            }
+            let mut t = StageTimings::default();
+            let (mut candidates, mut features) = stages.candidates(&lf.frame, &mut t)?;
+            if use_color {
+                let (c, f) = stages.candidates_with(&depth_only, &lf.frame, &mut t)?;
+                candidates.extend(c);
+                features.extend(f);
+            }
+            let lut = stages.mask.lut.as_ref();
+            let mut pairs = Vec::new();
+            let (features, labels) = candidates
+                .iter()
+                .zip(features)
+                .filter_map(|(c, f)| {
+                    let color = mean_posterior(c, lut, &lf.frame);
+                    let l = label(c, &lf, params, color)?;
+                    if l {
+                        pairs.extend(radius_pair(c, &lf.truth, params));
+                    }
+                    Some((f, l))
+                })
+                .unzip();
+            progress(
+                done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1,
+                n,
+            );
+            Ok((features, labels, pairs))
+        })
+        .collect();
+    let (mut values, mut labels, mut pairs) = (Vec::new(), Vec::new(), Vec::new());
+    for (f, l, r) in per_frame? {
+        values.extend(f);
+        labels.extend(l);
+        pairs.extend(r);
+    }
+    Ok((values, labels, pairs))
+}
+
+/// Caps the negatives, grid-searches the RBF SVM on the descriptors and packages the model.
+fn fit_classifier(
+    stage_params: ShapeFitStageParams,
+    values: Vec<Vec<f64>>,
+    labels: Vec<bool>,
+    options: &TrainOptions,
+) -> Result<ModelFile, PipelineError> {
+    let values: Vec<f64> = values.into_iter().flatten().collect();
+    let (values, labels) = cap_negatives(
+        values,
+        labels,
+        stage_params.params.max_negatives_per_positive,
+        options.seed,
+    );
+    let positives = labels.iter().filter(|&&l| l).count();
+    if positives < 2 || labels.len() - positives < 2 {
+        return Err(not_enough(format!(
+            "{positives} positive and {} negative candidates",
+            labels.len() - positives
+        )));
+    }
+    let data = TrainingSet::new(Samples::new(crate::GPCD_LEN, values)?, labels)?;
+    let (log2_c, log2_gamma) = if options.full_grid {
+        let d = GridSearchParams::default();
+        (d.log2_c, d.log2_gamma)
+    } else {
+        (
+            GridAxis {
+                start: -1.0,
+                stop: 11.0,
+                step: 2.0,
+            },
+            GridAxis {
+                start: 1.0,
+                stop: -9.0,
+                step: 2.0,
+            },
+        )
+    };
+    let search = GridSearchParams {
+        log2_c,
+        log2_gamma,
+        folds: options.folds,
+        fine: options.full_grid,
+        seed: options.seed,
+        metric: stage_params.params.cv_metric,
+        base: SvmParams::default()
+            .class_weights(stage_params.params.class_weights)
+            .seed(options.seed),
+    }
+    .check()?
+    .fit(&data)?;
+    let stage_json = serde_json::to_value(&stage_params)
+        .map_err(|e| PipelineError::StageParams(e.to_string()))?;
+    Ok(ModelFile::new(PIPELINE_NAME, stage_json, &search.model))
+}
+
 /// size prior.
 type FramePrior = (Option<ColorHistograms>, Vec<FruitTruth>);
 

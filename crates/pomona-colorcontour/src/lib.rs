@@ -48,5 +48,5 @@ pub use params::ColorContourParams;
 pub use pipeline::{
     ColorContourDetector, ColorContourPipeline, ColorContourStageParams, PIPELINE_NAME,
 };
-pub use pixel_f1::{pixel_counts, PixelCounts};
+pub use pixel_f1::{best_f1_threshold, pixel_counts, value_histograms, PixelCounts};
 pub use training_pixels::{fruit_labels, training_pixels};

@@ -14,9 +14,15 @@ pub struct ColorContourParams {
     /// Training pixels drawn per class per frame (seeded; the paper used hand-cut samples of
     /// fruit and of background from 800 images).
     pub pixels_per_class_per_frame: usize,
-    /// A pixel is fruit when the network's output is at least this (our choice: the even odds
-    /// of a class-balanced training set).
+    /// A pixel is fruit when the network's output is at least this. With
+    /// `learn_color_threshold`, training replaces it by the value that maximises pixel F1 over
+    /// the training frames (the network sees balanced classes, but fruit are a few per cent of
+    /// a frame, so even odds would pass far too much background).
     pub color_threshold: f64,
+    /// Whether training chooses `color_threshold` (see above; the paper does not say how its
+    /// table was thresholded).
+    #[serde(default = "yes")]
+    pub learn_color_threshold: bool,
     /// Mask components smaller than this many pixels have no contour worth fitting.
     pub min_component_px: usize,
     /// The adaptive edge fitting (Eq. 8).
@@ -43,6 +49,7 @@ impl Default for ColorContourParams {
             mlp: MlpParams::default(),
             pixels_per_class_per_frame: 2000,
             color_threshold: 0.5,
+            learn_color_threshold: true,
             min_component_px: 40,
             edge_fit: EdgeFitParams::default(),
             min_support: 0.15,
@@ -53,4 +60,8 @@ impl Default for ColorContourParams {
             depth_core_fraction: 0.8,
         }
     }
+}
+
+fn yes() -> bool {
+    true
 }

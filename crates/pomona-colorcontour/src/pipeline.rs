@@ -11,7 +11,10 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::stages::{ColorClassStage, ContourStage, EdgeFitStage, FruitStage};
-use crate::{quantise_probability, training_pixels, ColorContourParams, HSigmaLut, Mlp};
+use crate::{
+    best_f1_threshold, quantise_probability, training_pixels, value_histograms, ColorContourParams,
+    HSigmaLut, Mlp,
+};
 
 /// Name of the pipeline on the command line and in model files.
 pub const PIPELINE_NAME: &str = "color-contour";
@@ -116,10 +119,26 @@ impl Pipeline for ColorContourPipeline {
                 ),
             }
         })?;
-        let stage = ColorContourStageParams {
-            params: self.params.clone(),
-            mlp,
-        };
+        let mut params = self.params.clone();
+        if params.learn_color_threshold {
+            let lut = HSigmaLut::compile(&mlp);
+            let per_frame: Result<Vec<[[u64; 256]; 2]>, PipelineError> = (0..n)
+                .into_par_iter()
+                .map(|i| Ok(value_histograms(&frames.load(i)?, &lut)))
+                .collect();
+            let mut total = [[0u64; 256]; 2];
+            for h in per_frame? {
+                for (t, f) in total.iter_mut().zip(h) {
+                    for (a, b) in t.iter_mut().zip(f) {
+                        *a += b;
+                    }
+                }
+            }
+            if let Some(t) = best_f1_threshold(&total) {
+                params.color_threshold = f64::from(t) / 255.0;
+            }
+        }
+        let stage = ColorContourStageParams { params, mlp };
         Ok(ModelFile::new(
             PIPELINE_NAME,
             params_to_json(&stage),

@@ -2,7 +2,7 @@
 //! labels of [`crate::fruit_labels`] (instance mask, or inscribed truth discs): the measure of the
 //! issue's colour targets (pixel F1).
 
-use pomona_pipeline::{FrameSource, PipelineError};
+use pomona_pipeline::{FrameSource, LabelledFrame, PipelineError};
 
 use crate::{fruit_labels, HSigmaLut};
 
@@ -36,6 +36,44 @@ impl PixelCounts {
     }
 }
 
+/// Per table value 0–255: how many fruit and background pixels of `lf` have it (empty without
+/// colour).
+pub fn value_histograms(lf: &LabelledFrame, lut: &HSigmaLut) -> [[u64; 256]; 2] {
+    let mut h = [[0u64; 256]; 2];
+    if let (Some(color), Some(labels)) = (lf.frame.color(), fruit_labels(lf)) {
+        for (rgb, &fruit) in color.pixels().zip(&labels) {
+            h[usize::from(fruit)][usize::from(lut.value(rgb))] += 1;
+        }
+    }
+    h
+}
+
+/// The table value from which calling a pixel fruit maximises pixel F1, given per-value counts
+/// `[background, fruit]` (ties: the lowest such value); `None` without fruit pixels.
+pub fn best_f1_threshold(histograms: &[[u64; 256]; 2]) -> Option<u8> {
+    let [background, fruit] = histograms;
+    let total_fruit: u64 = fruit.iter().sum();
+    if total_fruit == 0 {
+        return None;
+    }
+    let (mut tp, mut fp) = (0u64, 0u64);
+    let mut best = (0.0, 255u8);
+    for t in (0..256).rev() {
+        tp += fruit[t];
+        fp += background[t];
+        let counts = PixelCounts {
+            true_positives: tp,
+            false_positives: fp,
+            false_negatives: total_fruit - tp,
+        };
+        let f1 = counts.precision_recall_f1().2;
+        if f1 >= best.0 {
+            best = (f1, t as u8);
+        }
+    }
+    Some(best.1)
+}
+
 /// Counts over every frame of `frames` with colour, classifying with `lut` at `threshold`
 /// (table value 0–255).
 ///
@@ -63,4 +101,22 @@ pub fn pixel_counts(
         }
     }
     Ok(c)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_best_threshold_maximises_f1() {
+        let mut h = [[0u64; 256]; 2];
+        h[1][200] = 90; // most fruit high
+        h[1][100] = 10;
+        h[0][100] = 500; // background in the middle
+        h[0][10] = 10_000;
+        assert_eq!(best_f1_threshold(&h), Some(200));
+        h[0][100] = 1;
+        assert_eq!(best_f1_threshold(&h), Some(100));
+        assert_eq!(best_f1_threshold(&[[0; 256], [0; 256]]), None);
+    }
 }

@@ -118,10 +118,10 @@ impl Mlp {
                 let ((x, y), fruit) = samples[i];
                 let (x, y) = (x * INPUT_SCALE, y * INPUT_SCALE);
                 let mut sum = net.output_bias;
-                for k in 0..h {
+                for (k, out) in hidden_out.iter_mut().enumerate() {
                     let w = net.hidden_weights[k];
-                    hidden_out[k] = sigmoid(w[0] * x + w[1] * y + net.hidden_bias[k]);
-                    sum += net.output_weights[k] * hidden_out[k];
+                    *out = sigmoid(w[0] * x + w[1] * y + net.hidden_bias[k]);
+                    sum += net.output_weights[k] * *out;
                 }
                 // Cross-entropy at a sigmoid output: the error signal is output − target.
                 let delta = sigmoid(sum) - if fruit { 1.0 } else { 0.0 };

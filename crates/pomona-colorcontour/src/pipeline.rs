@@ -190,7 +190,7 @@ impl ColorContourDetector {
         if !(near > 0.0 && near <= far) {
             return Err(invalid("working_distance_m", "needs 0 < near ≤ far"));
         }
-        if !(p.prior_radius_m > 0.0) {
+        if p.prior_radius_m.is_nan() || p.prior_radius_m <= 0.0 {
             return Err(invalid("prior_radius_m", "must be positive"));
         }
         Ok(Self {

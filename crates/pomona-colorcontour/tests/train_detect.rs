@@ -33,10 +33,12 @@ fn trains_and_finds_oranges() {
         seed: 5,
         ..TrainOptions::default()
     };
-    let model = pipeline.train(&frames(21, 6), &options, &|_, _| {}).unwrap();
-    let detector = pipeline.load(&model).unwrap();
-    let run = detect_and_evaluate(detector.as_ref(), &frames(22, 4), &EvalConfig::default())
+    let model = pipeline
+        .train(&frames(21, 6), &options, &|_, _| {})
         .unwrap();
+    let detector = pipeline.load(&model).unwrap();
+    let run =
+        detect_and_evaluate(detector.as_ref(), &frames(22, 4), &EvalConfig::default()).unwrap();
     let recall = run.report.recall.unwrap();
     let ap = run.report.ap_voc11.unwrap();
     assert!(recall > 0.5 && ap > 0.4, "recall {recall}, AP {ap}");
@@ -50,7 +52,9 @@ fn trains_and_finds_oranges() {
 
     // Same seed → the same model; the JSON round trip gives the same detections.
     assert_eq!(
-        pipeline.train(&frames(21, 6), &options, &|_, _| {}).unwrap(),
+        pipeline
+            .train(&frames(21, 6), &options, &|_, _| {})
+            .unwrap(),
         model
     );
     let json = serde_json::to_string(&model).unwrap();

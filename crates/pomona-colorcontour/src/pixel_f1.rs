@@ -114,9 +114,11 @@ mod tests {
         h[1][100] = 10;
         h[0][100] = 500; // background in the middle
         h[0][10] = 10_000;
-        assert_eq!(best_f1_threshold(&h), Some(200));
+        // Every value in 101..=200 separates alike; ties go to the lowest.
+        assert_eq!(best_f1_threshold(&h), Some(101));
+        // Little background at 100: taking all fruit wins (values 11..=100 tie).
         h[0][100] = 1;
-        assert_eq!(best_f1_threshold(&h), Some(100));
+        assert_eq!(best_f1_threshold(&h), Some(11));
         assert_eq!(best_f1_threshold(&[[0; 256], [0; 256]]), None);
     }
 }

@@ -12,13 +12,14 @@ use crate::Error;
 ///
 /// ```
 /// let names: Vec<&str> = pomona::pipelines().iter().map(|p| p.name()).collect();
-/// assert_eq!(names, ["shape-fit", "symmetry", "viewer-pose"]);
+/// assert_eq!(names, ["shape-fit", "symmetry", "viewer-pose", "color-contour"]);
 /// ```
 pub fn pipelines() -> Vec<Box<dyn Pipeline>> {
     vec![
         Box::new(pomona_shapefit::ShapeFitPipeline::default()),
         Box::new(pomona_symmetry::SymmetryPipeline::default()),
         Box::new(pomona_symmetry::ViewerPosePipeline::default()),
+        Box::new(pomona_colorcontour::ColorContourPipeline::default()),
     ]
 }
 
@@ -27,7 +28,7 @@ pub fn pipelines() -> Vec<Box<dyn Pipeline>> {
 /// ```
 /// assert_eq!(
 ///     pomona::pipeline_names(&pomona::pipelines()),
-///     "shape-fit, symmetry, viewer-pose"
+///     "shape-fit, symmetry, viewer-pose, color-contour"
 /// );
 /// ```
 pub fn pipeline_names(pipelines: &[Box<dyn Pipeline>]) -> String {

@@ -1,0 +1,355 @@
+//! Circles from the curvature of pieces of contour (seed 004 §3.2, "adaptive edge fitting").
+//!
+//! At every point of a closed contour a window of contour points spans an arc of length `a` with
+//! chord `c`; Eq. 8 ([`crate::arc_radius`]) turns them into a radius r, and the window is
+//! resized until its arc length is about `arc_per_radius` × r ("adjusted recursively until the
+//! length of the arc is near to the value of the radius"). The centre lies at r cos θ from the
+//! chord's midpoint, on the side away from the arc. The window then moves one point along the
+//! contour. Consecutive centre estimates that stay together belong to one fruit; "when a sharp
+//! variation in the position of the estimated center is detected", the estimates gathered so far
+//! become one circle — centre and radius are means weighted by the window's point count — and a
+//! new group begins.
+//!
+//! Departures, documented: estimates from concave windows (the notch between two touching
+//! fruit) or straight ones (c/a ≥ 1) are not centres of anything and end the current group; a
+//! jump is a centre more than `jump_fraction` × the group's mean radius from the group's running
+//! mean (the paper gives no number); the first and last groups of a closed contour are joined
+//! when they continue each other; a group needs `min_estimates` estimates; and its score is its
+//! *support fraction* — the arc length it spans over 2πr, capped at 1 — which the pruning and the
+//! detector's score use (the paper's "score accumulated during the edge-fitting process").
+
+use pomona_core::nalgebra::{Point2, Vector2};
+use serde::{Deserialize, Serialize};
+
+use crate::{arc_half_angle, Contour};
+
+/// Settings of the adaptive edge fitting.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct EdgeFitParams {
+    /// Target arc length of a window in radii (paper: the arc is "near to the value of the
+    /// radius", i.e. 1).
+    pub arc_per_radius: f64,
+    /// Relative tolerance on `arc ≈ arc_per_radius × r` before the window stops adapting.
+    pub arc_tolerance: f64,
+    /// Resizing rounds per window position.
+    pub max_adapt_steps: usize,
+    /// Smallest window, in contour points.
+    pub min_window: usize,
+    /// A centre farther than this many mean radii from its group's mean starts a new group.
+    pub jump_fraction: f64,
+    /// Estimates a group needs to become a circle.
+    pub min_estimates: usize,
+    /// Half-width of the moving average applied to contour points before fitting.
+    pub smoothing_half_window: usize,
+}
+
+impl Default for EdgeFitParams {
+    fn default() -> Self {
+        Self {
+            arc_per_radius: 1.0,
+            arc_tolerance: 0.2,
+            max_adapt_steps: 4,
+            min_window: 6,
+            jump_fraction: 0.3,
+            min_estimates: 4,
+            smoothing_half_window: 2,
+        }
+    }
+}
+
+/// A circle found on a contour, in pixels.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ContourCircle {
+    /// Centre, pixel coordinates.
+    pub center_px: Point2<f64>,
+    /// Radius, pixels.
+    pub radius_px: f64,
+    /// Arc length the group spans divided by the circumference, in (0, 1].
+    pub support: f64,
+}
+
+/// One centre estimate of a window.
+#[derive(Debug, Clone, Copy)]
+struct Estimate {
+    center: Point2<f64>,
+    radius: f64,
+    weight: f64,
+    /// Contour index at which the window starts and its point count.
+    start: usize,
+    len: usize,
+}
+
+/// A closed contour's arc-length prefix sums, for O(1) window lengths.
+struct ArcTable<'a> {
+    points: &'a [Point2<f64>],
+    /// `cumulative[i]` is the length from point 0 to point `i` (index `n` closes the loop).
+    cumulative: Vec<f64>,
+}
+
+impl<'a> ArcTable<'a> {
+    fn new(points: &'a [Point2<f64>]) -> Self {
+        let n = points.len();
+        let mut cumulative = Vec::with_capacity(n + 1);
+        let mut s = 0.0;
+        cumulative.push(0.0);
+        for i in 0..n {
+            s += (points[(i + 1) % n] - points[i]).norm();
+            cumulative.push(s);
+        }
+        Self { points, cumulative }
+    }
+
+    fn total(&self) -> f64 {
+        self.cumulative[self.points.len()]
+    }
+
+    /// Arc length from point `i` over `len` steps (wrapping).
+    fn arc(&self, i: usize, len: usize) -> f64 {
+        let n = self.points.len();
+        let j = i + len;
+        if j <= n {
+            self.cumulative[j] - self.cumulative[i]
+        } else {
+            self.total() - self.cumulative[i] + self.cumulative[j - n]
+        }
+    }
+
+    fn point(&self, i: usize) -> Point2<f64> {
+        self.points[i % self.points.len()]
+    }
+}
+
+/// The estimate of the window starting at `i` with `len` steps: `None` for straight or concave
+/// pieces. `orientation` is the sign of the contour's signed area.
+fn window_estimate(t: &ArcTable, i: usize, len: usize, orientation: f64) -> Option<Estimate> {
+    let (p, q) = (t.point(i), t.point(i + len));
+    let a = t.arc(i, len);
+    let chord = q - p;
+    let c = chord.norm();
+    let theta = arc_half_angle(c / a)?;
+    let r = a / (2.0 * theta);
+    let m = t.point(i + len / 2);
+    let bulge = chord.perp(&(m - p));
+    // Convex (bulging outwards) pieces turn against the contour's orientation.
+    if bulge * orientation >= 0.0 || c == 0.0 {
+        return None;
+    }
+    // Unit normal of the chord towards the bulge; the centre is on the other side.
+    let mut normal = Vector2::new(-chord.y, chord.x) / c;
+    if normal.dot(&(m - p)) < 0.0 {
+        normal = -normal;
+    }
+    let mid = p + chord / 2.0;
+    Some(Estimate {
+        center: mid - normal * (r * theta.cos()),
+        radius: r,
+        weight: len as f64,
+        start: i,
+        len,
+    })
+}
+
+/// Every circle the adaptive edge fitting finds on `contour` (already smoothed).
+pub fn contour_circles(contour: &Contour, params: &EdgeFitParams) -> Vec<ContourCircle> {
+    let n = contour.points.len();
+    let min_window = params.min_window.max(2);
+    if n < 2 * min_window {
+        return Vec::new();
+    }
+    let orientation = contour.signed_area2().signum();
+    let table = ArcTable::new(&contour.points);
+    let max_window = n / 2;
+    let mut len = min_window;
+    let mut estimates: Vec<Option<Estimate>> = Vec::with_capacity(n);
+    for i in 0..n {
+        let mut est = None;
+        for _ in 0..=params.max_adapt_steps {
+            est = window_estimate(&table, i, len, orientation);
+            let Some(e) = est else { break };
+            let target = params.arc_per_radius * e.radius;
+            let a = table.arc(i, len);
+            if (a - target).abs() <= params.arc_tolerance * target {
+                break;
+            }
+            let resized =
+                ((len as f64 * target / a).round() as usize).clamp(min_window, max_window);
+            if resized == len {
+                break;
+            }
+            len = resized;
+        }
+        if est.is_none() {
+            len = min_window;
+        }
+        estimates.push(est);
+    }
+    let mut groups = group_estimates(&estimates, params.jump_fraction);
+    join_wrapping_groups(&mut groups, n, params.jump_fraction);
+    groups
+        .iter()
+        .filter(|g| g.len() >= params.min_estimates.max(1))
+        .filter_map(|g| circle_of_group(g, &table))
+        .collect()
+}
+
+/// Splits the sequence into runs of valid estimates whose centres stay within `jump` mean radii
+/// of the run's running mean.
+fn group_estimates(estimates: &[Option<Estimate>], jump: f64) -> Vec<Vec<Estimate>> {
+    let mut groups: Vec<Vec<Estimate>> = Vec::new();
+    let mut current: Vec<Estimate> = Vec::new();
+    for e in estimates {
+        match e {
+            Some(e) => {
+                if let Some((c, r)) = weighted_mean(&current) {
+                    if (e.center - c).norm() > jump * r {
+                        groups.push(std::mem::take(&mut current));
+                    }
+                }
+                current.push(*e);
+            }
+            None => {
+                if !current.is_empty() {
+                    groups.push(std::mem::take(&mut current));
+                }
+            }
+        }
+    }
+    if !current.is_empty() {
+        groups.push(current);
+    }
+    groups
+}
+
+/// Joins the last group into the first when the first starts at point 0, the last ends at the
+/// end of the contour, and their means agree (one fruit across the contour's starting point).
+fn join_wrapping_groups(groups: &mut Vec<Vec<Estimate>>, n: usize, jump: f64) {
+    if groups.len() < 2 {
+        return;
+    }
+    let (first, last) = (&groups[0], &groups[groups.len() - 1]);
+    let wraps = first.first().is_some_and(|e| e.start == 0)
+        && last.last().is_some_and(|e| e.start + 1 == n);
+    let agree = match (weighted_mean(first), weighted_mean(last)) {
+        (Some((a, ra)), Some((b, rb))) => (a - b).norm() <= jump * ra.max(rb),
+        _ => false,
+    };
+    if wraps && agree {
+        if let Some(last) = groups.pop() {
+            groups[0].extend(last);
+        }
+    }
+}
+
+fn weighted_mean(group: &[Estimate]) -> Option<(Point2<f64>, f64)> {
+    let w: f64 = group.iter().map(|e| e.weight).sum();
+    if w <= 0.0 {
+        return None;
+    }
+    let c = group
+        .iter()
+        .fold(Vector2::zeros(), |s, e| s + e.center.coords * e.weight)
+        / w;
+    let r = group.iter().map(|e| e.radius * e.weight).sum::<f64>() / w;
+    Some((Point2::from(c), r))
+}
+
+fn circle_of_group(group: &[Estimate], table: &ArcTable) -> Option<ContourCircle> {
+    let (center_px, radius_px) = weighted_mean(group)?;
+    // Arc covered: union of the windows, as the sum of point steps each covers at most once.
+    let n = table.points.len();
+    let mut covered = vec![false; n];
+    for e in group {
+        for k in 0..e.len {
+            covered[(e.start + k) % n] = true;
+        }
+    }
+    let arc: f64 = (0..n)
+        .filter(|&i| covered[i])
+        .map(|i| table.arc(i, 1))
+        .sum();
+    let support = (arc / (2.0 * std::f64::consts::PI * radius_px)).min(1.0);
+    (radius_px.is_finite() && radius_px > 0.0).then_some(ContourCircle {
+        center_px,
+        radius_px,
+        support,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{smooth_mask, trace_contours};
+
+    /// A disc of radius `r` at `(cx, cy)` with the pixels for which `hidden` holds removed.
+    fn partial_disc(
+        w: usize,
+        h: usize,
+        (cx, cy, r): (f64, f64, f64),
+        hidden: impl Fn(f64, f64) -> bool,
+    ) -> Vec<bool> {
+        (0..w * h)
+            .map(|i| {
+                let (x, y) = ((i % w) as f64, (i / w) as f64);
+                (x - cx).powi(2) + (y - cy).powi(2) <= r * r && !hidden(x, y)
+            })
+            .collect()
+    }
+
+    fn circles(mask: &[bool], w: usize, h: usize) -> Vec<ContourCircle> {
+        let params = EdgeFitParams::default();
+        let smooth = smooth_mask(mask, w, h);
+        trace_contours(&smooth, w, h, 20)
+            .iter()
+            .flat_map(|c| contour_circles(&c.smoothed(params.smoothing_half_window), &params))
+            .collect()
+    }
+
+    fn best(found: &[ContourCircle]) -> ContourCircle {
+        *found
+            .iter()
+            .max_by(|a, b| a.support.total_cmp(&b.support))
+            .unwrap()
+    }
+
+    #[test]
+    fn a_whole_disc_gives_its_circle() {
+        let (w, h) = (120, 100);
+        for r in [12.0, 25.0, 40.0] {
+            let found = circles(&partial_disc(w, h, (60.3, 49.6, r), |_, _| false), w, h);
+            let c = best(&found);
+            let err = (c.center_px - Point2::new(60.3, 49.6)).norm();
+            assert!(err < 0.1 * r, "r {r}: centre off by {err}");
+            assert!((c.radius_px - r).abs() < 0.12 * r, "r {r}: {}", c.radius_px);
+            assert!(c.support > 0.8, "support {}", c.support);
+        }
+    }
+
+    #[test]
+    fn a_disc_with_a_third_hidden_keeps_its_centre() {
+        let (w, h) = (140, 120);
+        let (cx, cy, r) = (70.0, 60.0, 35.0);
+        // A leaf (band) covers the right third of the fruit.
+        let mask = partial_disc(w, h, (cx, cy, r), |x, _| x > cx + r / 3.0);
+        let c = best(&circles(&mask, w, h));
+        let err = (c.center_px - Point2::new(cx, cy)).norm();
+        assert!(err < 0.1 * r, "centre off by {err}: {c:?}");
+        assert!((c.radius_px - r).abs() < 0.12 * r, "{c:?}");
+        assert!(c.support > 0.4 && c.support < 0.9, "{c:?}");
+    }
+
+    #[test]
+    fn two_touching_discs_give_two_circles() {
+        let (w, h) = (160, 100);
+        let a = partial_disc(w, h, (50.0, 50.0, 28.0), |_, _| false);
+        let b = partial_disc(w, h, (100.0, 52.0, 26.0), |_, _| false);
+        let mask: Vec<bool> = a.iter().zip(&b).map(|(x, y)| *x || *y).collect();
+        let found = circles(&mask, w, h);
+        for (cx, cy, r) in [(50.0, 50.0, 28.0), (100.0, 52.0, 26.0)] {
+            let hit = found.iter().any(|c| {
+                (c.center_px - Point2::new(cx, cy)).norm() < 0.15 * r
+                    && (c.radius_px - r).abs() < 0.15 * r
+            });
+            assert!(hit, "no circle at ({cx}, {cy}): {found:?}");
+        }
+    }
+}

@@ -1,0 +1,52 @@
+//! # pomona-colorcontour
+//!
+//! The `color-contour` detector of seed 004 (Plebe & Grasso 2001, the vision system of an
+//! orange-picking robot): fruit colour in the HΣ plane (§3.1, [`hsigma`]) classified by a small
+//! perceptron ([`Mlp`]) compiled into an exact lookup table ([`HSigmaLut`]); fruit circles from
+//! the curvature of the mask's contours (§3.2: [`Contour`], [`arc_half_angle`] solves Eq. 8,
+//! [`contour_circles`]), pruned by overlap ([`prune_overlapping`]) and by size; and, where the
+//! frame has depth, each circle lifted to a 3D centre and diameter ([`sphere_from_depth`]). It
+//! works on pieces of contour, so it finds oranges that leaves or neighbours hide in large part.
+//!
+//! Each step is a [`pomona_pipeline::Stage`] (see [`stages`]); [`ColorContourPipeline`] trains
+//! a [`pomona_pipeline::ModelFile`] (the perceptron and the stage parameters in `stage_params`;
+//! its SVM slot is empty: the score is contour support × colour purity) and loads a
+//! [`ColorContourDetector`] from one. The built-in model is retrained by
+//! `cargo run --release -p pomona-colorcontour --example train_color_contour_default`.
+//!
+//! Departures from the paper, each documented where it is made: the perceptron's size, scaling
+//! and training schedule ([`Mlp`]); only outer borders followed, and contours smoothed
+//! ([`Contour`]); concave and straight windows, the jump rule, wrap-around joining and the
+//! support score ([`contour_circles`]); overlap relative to the smaller circle
+//! ([`prune_overlapping`]); the size test before the overlap test, and 3D from depth instead of
+//! stereo ([`stages::FruitStage`], [`sphere_from_depth`]). Not built here: tracking (§3.3) and
+//! stereo matching (§4).
+
+mod arc_half_angle;
+mod circle_in_space;
+mod circle_pruning;
+mod contour;
+mod contour_circles;
+mod hsigma;
+mod hsigma_lut;
+mod mlp;
+mod params;
+mod pipeline;
+mod pixel_f1;
+pub mod stages;
+mod training_pixels;
+
+pub use arc_half_angle::{arc_half_angle, arc_radius};
+pub use circle_in_space::{sphere_from_depth, sphere_from_size, SphereFromCircle};
+pub use circle_pruning::{disc_overlap_area, prune_overlapping};
+pub use contour::{smooth_mask, trace_contours, Contour};
+pub use contour_circles::{contour_circles, ContourCircle, EdgeFitParams};
+pub use hsigma::{hsigma, hsigma_integers, hsigma_of_integers};
+pub use hsigma_lut::{quantise_probability, HSigmaLut};
+pub use mlp::{HSigmaSample, Mlp, MlpParams};
+pub use params::ColorContourParams;
+pub use pipeline::{
+    ColorContourDetector, ColorContourPipeline, ColorContourStageParams, PIPELINE_NAME,
+};
+pub use pixel_f1::{best_f1_threshold, pixel_counts, value_histograms, PixelCounts};
+pub use training_pixels::{fruit_labels, training_pixels};

@@ -1,0 +1,67 @@
+//! Every tunable of the colour-contour detector in one serialisable struct, defaulted to seed
+//! 004's values where it gives them and to documented choices where it is silent; stored in the
+//! model file (`stage_params`) so a model runs with the parameters it was trained with.
+
+use serde::{Deserialize, Serialize};
+
+use crate::{EdgeFitParams, MlpParams};
+
+/// Parameters of every stage.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ColorContourParams {
+    /// The colour perceptron's training (2-8-1, back-propagation).
+    pub mlp: MlpParams,
+    /// Training pixels drawn per class per frame (seeded; the paper used hand-cut samples of
+    /// fruit and of background from 800 images).
+    pub pixels_per_class_per_frame: usize,
+    /// A pixel is fruit when the network's output is at least this. With
+    /// `learn_color_threshold`, training replaces it by the value that maximises pixel F1 over
+    /// the training frames (the network sees balanced classes, but fruit are a few per cent of
+    /// a frame, so even odds would pass far too much background).
+    pub color_threshold: f64,
+    /// Whether training chooses `color_threshold` (see above; the paper does not say how its
+    /// table was thresholded).
+    #[serde(default = "yes")]
+    pub learn_color_threshold: bool,
+    /// Mask components smaller than this many pixels have no contour worth fitting.
+    pub min_component_px: usize,
+    /// The adaptive edge fitting (Eq. 8).
+    pub edge_fit: EdgeFitParams,
+    /// Circles need at least this support (arc spanned over circumference) to be reported.
+    pub min_support: f64,
+    /// Of two circles sharing more than this fraction of the smaller one's area, the weaker is
+    /// dropped (paper: 40 %).
+    pub max_overlap: f64,
+    /// Allowed fruit radius at the measured depth, metres (paper: 25–55 mm for oranges).
+    pub radius_range_m: (f64, f64),
+    /// Camera-to-fruit distances, metres, that bound the radius in pixels of a circle without
+    /// depth (the paper scales by the known working distance).
+    pub working_distance_m: (f64, f64),
+    /// Radius assumed to place a circle without depth in 3D, metres (middle of the range).
+    pub prior_radius_m: f64,
+    /// Depth is read from fruit pixels within this fraction of the radius from the centre.
+    pub depth_core_fraction: f64,
+}
+
+impl Default for ColorContourParams {
+    fn default() -> Self {
+        Self {
+            mlp: MlpParams::default(),
+            pixels_per_class_per_frame: 2000,
+            color_threshold: 0.5,
+            learn_color_threshold: true,
+            min_component_px: 40,
+            edge_fit: EdgeFitParams::default(),
+            min_support: 0.15,
+            max_overlap: 0.4,
+            radius_range_m: (0.025, 0.055),
+            working_distance_m: (0.3, 2.0),
+            prior_radius_m: 0.04,
+            depth_core_fraction: 0.8,
+        }
+    }
+}
+
+fn yes() -> bool {
+    true
+}

@@ -1,0 +1,233 @@
+//! The `color-contour` pipeline: training (the colour perceptron on fruit and background pixels)
+//! and the detector that chains the stages.
+
+use pomona_core::{Detection, RgbdFrame};
+use pomona_learn::{ModelFile, RbfSvm, SvmClassifier};
+use pomona_pipeline::{
+    params_from_json, params_to_json, run_stage, Detector, FrameSource, Pipeline, PipelineError,
+    StageTimings, TrainOptions,
+};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use crate::stages::{ColorClassStage, ContourStage, EdgeFitStage, FruitStage};
+use crate::{
+    best_f1_threshold, quantise_probability, training_pixels, value_histograms, ColorContourParams,
+    HSigmaLut, Mlp,
+};
+
+/// Name of the pipeline on the command line and in model files.
+pub const PIPELINE_NAME: &str = "color-contour";
+
+/// What the model file's `stage_params` holds for this pipeline.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ColorContourStageParams {
+    /// Stage parameters used in training.
+    pub params: ColorContourParams,
+    /// The trained colour perceptron.
+    pub mlp: Mlp,
+}
+
+/// The colour-contour method (seed 004). `params` are used for training; a loaded model carries
+/// its own.
+#[derive(Debug, Clone, Default)]
+pub struct ColorContourPipeline {
+    /// Stage parameters for training.
+    pub params: ColorContourParams,
+}
+
+/// The model file's classifier slot: this method has no SVM (its score is support × colour
+/// purity), so the file carries an empty one that is never evaluated.
+fn no_svm() -> SvmClassifier {
+    SvmClassifier {
+        scaler: None,
+        svm: RbfSvm {
+            n_features: 1,
+            gamma: 1.0,
+            rho: 0.0,
+            support_vectors: Vec::new(),
+            coef: Vec::new(),
+            n_support_negative: 0,
+            n_support_positive: 0,
+            probability: None,
+        },
+        info: None,
+    }
+}
+
+impl Pipeline for ColorContourPipeline {
+    fn name(&self) -> &'static str {
+        PIPELINE_NAME
+    }
+
+    fn needs_color(&self) -> bool {
+        true
+    }
+
+    fn train_params(&self) -> serde_json::Value {
+        params_to_json(&self.params)
+    }
+
+    fn with_train_params(
+        &self,
+        params: serde_json::Value,
+    ) -> Result<Box<dyn Pipeline>, PipelineError> {
+        Ok(Box::new(Self {
+            params: params_from_json(params)?,
+        }))
+    }
+
+    fn default_model(&self) -> Option<&'static str> {
+        Some(include_str!("../models/default.json")).filter(|s| !s.trim().is_empty())
+    }
+
+    fn train(
+        &self,
+        frames: &dyn FrameSource,
+        options: &TrainOptions,
+        progress: &(dyn Fn(usize, usize) + Sync),
+    ) -> Result<ModelFile, PipelineError> {
+        let n = frames.len();
+        let done = std::sync::atomic::AtomicUsize::new(0);
+        let per_class = self.params.pixels_per_class_per_frame;
+        let per_frame: Result<Vec<Vec<_>>, PipelineError> = (0..n)
+            .into_par_iter()
+            .map(|i| {
+                let lf = frames.load(i)?;
+                if lf.frame.color().is_none() {
+                    return Err(PipelineError::MissingColor {
+                        pipeline: PIPELINE_NAME,
+                    });
+                }
+                let seed = options.seed ^ (i as u64 + 1).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+                let samples = training_pixels(&lf, per_class, seed);
+                let k = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+                progress(k, n);
+                Ok(samples)
+            })
+            .collect();
+        let samples: Vec<_> = per_frame?.into_iter().flatten().collect();
+        let mlp = Mlp::train(&samples, &self.params.mlp, options.seed).ok_or_else(|| {
+            PipelineError::NotEnoughTrainingData {
+                pipeline: PIPELINE_NAME,
+                reason: format!(
+                    "the colour perceptron needs fruit and background pixels ({} frames gave {} \
+                     samples, {} of fruit)",
+                    n,
+                    samples.len(),
+                    samples.iter().filter(|s| s.1).count()
+                ),
+            }
+        })?;
+        let mut params = self.params.clone();
+        if params.learn_color_threshold {
+            let lut = HSigmaLut::compile(&mlp);
+            let per_frame: Result<Vec<[[u64; 256]; 2]>, PipelineError> = (0..n)
+                .into_par_iter()
+                .map(|i| Ok(value_histograms(&frames.load(i)?, &lut)))
+                .collect();
+            let mut total = [[0u64; 256]; 2];
+            for h in per_frame? {
+                for (t, f) in total.iter_mut().zip(h) {
+                    for (a, b) in t.iter_mut().zip(f) {
+                        *a += b;
+                    }
+                }
+            }
+            if let Some(t) = best_f1_threshold(&total) {
+                params.color_threshold = f64::from(t) / 255.0;
+            }
+        }
+        let stage = ColorContourStageParams { params, mlp };
+        Ok(ModelFile::new(
+            PIPELINE_NAME,
+            params_to_json(&stage),
+            &no_svm(),
+        ))
+    }
+
+    fn load(&self, model: &ModelFile) -> Result<Box<dyn Detector>, PipelineError> {
+        let stage: ColorContourStageParams = serde_json::from_value(model.stage_params.clone())
+            .map_err(|e| PipelineError::StageParams(e.to_string()))?;
+        Ok(Box::new(ColorContourDetector::new(&stage)?))
+    }
+}
+
+/// A trained colour-contour detector.
+pub struct ColorContourDetector {
+    color: ColorClassStage,
+    smoothing_half_window: usize,
+    min_component_px: usize,
+    edge_fit: EdgeFitStage,
+    fruit: FruitStage,
+}
+
+impl ColorContourDetector {
+    /// Builds the stages from a model's stage parameters (compiles the lookup table).
+    ///
+    /// # Errors
+    /// [`PipelineError::StageParams`] for an unusable perceptron;
+    /// [`PipelineError::InvalidParameter`] for out-of-range parameters.
+    pub fn new(stage: &ColorContourStageParams) -> Result<Self, PipelineError> {
+        if !stage.mlp.is_valid() {
+            return Err(PipelineError::StageParams(
+                "the colour perceptron's weights are inconsistent or not finite".into(),
+            ));
+        }
+        let p = &stage.params;
+        let invalid = |name: &str, reason: &str| PipelineError::InvalidParameter {
+            name: name.into(),
+            reason: reason.into(),
+        };
+        if !(0.0..=1.0).contains(&p.color_threshold) {
+            return Err(invalid("color_threshold", "must lie in [0, 1]"));
+        }
+        let (lo, hi) = p.radius_range_m;
+        if !(lo > 0.0 && lo <= hi) {
+            return Err(invalid("radius_range_m", "needs 0 < min ≤ max"));
+        }
+        let (near, far) = p.working_distance_m;
+        if !(near > 0.0 && near <= far) {
+            return Err(invalid("working_distance_m", "needs 0 < near ≤ far"));
+        }
+        if p.prior_radius_m.is_nan() || p.prior_radius_m <= 0.0 {
+            return Err(invalid("prior_radius_m", "must be positive"));
+        }
+        Ok(Self {
+            color: ColorClassStage {
+                lut: HSigmaLut::compile(&stage.mlp),
+                threshold: quantise_probability(p.color_threshold),
+            },
+            smoothing_half_window: p.edge_fit.smoothing_half_window,
+            min_component_px: p.min_component_px,
+            edge_fit: EdgeFitStage { params: p.edge_fit },
+            fruit: FruitStage { params: p.clone() },
+        })
+    }
+}
+
+impl Detector for ColorContourDetector {
+    fn pipeline(&self) -> &'static str {
+        PIPELINE_NAME
+    }
+
+    fn detect(
+        &self,
+        frame: &RgbdFrame,
+        timings: &mut StageTimings,
+    ) -> Result<Vec<Detection>, PipelineError> {
+        let fruit = run_stage(&self.color, frame, timings)?;
+        let contour_stage = ContourStage {
+            min_component_px: self.min_component_px,
+            smoothing_half_window: self.smoothing_half_window,
+            width: frame.camera().width as usize,
+        };
+        let contours = run_stage(&contour_stage, fruit.as_slice(), timings)?;
+        let circles = run_stage(&self.edge_fit, contours.as_slice(), timings)?;
+        run_stage(
+            &self.fruit,
+            (frame, fruit.as_slice(), circles.as_slice()),
+            timings,
+        )
+    }
+}

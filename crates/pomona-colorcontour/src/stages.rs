@@ -1,0 +1,213 @@
+//! The four stages of the detector, each behind [`pomona_pipeline::Stage`] so it can be timed,
+//! benchmarked or replaced alone: colour lookup → contours → edge fitting → circles to fruit.
+
+use pomona_core::nalgebra::Point2;
+use pomona_core::{Detection, PixelBox, RgbdFrame};
+use pomona_pipeline::{PipelineError, Stage};
+
+use crate::{
+    contour_circles, prune_overlapping, smooth_mask, sphere_from_depth, sphere_from_size,
+    trace_contours, ColorContourParams, Contour, ContourCircle, EdgeFitParams, HSigmaLut,
+    PIPELINE_NAME,
+};
+
+/// Per pixel: the lookup table's value at or above the threshold (§3.1).
+pub struct ColorClassStage {
+    /// The compiled perceptron.
+    pub lut: HSigmaLut,
+    /// Table value (0–255) from which a pixel is fruit.
+    pub threshold: u8,
+}
+
+impl Stage<&RgbdFrame, Vec<bool>> for ColorClassStage {
+    fn name(&self) -> &'static str {
+        "hsigma-lut"
+    }
+
+    fn run(&self, frame: &RgbdFrame) -> Result<Vec<bool>, PipelineError> {
+        let color = frame.color().ok_or(PipelineError::MissingColor {
+            pipeline: PIPELINE_NAME,
+        })?;
+        Ok(color
+            .pixels()
+            .map(|rgb| self.lut.value(rgb) >= self.threshold)
+            .collect())
+    }
+}
+
+/// 5×5 Gaussian, threshold, outer borders of the components, smoothed (see [`crate::Contour`]).
+pub struct ContourStage {
+    /// Smallest component traced, pixels.
+    pub min_component_px: usize,
+    /// Moving-average half-width applied to each contour.
+    pub smoothing_half_window: usize,
+    /// Image width, pixels (the mask is row-major).
+    pub width: usize,
+}
+
+impl Stage<&[bool], Vec<Contour>> for ContourStage {
+    fn name(&self) -> &'static str {
+        "contours"
+    }
+
+    fn run(&self, mask: &[bool]) -> Result<Vec<Contour>, PipelineError> {
+        let w = self.width.max(1);
+        let h = mask.len() / w;
+        let smooth = smooth_mask(mask, w, h);
+        Ok(trace_contours(&smooth, w, h, self.min_component_px)
+            .iter()
+            .map(|c| c.smoothed(self.smoothing_half_window))
+            .collect())
+    }
+}
+
+/// Circles from every contour (Eq. 8, adaptive windows, grouping at centre jumps).
+pub struct EdgeFitStage {
+    /// Fitting parameters.
+    pub params: EdgeFitParams,
+}
+
+impl Stage<&[Contour], Vec<ContourCircle>> for EdgeFitStage {
+    fn name(&self) -> &'static str {
+        "edge-fit"
+    }
+
+    fn run(&self, contours: &[Contour]) -> Result<Vec<ContourCircle>, PipelineError> {
+        Ok(contours
+            .iter()
+            .flat_map(|c| contour_circles(c, &self.params))
+            .collect())
+    }
+}
+
+/// Fraction of the circle's pixels (a grid of at most about 400 inside the image) that are
+/// fruit-coloured.
+fn color_purity(fruit: &[bool], width: usize, height: usize, c: &ContourCircle) -> f64 {
+    let r = c.radius_px;
+    let step = (r / 10.0).max(1.0);
+    let steps = (r / step).ceil() as i64;
+    let (mut inside, mut hits) = (0usize, 0usize);
+    for j in -steps..=steps {
+        for i in -steps..=steps {
+            let (dx, dy) = (i as f64 * step, j as f64 * step);
+            if dx * dx + dy * dy > r * r {
+                continue;
+            }
+            let (x, y) = ((c.center_px.x + dx).round(), (c.center_px.y + dy).round());
+            if x < 0.0 || y < 0.0 || x >= width as f64 || y >= height as f64 {
+                continue;
+            }
+            inside += 1;
+            hits += usize::from(fruit[y as usize * width + x as usize]);
+        }
+    }
+    if inside == 0 {
+        0.0
+    } else {
+        hits as f64 / inside as f64
+    }
+}
+
+/// From circles to detections: support and size checks, score, overlap pruning, 3D.
+///
+/// * score = support (arc spanned over circumference) × colour purity (fraction of the circle
+///   that is fruit-coloured): a confidence-like value in [0, 1];
+/// * size (§3.2): with depth inside the circle, the fruit radius in metres must lie in
+///   `radius_range_m`; without, the pixel radius must lie in the range those radii give over
+///   `working_distance_m`. Checked *before* the overlap pruning (the paper does it after),
+///   so an implausible circle cannot remove a plausible one;
+/// * overlap (§3.2): see [`crate::prune_overlapping`];
+/// * 3D: [`crate::sphere_from_depth`], or [`crate::sphere_from_size`] with `prior_radius_m`
+///   when the circle has no depth (then `diameter_m` is `None`: it was not measured).
+///
+/// `bbox_px` is the square around the circle (not clipped to the image), so the image circle is
+/// its centre and half its width.
+pub struct FruitStage {
+    /// The detector's parameters.
+    pub params: ColorContourParams,
+}
+
+/// A circle with what the fruit stage measured on it.
+struct Measured {
+    circle: ContourCircle,
+    score: f64,
+    center_m: pomona_core::nalgebra::Point3<f64>,
+    diameter_m: Option<f64>,
+}
+
+impl<'a> Stage<(&'a RgbdFrame, &'a [bool], &'a [ContourCircle]), Vec<Detection>> for FruitStage {
+    fn name(&self) -> &'static str {
+        "circles-to-fruit"
+    }
+
+    fn run(
+        &self,
+        (frame, fruit, circles): (&'a RgbdFrame, &'a [bool], &'a [ContourCircle]),
+    ) -> Result<Vec<Detection>, PipelineError> {
+        let p = &self.params;
+        let camera = frame.camera();
+        let (w, h) = (camera.width as usize, camera.height as usize);
+        let f = 0.5 * (camera.fx + camera.fy);
+        let (r_lo, r_hi) = p.radius_range_m;
+        let (z_near, z_far) = p.working_distance_m;
+        let px_range = (f * r_lo / z_far, f * r_hi / z_near.max(1e-6));
+        let measured: Vec<Measured> = circles
+            .iter()
+            .filter(|c| c.support >= p.min_support)
+            .filter_map(|c| {
+                let (center_m, diameter_m) = match sphere_from_depth(
+                    frame,
+                    fruit,
+                    c.center_px,
+                    c.radius_px,
+                    p.depth_core_fraction,
+                ) {
+                    Some(s) => {
+                        if s.radius_m < r_lo || s.radius_m > r_hi {
+                            return None;
+                        }
+                        (s.center_m, Some(2.0 * s.radius_m))
+                    }
+                    None => {
+                        if c.radius_px < px_range.0 || c.radius_px > px_range.1 {
+                            return None;
+                        }
+                        let s =
+                            sphere_from_size(camera, c.center_px, c.radius_px, p.prior_radius_m);
+                        (s.center_m, None)
+                    }
+                };
+                let score = c.support * color_purity(fruit, w, h, c);
+                Some(Measured {
+                    circle: *c,
+                    score,
+                    center_m,
+                    diameter_m,
+                })
+            })
+            .collect();
+        let discs: Vec<(Point2<f64>, f64)> = measured
+            .iter()
+            .map(|m| (m.circle.center_px, m.circle.radius_px))
+            .collect();
+        let scores: Vec<f64> = measured.iter().map(|m| m.score).collect();
+        Ok(prune_overlapping(&discs, &scores, p.max_overlap)
+            .into_iter()
+            .map(|i| {
+                let m = &measured[i];
+                let (c, r) = (m.circle.center_px, m.circle.radius_px);
+                Detection {
+                    center_m: m.center_m,
+                    score: m.score,
+                    diameter_m: m.diameter_m,
+                    axis: None,
+                    bbox_px: PixelBox::new(c.x - r, c.y - r, c.x + r, c.y + r).ok(),
+                    kind: None,
+                    support_points: None,
+                    fit_rms_m: None,
+                    confidence: None,
+                }
+            })
+            .collect())
+    }
+}

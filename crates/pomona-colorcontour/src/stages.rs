@@ -196,17 +196,10 @@ impl<'a> Stage<(&'a RgbdFrame, &'a [bool], &'a [ContourCircle]), Vec<Detection>>
             .map(|i| {
                 let m = &measured[i];
                 let (c, r) = (m.circle.center_px, m.circle.radius_px);
-                Detection {
-                    center_m: m.center_m,
-                    score: m.score,
-                    diameter_m: m.diameter_m,
-                    axis: None,
-                    bbox_px: PixelBox::new(c.x - r, c.y - r, c.x + r, c.y + r).ok(),
-                    kind: None,
-                    support_points: None,
-                    fit_rms_m: None,
-                    confidence: None,
-                }
+                let mut d = Detection::new(m.center_m, m.score);
+                d.diameter_m = m.diameter_m;
+                d.bbox_px = PixelBox::new(c.x - r, c.y - r, c.x + r, c.y + r).ok();
+                d
             })
             .collect())
     }

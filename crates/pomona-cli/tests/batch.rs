@@ -5,36 +5,16 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used)] // test helpers outside #[test] functions
 
+#[path = "support/run.rs"]
+mod run;
+use run::{pomona, stderr, synth_dataset};
+
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::time::Instant;
 
-use pomona_synth::{
-    generate_dataset, CameraPreset, DatasetSpec, FruitChoice, FruitKind, SceneSpec,
-};
 use rand::{Rng, SeedableRng};
-
-fn pomona(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_pomona"))
-        .args(args)
-        .output()
-        .unwrap()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-/// A small synthetic dataset: SR4000 camera (176×144), oranges, exact depth.
-fn synth_dataset(root: &Path, frames: u32, seed: u64) {
-    let scene = SceneSpec {
-        fruit: FruitChoice::Only(FruitKind::Orange),
-        camera: CameraPreset::Sr4000.camera(),
-        ..SceneSpec::default()
-    };
-    generate_dataset(&DatasetSpec::new(scene, frames, seed), root, &|_| {}).unwrap();
-}
 
 fn detect(pipeline: &str, data: &Path, out: &Path, extra: &[&str]) -> Output {
     let mut args = vec![

@@ -3,26 +3,14 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used)] // test helpers outside #[test] functions
 
+#[path = "support/run.rs"]
+mod run;
+use run::{pomona, stderr, stdout, synth_dataset};
+
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
 use pomona_core::{ColorImage, DepthImage, PinholeCamera};
 use pomona_io::DatasetWriter;
-
-fn pomona(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_pomona"))
-        .args(args)
-        .output()
-        .unwrap()
-}
-
-fn stdout(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
 
 fn shared_data(rel: &str) -> Option<PathBuf> {
     pomona_test_support::shared_data(rel, "pomona-cli/tests/cli.rs")
@@ -247,19 +235,6 @@ use blob::BlobPipeline;
 use pomona_cli::commands::{demo, detect, experiment, train};
 use pomona_core::{Detection, FrameDetections};
 use pomona_pipeline::{ModelFile, Pipeline};
-use pomona_synth::{
-    generate_dataset, CameraPreset, DatasetSpec, FruitChoice, FruitKind, SceneSpec,
-};
-
-/// A small synthetic dataset: SR4000 camera (176×144), oranges, exact depth.
-fn synth_dataset(root: &Path, frames: u32, seed: u64) {
-    let scene = SceneSpec {
-        fruit: FruitChoice::Only(FruitKind::Orange),
-        camera: CameraPreset::Sr4000.camera(),
-        ..SceneSpec::default()
-    };
-    generate_dataset(&DatasetSpec::new(scene, frames, seed), root, &|_| {}).unwrap();
-}
 
 fn only(p: BlobPipeline) -> Vec<Box<dyn Pipeline>> {
     vec![Box::new(p)]

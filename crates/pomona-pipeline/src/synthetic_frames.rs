@@ -2,7 +2,7 @@
 //! detectors' tests, benchmarks and the examples that train their built-in models.
 
 use crate::{FrameSource, LabelledFrame, PipelineError};
-use pomona_synth::{render, SceneSpec};
+use pomona_synth::{render, CameraPreset, Domain, FruitChoice, NoiseModel, SceneSpec};
 
 /// Frames `first..first + count` of the synthetic dataset `(spec, seed)`, rendered on demand.
 #[derive(Debug, Clone)]
@@ -15,6 +15,36 @@ pub struct SyntheticFrames {
     pub first: u64,
     /// Number of frames.
     pub count: usize,
+}
+
+impl SyntheticFrames {
+    /// `count` frames of mixed fruit (a fraction `green_fraction` green) seen by `camera` in
+    /// `domain`, with that domain's depth noise for the camera (`tof` in the narrow domain):
+    /// the training sets the built-in models are made from.
+    pub fn mixed_fruit(
+        domain: Domain,
+        camera: CameraPreset,
+        green_fraction: f64,
+        seed: u64,
+        count: usize,
+    ) -> Self {
+        Self {
+            spec: SceneSpec {
+                fruit: FruitChoice::Mixed,
+                camera: camera.camera(),
+                noise: match domain {
+                    Domain::Narrow => NoiseModel::Tof,
+                    Domain::Wide => NoiseModel::for_camera(camera),
+                },
+                green_fraction,
+                domain,
+                ..SceneSpec::default()
+            },
+            seed,
+            first: 0,
+            count,
+        }
+    }
 }
 
 impl FrameSource for SyntheticFrames {

@@ -21,7 +21,7 @@ use pomona_pipeline::{
     SyntheticFrames, TrainOptions,
 };
 use pomona_shapefit::ShapeFitPipeline;
-use pomona_synth::{CameraPreset, Domain, FruitChoice, NoiseModel, SceneSpec};
+use pomona_synth::{CameraPreset, Domain};
 
 /// Frames rendered for training per domain and camera; seeds 1000–1003 are reserved for the default models
 /// (tests, benchmarks and the cross-domain script use other seeds).
@@ -68,21 +68,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let rendered = ChainedFrames(
         CAMERAS
             .iter()
-            .map(|&(domain, camera, count, seed)| SyntheticFrames {
-                spec: SceneSpec {
-                    fruit: FruitChoice::Mixed,
-                    camera: camera.camera(),
-                    noise: match domain {
-                        Domain::Narrow => NoiseModel::Tof,
-                        Domain::Wide => NoiseModel::for_camera(camera),
-                    },
-                    green_fraction: 0.2,
-                    domain,
-                    ..SceneSpec::default()
-                },
-                seed,
-                first: 0,
-                count,
+            .map(|&(domain, camera, count, seed)| {
+                SyntheticFrames::mixed_fruit(domain, camera, 0.2, seed, count)
             })
             .collect(),
     );

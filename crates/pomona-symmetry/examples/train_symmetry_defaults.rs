@@ -29,7 +29,7 @@ use pomona_pipeline::{
     TrainOptions,
 };
 use pomona_symmetry::{SymmetryPipeline, ViewerPosePipeline};
-use pomona_synth::{CameraPreset, Domain, FruitChoice, NoiseModel, SceneSpec};
+use pomona_synth::{CameraPreset, Domain};
 
 /// Frames rendered for training per domain and camera (32 in all: the cap on the model size) and the
 /// dataset seeds reserved for the default models.
@@ -52,21 +52,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let rendered = ChainedFrames(
         CAMERAS
             .iter()
-            .map(|&(domain, camera, count, seed)| SyntheticFrames {
-                spec: SceneSpec {
-                    fruit: FruitChoice::Mixed,
-                    camera: camera.camera(),
-                    noise: match domain {
-                        Domain::Narrow => NoiseModel::Tof,
-                        Domain::Wide => NoiseModel::for_camera(camera),
-                    },
-                    green_fraction: 0.5,
-                    domain,
-                    ..SceneSpec::default()
-                },
-                seed,
-                first: 0,
-                count,
+            .map(|&(domain, camera, count, seed)| {
+                SyntheticFrames::mixed_fruit(domain, camera, 0.5, seed, count)
             })
             .collect(),
     );

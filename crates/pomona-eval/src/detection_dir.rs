@@ -67,6 +67,20 @@ pub(crate) fn parse_detections(
 /// process (not a detection file; skipped here unless the dataset has a frame of that name).
 pub const FAILURES_FILE: &str = "failures.json";
 
+/// The frame whose detections the file at `path` holds, when it is a detection file name:
+/// `<frame>.json` (extension in any case), not hidden, and not [`FAILURES_FILE`] unless
+/// `is_frame` says the dataset has a frame of that name. `pomona eval` and `pomona detect` use
+/// this one rule for which files of a detection folder are frames'.
+pub fn detection_file_frame(path: &Path, is_frame: impl Fn(&str) -> bool) -> Option<&str> {
+    let is_json = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("json"));
+    let stem = path.file_stem().and_then(|s| s.to_str())?;
+    let failures = FAILURES_FILE.trim_end_matches(".json");
+    (is_json && !stem.starts_with('.') && (stem != failures || is_frame(stem))).then_some(stem)
+}
+
 /// Reads every `*.json` in `dir` (hidden files, other extensions and [`FAILURES_FILE`] are
 /// skipped).
 ///
@@ -81,27 +95,17 @@ pub fn load_detections(dir: &Path, dataset: &Dataset) -> Result<DetectionSet, Ev
         source,
     };
     let mut files: Vec<(String, PathBuf)> = Vec::new();
-    for entry in std::fs::read_dir(dir).map_err(io)? {
-        let path = entry.map_err(io)?.path();
-        let is_json = path
-            .extension()
-            .and_then(|e| e.to_str())
-            .is_some_and(|e| e.eq_ignore_ascii_case("json"));
-        let Some(stem) = path.file_stem().and_then(|s| s.to_str()) else {
-            continue;
-        };
-        if !is_json || stem.starts_with('.') || !path.is_file() {
-            continue;
-        }
-        files.push((stem.to_owned(), path.clone()));
-    }
-    files.sort();
     let known: std::collections::BTreeSet<&str> =
         dataset.frames().iter().map(String::as_str).collect();
-    let failures_stem = FAILURES_FILE.trim_end_matches(".json");
-    if !known.contains(failures_stem) {
-        files.retain(|(stem, _)| stem != failures_stem);
+    for entry in std::fs::read_dir(dir).map_err(io)? {
+        let path = entry.map_err(io)?.path();
+        if let Some(stem) = detection_file_frame(&path, |f| known.contains(f)) {
+            if path.is_file() {
+                files.push((stem.to_owned(), path.clone()));
+            }
+        }
     }
+    files.sort();
     let mut by_frame = BTreeMap::new();
     for (stem, path) in files {
         if !known.contains(stem.as_str()) {

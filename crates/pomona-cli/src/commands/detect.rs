@@ -93,13 +93,9 @@ fn warn_foreign_files(out: &Path, frames: &[String]) {
     let known: std::collections::HashSet<&str> = frames.iter().map(String::as_str).collect();
     let foreign = entries
         .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| p.extension().is_some_and(|e| e == "json"))
         .filter(|p| {
-            p.file_stem().and_then(|s| s.to_str()).is_some_and(|s| {
-                !s.starts_with('.')
-                    && !known.contains(s)
-                    && format!("{s}.json") != pomona_eval::FAILURES_FILE
-            })
+            pomona_eval::detection_file_frame(p, |f| known.contains(f))
+                .is_some_and(|f| !known.contains(f))
         })
         .count();
     if foreign > 0 {

@@ -297,6 +297,7 @@ fn detect_args(
         overlay: None,
         min_confidence: None,
         resume: false,
+        rrd: None,
     }
 }
 

@@ -197,24 +197,28 @@ mod with_rerun {
             Ok(())
         }
 
-        /// Records frame `stem` of the dataset: its images, cloud and `truth`, the detections
-        /// `kept` and, faint, the `dropped` ones.
+        /// Records frame `stem` of `dataset` (the one the recording was created for): its images,
+        /// cloud and truth, the `detections` that are `kept` and, faint, the others.
         ///
         /// # Errors
-        /// A frame the dataset does not list, or data the recording refuses; the message names
-        /// the recording file.
+        /// The dataset's errors reading the frame or its truth (naming the file), a frame the
+        /// dataset does not list, or data the recording refuses (naming the recording).
         pub fn record_frame(
             &self,
+            dataset: &Dataset,
             stem: &str,
-            frame: &RgbdFrame,
-            truth: Option<&FrameTruth>,
-            kept: &[&Detection],
-            dropped: &[&Detection],
+            detections: &[Detection],
+            kept: &dyn Fn(&Detection) -> bool,
         ) -> Result<()> {
             let index = *self.frame_index.get(stem).with_context(|| {
                 format!("frame {stem} is not in the dataset being recorded")
             })?;
-            let entities = FrameEntities::new(frame, self.depth_unit_m, truth, kept, dropped)?;
+            let frame = dataset.load_frame(stem)?;
+            let truth = dataset.load_truth(stem)?;
+            let (kept, dropped): (Vec<&Detection>, Vec<&Detection>) =
+                detections.iter().partition(|d| kept(d));
+            let entities =
+                FrameEntities::new(&frame, self.depth_unit_m, truth.as_ref(), &kept, &dropped)?;
             // Nothing between setting this thread's time and logging may yield to rayon (which
             // could start another frame on this thread), so everything is built beforehand.
             self.stream.set_time_sequence(TIMELINE, index);
@@ -380,7 +384,7 @@ mod without_rerun {
     use std::path::Path;
 
     use anyhow::{bail, Result};
-    use pomona_core::{Detection, FrameTruth, RgbdFrame};
+    use pomona_core::Detection;
     use pomona_io::Dataset;
 
     use super::RunDescription;
@@ -410,11 +414,10 @@ mod without_rerun {
         /// None.
         pub fn record_frame(
             &self,
+            _dataset: &Dataset,
             _stem: &str,
-            _frame: &RgbdFrame,
-            _truth: Option<&FrameTruth>,
-            _kept: &[&Detection],
-            _dropped: &[&Detection],
+            _detections: &[Detection],
+            _kept: &dyn Fn(&Detection) -> bool,
         ) -> Result<()> {
             match *self {}
         }

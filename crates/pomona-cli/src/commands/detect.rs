@@ -203,15 +203,7 @@ pub fn run_with(pipelines: &[Box<dyn Pipeline>], args: &DetectArgs) -> Result<De
                 };
                 pomona_io::write_json(&args.out.join(format!("{}.json", frames[i])), &record)?;
                 if let Some(recording) = &recording {
-                    let (kept, dropped): (Vec<_>, Vec<_>) =
-                        result.detections.iter().partition(|d| kept(d));
-                    recording.record_frame(
-                        frames[i],
-                        &dataset.load_frame(frames[i])?,
-                        dataset.load_truth(frames[i])?.as_ref(),
-                        &kept,
-                        &dropped,
-                    )?;
+                    recording.record_frame(&dataset, frames[i], &result.detections, &kept)?;
                 }
                 if let Some(dir) = &args.overlay {
                     let (image, truth) = view_of(&dataset, frames[i])?;

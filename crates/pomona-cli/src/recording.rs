@@ -98,9 +98,9 @@ mod with_rerun {
     use std::path::{Path, PathBuf};
 
     use anyhow::{Context, Result};
+    use pomona_core::nalgebra::Point3;
     use pomona_core::{Detection, FrameTruth, PinholeCamera, RgbdFrame};
     use pomona_io::Dataset;
-    use pomona_core::nalgebra::Point3;
     use rerun::{
         Color, DepthImage, Ellipsoids3D, FillMode, Image, Pinhole, Points3D, RecordingStream,
         RecordingStreamBuilder, Rgba32, TextDocument, ViewCoordinates,
@@ -210,9 +210,10 @@ mod with_rerun {
             detections: &[Detection],
             kept: &dyn Fn(&Detection) -> bool,
         ) -> Result<()> {
-            let index = *self.frame_index.get(stem).with_context(|| {
-                format!("frame {stem} is not in the dataset being recorded")
-            })?;
+            let index = *self
+                .frame_index
+                .get(stem)
+                .with_context(|| format!("frame {stem} is not in the dataset being recorded"))?;
             let frame = dataset.load_frame(stem)?;
             let truth = dataset.load_truth(stem)?;
             let (kept, dropped): (Vec<&Detection>, Vec<&Detection>) =
@@ -271,7 +272,9 @@ mod with_rerun {
                 .map(|c| Image::from_rgb24(c.as_rgb().to_vec(), [w, h]));
             let raw = frame.depth().to_u16(depth_unit_m)?;
             let depth = DepthImage::from_gray16(
-                raw.iter().flat_map(|r| r.to_ne_bytes()).collect::<Vec<u8>>(),
+                raw.iter()
+                    .flat_map(|r| r.to_ne_bytes())
+                    .collect::<Vec<u8>>(),
                 [w, h],
             )
             .with_meter((1.0 / depth_unit_m) as f32);
@@ -336,7 +339,10 @@ mod with_rerun {
 
     /// A sphere of `diameter_m` (or [`NO_SIZE_DIAMETER_M`]) as its centre and half size.
     fn sphere(center_m: &Point3<f64>, diameter_m: Option<f64>) -> ([f32; 3], f32) {
-        let radius = 0.5 * diameter_m.filter(|d| *d > 0.0).unwrap_or(NO_SIZE_DIAMETER_M);
+        let radius = 0.5
+            * diameter_m
+                .filter(|d| *d > 0.0)
+                .unwrap_or(NO_SIZE_DIAMETER_M);
         (
             [center_m.x as f32, center_m.y as f32, center_m.z as f32],
             radius as f32,

@@ -289,7 +289,11 @@ pub fn run_with(pipelines: &[Box<dyn Pipeline>], args: &DetectArgs) -> Result<De
         args.out.display()
     );
     if let Some(rrd) = &args.rrd {
-        println!("recording in {} (view it with `rerun {}`)", rrd.display(), rrd.display());
+        println!(
+            "recording in {} (view it with `rerun {}`)",
+            rrd.display(),
+            rrd.display()
+        );
     }
     if args.timings {
         print!("{}", summary.timings.table());

@@ -866,7 +866,7 @@ mod rrd_recording {
 
     fn decode(path: &Path) -> Recorded {
         let file = std::io::BufReader::new(std::fs::File::open(path).unwrap());
-        let frame = TimelineName::new("frame");
+        let frame = TimelineName::from_static_str("frame");
         let half_sizes = Ellipsoids3D::descriptor_half_sizes().component;
         let text = TextDocument::descriptor_text().component;
         let mut recorded = Recorded::default();

@@ -35,7 +35,6 @@
 use std::path::Path;
 
 use anyhow::Result;
-use pomona_core::Detection;
 use pomona_io::Dataset;
 
 /// At most this many points of a frame's cloud are recorded (every `k`-th valid pixel).
@@ -74,24 +73,6 @@ pub fn open(
         .transpose()
 }
 
-/// The label of a detection: calibrated confidence (when the model has one), score, diameter.
-fn detection_label(d: &Detection) -> String {
-    let confidence = d
-        .confidence
-        .map(|c| format!("conf {c:.2} · "))
-        .unwrap_or_default();
-    format!(
-        "{confidence}score {:.2} · ⌀ {}",
-        d.score,
-        diameter_words(d.diameter_m)
-    )
-}
-
-/// A diameter in millimetres, `?` when unknown.
-fn diameter_words(diameter_m: Option<f64>) -> String {
-    diameter_m.map_or_else(|| "?".to_owned(), |d| format!("{:.0} mm", 1e3 * d))
-}
-
 #[cfg(feature = "rerun")]
 mod with_rerun {
     use std::collections::HashMap;
@@ -106,12 +87,30 @@ mod with_rerun {
         RecordingStreamBuilder, Rgba32, TextDocument, ViewCoordinates,
     };
 
-    use super::{detection_label, diameter_words, RunDescription, MAX_POINTS, NO_SIZE_DIAMETER_M};
+    use super::{RunDescription, MAX_POINTS, NO_SIZE_DIAMETER_M};
 
     const TIMELINE: &str = "frame";
     const TRUTH: Color = Color(Rgba32::from_rgb(40, 230, 60));
     const DETECTION: Color = Color(Rgba32::from_rgb(240, 30, 30));
     const BELOW_THRESHOLD: Color = Color(Rgba32::from_unmultiplied_rgba(240, 120, 120, 70));
+
+    /// The label of a detection: calibrated confidence (when the model has one), score, diameter.
+    fn detection_label(d: &Detection) -> String {
+        let confidence = d
+            .confidence
+            .map(|c| format!("conf {c:.2} · "))
+            .unwrap_or_default();
+        format!(
+            "{confidence}score {:.2} · ⌀ {}",
+            d.score,
+            diameter_words(d.diameter_m)
+        )
+    }
+
+    /// A diameter in millimetres, `?` when unknown.
+    fn diameter_words(diameter_m: Option<f64>) -> String {
+        diameter_m.map_or_else(|| "?".to_owned(), |d| format!("{:.0} mm", 1e3 * d))
+    }
 
     /// An open `.rrd` recording of a detection run; frames may be recorded from many threads.
     pub struct RunRecording {

@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
 # The project's test command: `cargo test --workspace --locked` (extra arguments are passed on),
+# the recording tests of the `rerun` feature,
 # then a count of the real-data tests that skipped because ../shared/data is absent, so a skip is
 # never mistaken for a pass. With POMONA_REQUIRE_DATA=1 such tests fail instead of skipping.
 set -euo pipefail
@@ -10,6 +11,8 @@ trap 'rm -f "$skip_log"' EXIT
 export POMONA_SKIP_LOG="$skip_log"
 
 cargo test --workspace --locked "$@"
+# The run recording (`detect --rrd`) lives behind pomona-cli's `rerun` feature, off by default.
+cargo test -p pomona-cli --features rerun --locked --test cli "$@" -- rrd
 
 skipped=$(wc -l <"$skip_log")
 if [ "$skipped" -gt 0 ]; then

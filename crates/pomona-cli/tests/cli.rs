@@ -8,6 +8,7 @@ mod run;
 use run::{pomona, stderr, stdout, synth_dataset};
 
 use std::path::{Path, PathBuf};
+use std::process::Output;
 
 use pomona_core::{ColorImage, DepthImage, PinholeCamera};
 use pomona_io::DatasetWriter;
@@ -272,6 +273,7 @@ fn detect_args(
         overlay: None,
         min_confidence: None,
         resume: false,
+        rrd: None,
     }
 }
 
@@ -774,6 +776,21 @@ fn demo_runs_pipelines_with_a_builtin_model() {
     }
 }
 
+/// `pomona detect --pipeline shape-fit` (the built-in model) on `data` into `out`, plus `extra`.
+fn shape_fit_detect(data: &Path, out: &Path, extra: &[&str]) -> Output {
+    let mut args = vec![
+        "detect",
+        "--pipeline",
+        "shape-fit",
+        "--data",
+        data.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    pomona(&args)
+}
+
 #[test]
 fn built_in_shape_fit_detects_with_and_without_colour() {
     let dir = tempfile::tempdir().unwrap();
@@ -784,15 +801,7 @@ fn built_in_shape_fit_detects_with_and_without_colour() {
             std::fs::remove_dir_all(data.join("color")).unwrap();
         }
         let out_dir = dir.path().join(label);
-        let out = pomona(&[
-            "detect",
-            "--pipeline",
-            "shape-fit",
-            "--data",
-            data.to_str().unwrap(),
-            "--out",
-            out_dir.to_str().unwrap(),
-        ]);
+        let out = shape_fit_detect(&data, &out_dir, &[]);
         assert!(out.status.success(), "{label}: {}", stderr(&out));
         let dets = read_detections(&out_dir);
         assert_eq!(dets.len(), 2, "{label}");
@@ -802,4 +811,156 @@ fn built_in_shape_fit_detects_with_and_without_colour() {
             "{label}: nothing found"
         );
     }
+}
+
+// `pomona detect --rrd`: the recording is a real rerun file on disk, and decoding it back gives,
+// per frame of the `frame` timeline, the detections the run wrote and the dataset's truth; a
+// binary built without the `rerun` feature refuses `--rrd` saying so.
+
+#[cfg(feature = "rerun")]
+mod rrd_recording {
+    use std::collections::{BTreeMap, BTreeSet};
+    use std::path::Path;
+
+    use pomona_core::FrameTruth;
+    use rerun::components::{HalfSize3D, Text};
+    use rerun::external::re_log_encoding::{DecoderApp, RRD_FOURCC};
+    use rerun::log::{Chunk, LogMsg};
+    use rerun::{Ellipsoids3D, TextDocument, TimelineName};
+
+    use super::{read_detections, shape_fit_detect, stderr, stdout, synth_dataset};
+
+    /// What a recording holds: its entities (static and per frame), the number of spheres per
+    /// (entity, frame index), and the `frame` text per frame index.
+    #[derive(Default)]
+    struct Recorded {
+        static_entities: BTreeSet<String>,
+        frame_entities: BTreeSet<String>,
+        spheres: BTreeMap<(String, i64), usize>,
+        frame_texts: BTreeMap<i64, String>,
+    }
+
+    fn decode(path: &Path) -> Recorded {
+        let file = std::io::BufReader::new(std::fs::File::open(path).unwrap());
+        let frame = TimelineName::from_static_str("frame");
+        let half_sizes = Ellipsoids3D::descriptor_half_sizes().component;
+        let text = TextDocument::descriptor_text().component;
+        let mut recorded = Recorded::default();
+        for msg in DecoderApp::decode_eager(file).unwrap() {
+            let LogMsg::ArrowMsg(_, arrow) = msg.unwrap() else {
+                continue;
+            };
+            let chunk = Chunk::from_arrow_msg(&arrow).unwrap();
+            let entity = chunk.entity_path().to_string();
+            let entity = entity.trim_start_matches('/').to_owned();
+            if chunk.is_static() {
+                recorded.static_entities.insert(entity);
+                continue;
+            }
+            recorded.frame_entities.insert(entity.clone());
+            let rows = chunk.iter_component::<HalfSize3D>(half_sizes);
+            for ((t, _), row) in chunk.iter_component_indices(frame, half_sizes).zip(rows) {
+                let key = (entity.clone(), t.as_i64());
+                *recorded.spheres.entry(key).or_default() += row.len();
+            }
+            let rows = chunk.iter_component::<Text>(text);
+            for ((t, _), row) in chunk.iter_component_indices(frame, text).zip(rows) {
+                let line: String = row.iter().map(|s| s.as_str()).collect();
+                recorded.frame_texts.insert(t.as_i64(), line);
+            }
+        }
+        recorded
+    }
+
+    #[test]
+    fn recording_holds_each_frames_images_cloud_truth_and_detections() {
+        let dir = tempfile::tempdir().unwrap();
+        let data = dir.path().join("data");
+        synth_dataset(&data, 2, 17);
+        let (out, rrd) = (dir.path().join("det"), dir.path().join("run.rrd"));
+        let run = shape_fit_detect(
+            &data,
+            &out,
+            &["--threads", "2", "--rrd", rrd.to_str().unwrap()],
+        );
+        assert!(run.status.success(), "{}", stderr(&run));
+        assert!(stdout(&run).contains("run.rrd"), "{}", stdout(&run));
+
+        let bytes = std::fs::read(&rrd).unwrap();
+        assert!(bytes.len() > 50_000, "only {} bytes", bytes.len());
+        assert_eq!(bytes[..4], RRD_FOURCC);
+
+        let recorded = decode(&rrd);
+        for e in ["world", "world/camera", "run"] {
+            assert!(recorded.static_entities.contains(e), "static {e} missing");
+        }
+        for e in [
+            "world/camera/rgb",
+            "world/camera/depth",
+            "world/points",
+            "world/truth",
+            "world/detections",
+            "frame",
+        ] {
+            assert!(recorded.frame_entities.contains(e), "{e} missing");
+        }
+        let written = read_detections(&out);
+        assert_eq!(written.len(), 2);
+        for (index, frame) in written.iter().enumerate() {
+            let (index, stem) = (index as i64, &frame.frame);
+            let count = |e: &str| recorded.spheres.get(&(e.to_owned(), index)).copied();
+            assert_eq!(
+                count("world/detections").unwrap_or(0),
+                frame.detections.len(),
+                "frame {stem}"
+            );
+            let truth_file = data.join("truth").join(format!("{stem}.json"));
+            let truth: FrameTruth =
+                serde_json::from_str(&std::fs::read_to_string(truth_file).unwrap()).unwrap();
+            let placed = truth.fruits.iter().filter(|f| f.center_m.is_some()).count();
+            assert!(placed > 0);
+            assert_eq!(count("world/truth"), Some(placed), "frame {stem}");
+            let text = &recorded.frame_texts[&index];
+            assert!(text.contains(stem.as_str()), "{text}");
+        }
+        assert!(
+            written.iter().any(|f| !f.detections.is_empty()),
+            "shape-fit found nothing: the recording shows too little"
+        );
+    }
+
+    #[test]
+    fn an_unwritable_recording_is_an_error_naming_it() {
+        let dir = tempfile::tempdir().unwrap();
+        let data = dir.path().join("data");
+        synth_dataset(&data, 1, 17);
+        let rrd = dir.path().join("no-such-folder").join("run.rrd");
+        let run = shape_fit_detect(
+            &data,
+            &dir.path().join("det"),
+            &["--rrd", rrd.to_str().unwrap()],
+        );
+        assert!(!run.status.success());
+        let err = stderr(&run);
+        assert!(err.contains("cannot create the recording"), "{err}");
+        assert!(err.contains(rrd.to_str().unwrap()), "{err}");
+    }
+}
+
+#[cfg(not(feature = "rerun"))]
+#[test]
+fn without_the_rerun_feature_rrd_is_refused_saying_why() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = dir.path().join("data");
+    synth_dataset(&data, 1, 17);
+    let rrd = dir.path().join("run.rrd");
+    let run = shape_fit_detect(
+        &data,
+        &dir.path().join("det"),
+        &["--rrd", rrd.to_str().unwrap()],
+    );
+    assert!(!run.status.success());
+    let err = stderr(&run);
+    assert!(err.contains("without the `rerun` feature"), "{err}");
+    assert!(!rrd.exists());
 }

@@ -8,6 +8,9 @@
 //! frame is written, the failures go to `<out>/failures.json`, and the command exits with status
 //! 3 (see `exit_status.rs`). `--resume` continues a killed run: frames whose file it would write
 //! unchanged are skipped (see `detection_folder.rs`).
+//!
+//! `--rrd OUT.rrd` also writes a rerun recording of the run (see `recording.rs`), recorded from
+//! the worker threads as frames finish and closed before the command returns.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -25,6 +28,7 @@ use crate::error_line::error_line;
 use crate::exit_status::FramesFailed;
 use crate::overlay::{shown, view_of, write_overlay};
 use crate::progress::progress_bar;
+use crate::recording::{self, RunDescription};
 
 /// Arguments of `pomona detect`.
 #[derive(Debug, Clone, clap::Args)]
@@ -63,6 +67,12 @@ pub struct DetectArgs {
     /// made differently are an error either way.)
     #[arg(long)]
     pub resume: bool,
+    /// Also write a rerun recording of the run to OUT.rrd (view it with `rerun OUT.rrd`): per
+    /// frame the images, the point cloud, truth (green) and detections (red; those below the
+    /// confidence threshold faint), on a `frame` timeline. Needs the `rerun` build feature
+    /// (`--features rerun`; the release binary has it).
+    #[arg(long, value_name = "OUT.rrd")]
+    pub rrd: Option<PathBuf>,
 }
 
 /// What a detection run did.
@@ -137,6 +147,15 @@ pub fn run_with(pipelines: &[Box<dyn Pipeline>], args: &DetectArgs) -> Result<De
         min_confidence,
     };
     let already = prepare(&args.out, dataset.frames(), &identity)?;
+    let recording = recording::open(
+        args.rrd.as_deref(),
+        &dataset,
+        &RunDescription {
+            pipeline: name,
+            model_id: &model.id,
+            min_confidence,
+        },
+    )?;
     if let Some(dir) = &args.overlay {
         std::fs::create_dir_all(dir)
             .with_context(|| format!("cannot create overlay folder {}", dir.display()))?;
@@ -179,6 +198,9 @@ pub fn run_with(pipelines: &[Box<dyn Pipeline>], args: &DetectArgs) -> Result<De
                     model_id: Some(result.model.id.clone()),
                 };
                 pomona_io::write_json(&args.out.join(format!("{}.json", frames[i])), &record)?;
+                if let Some(recording) = &recording {
+                    recording.record_frame(&dataset, frames[i], &result.detections, &kept)?;
+                }
                 if let Some(dir) = &args.overlay {
                     let (image, truth) = view_of(&dataset, frames[i])?;
                     let shown = match min_confidence {
@@ -201,6 +223,9 @@ pub fn run_with(pipelines: &[Box<dyn Pipeline>], args: &DetectArgs) -> Result<De
         )
     });
     bar.finish_and_clear();
+    if let Some(recording) = recording {
+        recording.finish()?;
+    }
     let wall = started.elapsed().as_secs_f64();
     let failures: Vec<FailedFrame> = batch
         .failed
@@ -259,6 +284,13 @@ pub fn run_with(pipelines: &[Box<dyn Pipeline>], args: &DetectArgs) -> Result<De
         wall,
         args.out.display()
     );
+    if let Some(rrd) = &args.rrd {
+        println!(
+            "recording in {} (view it with `rerun {}`)",
+            rrd.display(),
+            rrd.display()
+        );
+    }
     if args.timings {
         print!("{}", summary.timings.table());
         if let Some(ms) = summary.ms_per_frame {

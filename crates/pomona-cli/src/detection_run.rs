@@ -11,6 +11,7 @@ use std::time::{Duration, Instant};
 
 use anyhow::{anyhow, bail, Context, Result};
 use pomona::{Detection, Detector, ModelInfo, ParamOverride, Pipeline, RgbdFrame, StageTimings};
+use pomona_io::Dataset;
 use rayon::prelude::*;
 
 /// The detector of `pipeline`: the model file `model` when given, otherwise the pipeline's
@@ -60,15 +61,25 @@ pub fn min_confidence(detector: &Detector, requested: Option<f64>) -> Result<Opt
     }
 }
 
-/// Refuses a colour-less dataset for a pipeline that needs colour, with a message saying so.
+/// Checks that the dataset has the images the pipeline needs: colour for colour methods, depth
+/// for every method but those that work from colour alone.
 ///
 /// # Errors
-/// As described.
-pub fn check_color(pipeline: &dyn Pipeline, has_color: bool, data: &Path) -> Result<()> {
-    if pipeline.needs_color() && !has_color {
+/// Naming the dataset folder and what is missing.
+pub fn check_inputs(pipeline: &dyn Pipeline, dataset: &Dataset) -> Result<()> {
+    let data = dataset.root();
+    if pipeline.needs_color() && !dataset.has_color() {
         bail!(
             "{} has no colour images (no color/ folder), and pipeline `{}` needs colour; \
              use a dataset with colour or a depth-only pipeline",
+            data.display(),
+            pipeline.name()
+        );
+    }
+    if pipeline.needs_depth() && !dataset.has_depth() {
+        bail!(
+            "{} has no depth images (no depth/ folder), and pipeline `{}` needs depth; \
+             on colour-only data use `color-contour`",
             data.display(),
             pipeline.name()
         );

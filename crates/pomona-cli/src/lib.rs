@@ -10,6 +10,7 @@ pub mod detection_folder;
 pub mod detection_run;
 pub mod error_line;
 pub mod exit_status;
+pub mod matching_args;
 pub mod overlay;
 pub mod params;
 pub mod progress;

@@ -289,8 +289,7 @@ fn experiment_args(data: &Path, seed: u64, json: &Path) -> experiment::Experimen
         splits: 2,
         train_fraction: 0.5,
         seed,
-        tolerance_mm: 50.0,
-        min_visibility: 0.5,
+        matching: Default::default(),
         threshold: 0.0,
         folds: 3,
         full_grid: false,
@@ -811,6 +810,96 @@ fn built_in_shape_fit_detects_with_and_without_colour() {
             "{label}: nothing found"
         );
     }
+}
+
+/// A colour-only dataset (no `depth/`): `color-contour` still finds circles and places each on
+/// the ray through its centre without a diameter; `pomona eval --2d` scores both runs, and on
+/// colour-only data `eval` matches in the image even without `--2d`; depth pipelines refuse the
+/// dataset, naming it.
+#[test]
+fn color_contour_runs_on_colour_only_data_and_eval_2d_scores_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = dir.path().join("data");
+    synth_dataset(&data, 2, 17);
+    let eval = |det: &Path, report: &Path, extra: &[&str]| {
+        let mut args = vec![
+            "eval",
+            "--threshold",
+            "0",
+            "--data",
+            data.to_str().unwrap(),
+            "--detections",
+            det.to_str().unwrap(),
+            "--json",
+            report.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        let out = pomona(&args);
+        assert!(out.status.success(), "{}", stderr(&out));
+        let json: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(report).unwrap()).unwrap();
+        (json, out)
+    };
+    let detect = |label: &str| {
+        let out_dir = dir.path().join(label);
+        let out = pomona(&[
+            "detect",
+            "--pipeline",
+            "color-contour",
+            "--min-confidence",
+            "0",
+            "--data",
+            data.to_str().unwrap(),
+            "--out",
+            out_dir.to_str().unwrap(),
+        ]);
+        assert!(out.status.success(), "{label}: {}", stderr(&out));
+        let dets = read_detections(&out_dir);
+        let all: Vec<Detection> = dets.into_iter().flat_map(|f| f.detections).collect();
+        assert!(!all.is_empty(), "{label}: nothing found");
+        assert!(all
+            .iter()
+            .all(|d| d.center_px.is_some() && d.radius_px.is_some()));
+        let (report, _) = eval(
+            &out_dir,
+            &dir.path().join(format!("{label}.json")),
+            &["--2d"],
+        );
+        assert!(
+            report["true_positives"].as_u64().unwrap() > 0,
+            "{label}: {report}"
+        );
+        assert!(report["center_error_radii"]["median"].as_f64().unwrap() < 0.5);
+        (out_dir, all)
+    };
+    let (_, with_depth) = detect("rgbd");
+    assert!(with_depth.iter().all(|d| d.diameter_m.is_some()));
+
+    std::fs::remove_dir_all(data.join("depth")).unwrap();
+    let (colour_dir, colour_only) = detect("colour-only");
+    let cam = pomona_io::Dataset::open(&data).unwrap().camera().to_owned();
+    for d in &colour_only {
+        assert_eq!(d.diameter_m, None);
+        let on_ray = cam.project(&d.center_m).unwrap();
+        assert!((on_ray - d.center_px.unwrap()).norm() < 1e-6);
+    }
+    let (explicit, _) = eval(&colour_dir, &dir.path().join("a.json"), &["--2d"]);
+    let (implicit, out) = eval(&colour_dir, &dir.path().join("b.json"), &[]);
+    assert!(
+        stderr(&out).contains("matched in the image"),
+        "{}",
+        stderr(&out)
+    );
+    assert_eq!(explicit, implicit);
+
+    let refused = shape_fit_detect(&data, &dir.path().join("sf"), &[]);
+    assert!(!refused.status.success());
+    let err = stderr(&refused);
+    assert!(
+        err.contains("no depth images") && err.contains("color-contour"),
+        "{err}"
+    );
+    assert!(err.contains(data.to_str().unwrap()), "{err}");
 }
 
 // `pomona detect --rrd`: the recording is a real rerun file on disk, and decoding it back gives,

@@ -64,6 +64,12 @@ impl Pipeline for ColorContourPipeline {
         true
     }
 
+    /// Circles come from colour alone; without depth a detection is placed by the prior fruit
+    /// radius (`prior_radius_m`) and has no diameter.
+    fn needs_depth(&self) -> bool {
+        false
+    }
+
     fn train_params(&self) -> serde_json::Value {
         params_to_json(&self.params)
     }

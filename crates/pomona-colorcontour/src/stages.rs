@@ -199,6 +199,8 @@ impl<'a> Stage<(&'a RgbdFrame, &'a [bool], &'a [ContourCircle]), Vec<Detection>>
                 let mut d = Detection::new(m.center_m, m.score);
                 d.diameter_m = m.diameter_m;
                 d.bbox_px = PixelBox::new(c.x - r, c.y - r, c.x + r, c.y + r).ok();
+                d.center_px = Some(c);
+                d.radius_px = Some(r);
                 d
             })
             .collect())

@@ -13,11 +13,11 @@
 //! (shape-fit, or a detector outside Pomona following the old documentation, "symmetry axis")
 //! as `fruit_axis`. A new key present beside `axis` wins. New files never write `axis`.
 
-use nalgebra::{Point3, Unit, Vector3};
+use nalgebra::{Point2, Point3, Unit, Vector3};
 use serde::{Deserialize, Serialize};
 
 use crate::truth::unit_axis;
-use crate::PixelBox;
+use crate::{ImageCircle, PinholeCamera, PixelBox};
 
 /// Pipelines whose detection files written before `fruit_axis`/`symmetry_plane_normal` existed
 /// stored the symmetry-plane normal under `axis` (see the module docs).
@@ -46,6 +46,13 @@ pub struct Detection {
     /// Image-space box, when the method has one.
     #[serde(default)]
     pub bbox_px: Option<PixelBox>,
+    /// Centre of the fruit's circle in the image, pixels, when the method finds circles
+    /// (color-contour).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub center_px: Option<Point2<f64>>,
+    /// Radius of that circle, pixels.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub radius_px: Option<f64>,
     /// Fruit kind, when the method distinguishes kinds.
     #[serde(default)]
     pub kind: Option<String>,
@@ -83,11 +90,26 @@ impl Detection {
             fruit_axis: None,
             symmetry_plane_normal: None,
             bbox_px: None,
+            center_px: None,
+            radius_px: None,
             kind: None,
             support_points: None,
             fit_rms_m: None,
             confidence: None,
         }
+    }
+
+    /// The detection's circle in the image: `center_px`/`radius_px` when the method reports
+    /// them, else the sphere `center_m` ⌀ `diameter_m` projected, else the box's inscribed
+    /// circle ([`ImageCircle::from_parts`]).
+    pub fn image_circle(&self, camera: &PinholeCamera) -> Option<ImageCircle> {
+        ImageCircle::from_parts(
+            camera,
+            self.center_px,
+            self.radius_px,
+            self.diameter_m.map(|d| (self.center_m, d)),
+            self.bbox_px.as_ref(),
+        )
     }
 
     /// Whether the detection has a calibrated confidence of at least `min_confidence` (one
@@ -194,6 +216,8 @@ mod tests {
                 fruit_axis: Some(Vector3::y_axis()),
                 symmetry_plane_normal: None,
                 bbox_px: Some(PixelBox::new(1.0, 2.0, 3.0, 4.0).unwrap()),
+                center_px: None,
+                radius_px: None,
                 kind: None,
                 support_points: None,
                 fit_rms_m: None,

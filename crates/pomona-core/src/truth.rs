@@ -4,10 +4,10 @@
 //! a 2D box but no 3D centre, say). Keys this version does not know are kept in `extra` and written
 //! back unchanged, so tools can round-trip files made by newer tools or by hand.
 
-use nalgebra::{Point3, Unit, Vector3};
+use nalgebra::{Point2, Point3, Unit, Vector3};
 use serde::{Deserialize, Serialize};
 
-use crate::PixelBox;
+use crate::{ImageCircle, PinholeCamera, PixelBox};
 
 /// Annotation of one frame (`truth/<frame>.json`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -42,12 +42,34 @@ pub struct FruitTruth {
     /// Box around the visible pixels.
     #[serde(default)]
     pub bbox_px: Option<PixelBox>,
+    /// Centre of the fruit's circle in the image, pixels (the whole fruit's outline, hidden
+    /// parts included), when annotated in 2D or written by `pomona synth`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub center_px: Option<Point2<f64>>,
+    /// Radius of that circle, pixels.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub radius_px: Option<f64>,
     /// Visible pixels divided by the pixels the fruit would cover alone, in `[0, 1]`.
     #[serde(default)]
     pub visibility: Option<f64>,
     /// Keys not part of the format, kept verbatim.
     #[serde(flatten)]
     pub extra: serde_json::Map<String, serde_json::Value>,
+}
+
+impl FruitTruth {
+    /// The fruit's circle in the image: `center_px`/`radius_px` when annotated, else the sphere
+    /// `center_m` ⌀ `diameter_m` projected, else the box's inscribed circle
+    /// ([`ImageCircle::from_parts`]); `None` when the fruit cannot be placed in the image.
+    pub fn image_circle(&self, camera: &PinholeCamera) -> Option<ImageCircle> {
+        ImageCircle::from_parts(
+            camera,
+            self.center_px,
+            self.radius_px,
+            self.center_m.zip(self.diameter_m),
+            self.bbox_px.as_ref(),
+        )
+    }
 }
 
 /// Serde for an optional unit vector stored as a plain `[x, y, z]` array. Reading normalises and

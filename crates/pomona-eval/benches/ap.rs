@@ -37,6 +37,8 @@ fn frames() -> Vec<FrameInput> {
                     diameter_m: Some(0.08),
                     axis: None,
                     bbox_px: None,
+                    center_px: None,
+                    radius_px: None,
                     visibility: Some(rng.next()),
                     extra: Default::default(),
                 })

@@ -1,5 +1,6 @@
-//! The knobs of an evaluation: match tolerance, visibility below which truth is ignored, and the
-//! operating point (a raw score threshold, or a calibrated confidence threshold).
+//! The knobs of an evaluation: match tolerance (a 3D distance, or in the image a fraction of the
+//! fruit's radius), visibility below which truth is ignored, and the operating point (a raw score
+//! threshold, or a calibrated confidence threshold).
 
 use serde::{Deserialize, Serialize};
 
@@ -20,6 +21,12 @@ pub struct EvalConfig {
     /// least this (a model's operating confidence), and `threshold` is not used.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub min_confidence: Option<f64>,
+    /// When set, match in the image instead of in 3D (`pomona eval --2d`, seed 004): a detection
+    /// matches a fruit when its circle's centre is within this fraction of the fruit's image
+    /// radius from the fruit's circle centre (0.5 in `--2d`); `tolerance_m` is then not used.
+    /// Circles come from [`pomona_core::ImageCircle::from_parts`].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub radius_fraction_2d: Option<f64>,
 }
 
 impl Default for EvalConfig {
@@ -29,16 +36,27 @@ impl Default for EvalConfig {
             min_visibility: 0.5,
             threshold: 0.0,
             min_confidence: None,
+            radius_fraction_2d: None,
         }
     }
 }
 
 impl EvalConfig {
+    /// The configuration of `pomona eval --2d`: the defaults, matched in the image at half the
+    /// fruit's radius.
+    pub fn image_2d() -> Self {
+        Self {
+            radius_fraction_2d: Some(0.5),
+            ..Self::default()
+        }
+    }
+
     /// Checks the parameters.
     ///
     /// # Errors
     /// [`EvalError::InvalidParameter`] for a tolerance that is not finite and positive, a
-    /// visibility outside `[0, 1]`, or a NaN threshold.
+    /// visibility outside `[0, 1]`, a NaN threshold, or a 2D radius fraction that is not finite
+    /// and positive.
     pub fn validate(&self) -> Result<(), EvalError> {
         if !(self.tolerance_m.is_finite() && self.tolerance_m > 0.0) {
             return Err(EvalError::InvalidParameter {
@@ -60,6 +78,15 @@ impl EvalConfig {
                 value: self.threshold,
                 reason: "must not be NaN",
             });
+        }
+        if let Some(f) = self.radius_fraction_2d {
+            if !(f.is_finite() && f > 0.0) {
+                return Err(EvalError::InvalidParameter {
+                    name: "radius_fraction_2d",
+                    value: f,
+                    reason: "must be finite and > 0",
+                });
+            }
         }
         if let Some(c) = self.min_confidence {
             if !(0.0..=1.0).contains(&c) {

@@ -78,6 +78,7 @@ struct Tally {
     /// curve ranks all of them, whatever the threshold).
     scored: Vec<(f64, bool)>,
     center_errors: Vec<f64>,
+    center_errors_radii: Vec<f64>,
     diameter_errors: Vec<f64>,
     fruits: usize,
     ignored: usize,
@@ -97,6 +98,7 @@ impl Tally {
             match *outcome {
                 DetectionOutcome::TruePositive {
                     center_error_m,
+                    center_error_radii,
                     diameter_error_m,
                     ..
                 } => {
@@ -104,6 +106,7 @@ impl Tally {
                     if config.keeps(det) {
                         tp += 1;
                         self.center_errors.extend(center_error_m);
+                        self.center_errors_radii.extend(center_error_radii);
                         self.diameter_errors.extend(diameter_error_m);
                     }
                 }
@@ -197,10 +200,24 @@ impl Tally {
         }
         let center_mean = mean(&self.center_errors);
         let center_median = median(&mut self.center_errors);
+        let center_error_radii = config.radius_fraction_2d.map(|_| CenterError {
+            mean: mean(&self.center_errors_radii),
+            median: median(&mut self.center_errors_radii),
+        });
+        if center_error_radii.is_some_and(|e| e.median.is_none()) {
+            null_reasons.insert(
+                "center_error_radii".into(),
+                "no true positive at the threshold".into(),
+            );
+        }
         if center_mean.is_none() {
             null_reasons.insert(
                 "center_error_m".into(),
-                "no true positive with a 3D truth centre at the threshold".into(),
+                if config.radius_fraction_2d.is_some() {
+                    "a 2D evaluation measures the centre error in truth radii".into()
+                } else {
+                    "no true positive with a 3D truth centre at the threshold".into()
+                },
             );
         }
         let diameter = mean(&self.diameter_errors);
@@ -221,10 +238,12 @@ impl Tally {
             recall,
             threshold: config.threshold,
             min_confidence: config.min_confidence,
+            radius_fraction_2d: config.radius_fraction_2d,
             center_error_m: CenterError {
                 median: center_median,
                 mean: center_mean,
             },
+            center_error_radii,
             diameter_error_m: DiameterError { mean_abs: diameter },
             per_frame: self.per_frame,
             min_visibility: config.min_visibility,

@@ -7,15 +7,19 @@
 //!    detection's centre projected with the camera falls inside the box. 3D candidates are
 //!    preferred over 2D ones (a 3D distance and a pixel distance do not compare); among 2D
 //!    candidates the nearest box centre wins.
+//!
+//!    With [`EvalConfig::radius_fraction_2d`] set (`pomona eval --2d`), matching is in the image
+//!    instead: reach means the detection's circle centre lies within that fraction of the truth
+//!    circle's radius from the truth circle's centre (circles from
+//!    [`pomona_core::ImageCircle::from_parts`]), and the nearest in pixels wins.
 //! 3. Truth with `visibility < min_visibility`, or with neither centre nor box (it cannot be
-//!    located), is *ignored*: a detection taking it is [`DetectionOutcome::Ignored`], it is not a
+//!    located; in 2D, no circle), is *ignored*: a detection taking it is [`DetectionOutcome::Ignored`], it is not a
 //!    miss, and further detections within reach of it once it is taken are ignored as well (as
 //!    PASCAL VOC treats "difficult" objects) rather than counted as duplicates.
 //! 4. Otherwise a detection with nothing in reach is a false positive — including a second
 //!    detection of an already-found fruit (duplicates are false positives, as in VOC).
 
-use pomona_core::nalgebra::Point3;
-use pomona_core::{Detection, FrameTruth, FruitTruth, PinholeCamera};
+use pomona_core::{Detection, FrameTruth, FruitTruth, ImageCircle, PinholeCamera};
 use serde::{Deserialize, Serialize};
 
 use crate::EvalConfig;
@@ -29,6 +33,8 @@ pub enum DetectionOutcome {
         truth: usize,
         /// Centre distance in metres (`None` for a 2D match).
         center_error_m: Option<f64>,
+        /// For a 2D match, the distance between the circle centres in truth radii.
+        center_error_radii: Option<f64>,
         /// `|detected − true|` diameter, metres, where both are known.
         diameter_error_m: Option<f64>,
     },
@@ -71,20 +77,32 @@ impl FrameMatch {
     }
 }
 
-fn is_ignored(f: &FruitTruth, config: &EvalConfig) -> bool {
+fn is_ignored(f: &FruitTruth, circle: Option<&ImageCircle>, config: &EvalConfig) -> bool {
     let too_hidden = f.visibility.is_some_and(|v| v < config.min_visibility);
-    let unlocatable = f.center_m.is_none() && f.bbox_px.is_none();
+    let unlocatable = match config.radius_fraction_2d {
+        Some(_) => circle.is_none(),
+        None => f.center_m.is_none() && f.bbox_px.is_none(),
+    };
     too_hidden || unlocatable
 }
 
 /// Distance key of a truth fruit within reach of a detection: `(0, metres)` for a 3D match,
-/// `(1, pixels)` for a 2D match; `None` when out of reach.
+/// `(1, pixels)` for a match on the truth's box, `(0, pixels)` in 2D mode; `None` when out of
+/// reach.
 fn reach(
-    d: &Point3<f64>,
+    det: &Detection,
+    det_circle: Option<&ImageCircle>,
     f: &FruitTruth,
+    truth_circle: Option<&ImageCircle>,
     camera: &PinholeCamera,
     config: &EvalConfig,
 ) -> Option<(u8, f64)> {
+    if let Some(fraction) = config.radius_fraction_2d {
+        let (d, t) = (det_circle?, truth_circle?);
+        let dist = d.center_distance_px(t);
+        return (dist <= fraction * t.radius_px).then_some((0, dist));
+    }
+    let d = &det.center_m;
     if let Some(c) = f.center_m {
         let dist = (c - d).norm();
         return (dist <= config.tolerance_m).then_some((0, dist));
@@ -115,7 +133,23 @@ pub fn match_frame(
     camera: &PinholeCamera,
     config: &EvalConfig,
 ) -> FrameMatch {
-    let ignored: Vec<bool> = truth.fruits.iter().map(|f| is_ignored(f, config)).collect();
+    let image_2d = config.radius_fraction_2d.is_some();
+    // Circles are only needed (and only derived) when matching in the image.
+    let truth_circles: Vec<Option<ImageCircle>> = truth
+        .fruits
+        .iter()
+        .map(|f| image_2d.then(|| f.image_circle(camera)).flatten())
+        .collect();
+    let det_circles: Vec<Option<ImageCircle>> = detections
+        .iter()
+        .map(|d| image_2d.then(|| d.image_circle(camera)).flatten())
+        .collect();
+    let ignored: Vec<bool> = truth
+        .fruits
+        .iter()
+        .enumerate()
+        .map(|(t, f)| is_ignored(f, truth_circles[t].as_ref(), config))
+        .collect();
     let mut taken = vec![false; truth.fruits.len()];
     let mut status: Vec<TruthStatus> = ignored
         .iter()
@@ -136,7 +170,14 @@ pub fn match_frame(
         let mut best: Option<(usize, (u8, f64))> = None;
         let mut near_taken_ignored = false;
         for (t, fruit) in truth.fruits.iter().enumerate() {
-            let Some(key) = reach(&det.center_m, fruit, camera, config) else {
+            let Some(key) = reach(
+                det,
+                det_circles[d].as_ref(),
+                fruit,
+                truth_circles[t].as_ref(),
+                camera,
+                config,
+            ) else {
                 continue;
             };
             if taken[t] {
@@ -161,7 +202,8 @@ pub fn match_frame(
                     let fruit = &truth.fruits[t];
                     DetectionOutcome::TruePositive {
                         truth: t,
-                        center_error_m: (key.0 == 0).then_some(key.1),
+                        center_error_m: (key.0 == 0 && !image_2d).then_some(key.1),
+                        center_error_radii: truth_circles[t].map(|c| key.1 / c.radius_px),
                         diameter_error_m: match (det.diameter_m, fruit.diameter_m) {
                             (Some(a), Some(b)) => Some((a - b).abs()),
                             _ => None,

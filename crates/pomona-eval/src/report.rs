@@ -13,10 +13,11 @@ use serde::{Deserialize, Serialize};
 
 use crate::{EvalConfig, PrCurve};
 
-/// Centre error of true positives, metres.
+/// Centre error of true positives: metres (`center_error_m`), or truth radii in the image
+/// (`center_error_radii`, 2D evaluation).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct CenterError {
-    /// Median (`null` without 3D-matched true positives).
+    /// Median (`null` without true positives measured this way).
     pub median: Option<f64>,
     /// Mean.
     pub mean: Option<f64>,
@@ -76,8 +77,15 @@ pub struct EvalReport {
     /// Confidence threshold of the operating point, when it is one.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub min_confidence: Option<f64>,
+    /// For a 2D evaluation (`pomona eval --2d`): the match radius as a fraction of the truth
+    /// circle's radius (`tolerance_m` is then unused).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub radius_fraction_2d: Option<f64>,
     /// Centre error of true positives at the threshold.
     pub center_error_m: CenterError,
+    /// For a 2D evaluation: the distance between matched circle centres, in truth radii.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub center_error_radii: Option<CenterError>,
     /// Diameter error of true positives at the threshold.
     pub diameter_error_m: DiameterError,
     /// Per-frame figures, in frame order.
@@ -110,6 +118,7 @@ impl EvalReport {
             min_visibility: self.min_visibility,
             threshold: self.threshold,
             min_confidence: self.min_confidence,
+            radius_fraction_2d: self.radius_fraction_2d,
         }
         .operating_point()
     }
@@ -117,13 +126,14 @@ impl EvalReport {
     /// A short Markdown summary (a heading, a table, and the reasons for any `n/a`).
     pub fn to_markdown(&self) -> String {
         let mut s = String::new();
+        let tolerance = match self.radius_fraction_2d {
+            Some(f) => format!("matched in the image within {f} truth radii"),
+            None => format!("tolerance {:.0} mm", self.tolerance_m * 1000.0),
+        };
         let _ = writeln!(
             s,
-            "## Evaluation: {} frames, {} fruits ({} ignored), tolerance {:.0} mm\n",
-            self.frames,
-            self.fruits,
-            self.ignored,
-            self.tolerance_m * 1000.0
+            "## Evaluation: {} frames, {} fruits ({} ignored), {tolerance}\n",
+            self.frames, self.fruits, self.ignored,
         );
         let _ = writeln!(s, "| metric | value |\n|---|---|");
         let rows = [
@@ -148,7 +158,14 @@ impl EvalReport {
                 fmt_mm(self.diameter_error_m.mean_abs),
             ),
         ];
-        for (k, v) in rows {
+        let radii = |v: Option<f64>| v.map_or_else(|| "n/a".into(), |v| format!("{v:.3} r"));
+        let rows_2d = self.center_error_radii.map(|e| {
+            [
+                ("centre error median (truth radii)", radii(e.median)),
+                ("centre error mean (truth radii)", radii(e.mean)),
+            ]
+        });
+        for (k, v) in rows.into_iter().chain(rows_2d.into_iter().flatten()) {
             let _ = writeln!(s, "| {k} | {v} |");
         }
         if !self.null_reasons.is_empty() {

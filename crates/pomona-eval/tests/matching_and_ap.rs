@@ -20,6 +20,8 @@ fn fruit(id: &str, center: Option<[f64; 3]>, visibility: Option<f64>) -> FruitTr
         diameter_m: Some(0.08),
         axis: None,
         bbox_px: None,
+        center_px: None,
+        radius_px: None,
         visibility,
         extra: Default::default(),
     }
@@ -404,4 +406,66 @@ fn split_summary_averages_figures_and_curves() {
     assert_eq!(curve.len(), 101);
     // At recall 0.5: split a's interpolated precision is 2/3, b's is 1.
     assert!(close(curve[50].1, (2.0 / 3.0 + 1.0) / 2.0));
+}
+
+/// `--2d`: a hit when the detection's circle centre is within half the truth radius; truth
+/// circles come from `center_px`/`radius_px` or are projected from the 3D sphere.
+#[test]
+fn image_2d_matching_uses_half_the_truth_radius() {
+    use pomona_core::nalgebra::Point2;
+    let cam = camera();
+    // Fruit 0: an annotated circle at (100, 100), radius 20 px. Fruit 1: a sphere ⌀ 80 mm at
+    // 1 m on the optical axis, imaged at (320, 240) with radius 500·0.04/√0.9984 = 20.016 px.
+    let mut annotated = fruit("0", None, None);
+    annotated.center_px = Some(Point2::new(100.0, 100.0));
+    annotated.radius_px = Some(20.0);
+    let sphere = fruit("1", Some([0.0, 0.0, 1.0]), None);
+    let t = truth(true, vec![annotated, sphere]);
+    let circle = |x: f64, y: f64, score: f64| Detection {
+        center_px: Some(Point2::new(x, y)),
+        radius_px: Some(18.0),
+        ..Detection::new(Point3::new(9.0, 9.0, 9.0), score) // 3D centre ignored in 2D
+    };
+    let dets = [
+        circle(109.0, 100.0, 3.0), // 0.45 r from fruit 0: hit
+        circle(330.5, 240.0, 2.0), // 10.5 px = 0.525 r from fruit 1: miss
+        circle(329.0, 240.0, 1.0), // 9 px = 0.45 r from fruit 1: hit
+    ];
+    let m = match_frame(&t, &dets, &cam, &EvalConfig::image_2d());
+    match m.detections[0] {
+        DetectionOutcome::TruePositive {
+            truth: 0,
+            center_error_m: None,
+            center_error_radii: Some(e),
+            ..
+        } => assert!(close(e, 0.45)),
+        ref other => panic!("{other:?}"),
+    }
+    assert_eq!(m.detections[1], DetectionOutcome::FalsePositive);
+    assert!(matches!(
+        m.detections[2],
+        DetectionOutcome::TruePositive { truth: 1, .. }
+    ));
+    // The same detections in 3D match nothing: the 2D rule is what found them.
+    let m3 = match_frame(&t, &dets, &cam, &EvalConfig::default());
+    assert!(m3
+        .detections
+        .iter()
+        .all(|d| *d == DetectionOutcome::FalsePositive));
+    let report = evaluate(
+        &[FrameInput {
+            frame: "f".into(),
+            truth: t,
+            detections: dets.to_vec(),
+        }],
+        &cam,
+        &EvalConfig::image_2d(),
+    )
+    .unwrap();
+    assert_eq!((report.true_positives, report.false_positives), (2, 1));
+    assert_eq!(report.radius_fraction_2d, Some(0.5));
+    let radii = report.center_error_radii.unwrap();
+    // Median of 0.45 and 9 / 20.016 = 0.4496.
+    assert!((radii.median.unwrap() - 0.44982).abs() < 1e-4, "{radii:?}");
+    assert!(report.to_markdown().contains("truth radii"));
 }

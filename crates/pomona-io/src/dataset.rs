@@ -2,11 +2,16 @@
 //!
 //! ```text
 //! <root>/camera.json          intrinsics + depth unit
-//! <root>/depth/<frame>.png    16-bit depth, registered to colour, 0 = no reading   (required)
-//! <root>/color/<frame>.png    8-bit RGB (or .jpg/.jpeg)                             (optional)
+//! <root>/depth/<frame>.png    16-bit depth, registered to colour, 0 = no reading   (*)
+//! <root>/color/<frame>.png    8-bit RGB (or .jpg/.jpeg)                             (*)
 //! <root>/truth/<frame>.json   ground truth                                          (optional)
 //! <root>/mask/<frame>.png     16-bit instance ids, 0 = background                   (optional)
 //! ```
+//!
+//! (*) At least one of `depth/` and `color/`; when both exist every frame must be in both. A
+//! dataset without `depth/` is *colour-only* (a 2D camera, seed 004's setting): its frames load
+//! with a depth image that has no reading anywhere, so only methods that work from colour alone
+//! find anything in them (the CLI refuses the others, see `Pipeline::needs_depth`).
 //!
 //! Opening lists and pairs the frames and reads the camera; pixels are decoded only when a frame
 //! is loaded, so opening a dataset of thousands of frames is instant.
@@ -29,7 +34,7 @@ pub struct Dataset {
     root: PathBuf,
     camera_file: CameraFile,
     frames: Vec<String>,
-    depth_files: BTreeMap<String, PathBuf>,
+    depth_files: Option<BTreeMap<String, PathBuf>>,
     color_files: Option<BTreeMap<String, PathBuf>>,
 }
 
@@ -60,12 +65,13 @@ fn list_stems(dir: &Path, extensions: &[&str]) -> Result<BTreeMap<String, PathBu
 }
 
 impl Dataset {
-    /// Opens a dataset folder: reads `camera.json`, lists `depth/` and (when present) `color/`,
-    /// and checks that every frame has both.
+    /// Opens a dataset folder: reads `camera.json`, lists `depth/` and `color/` (either may be
+    /// missing, not both), and checks that every frame has both when both exist.
     ///
     /// # Errors
-    /// [`DatasetError::Missing`] without `camera.json` or `depth/`, the camera file's errors,
-    /// [`DatasetError::UnpairedFrame`] or [`DatasetError::DuplicateFrame`] for bad pairing.
+    /// [`DatasetError::Missing`] without `camera.json` or without both image folders, the camera
+    /// file's errors, [`DatasetError::UnpairedFrame`] or [`DatasetError::DuplicateFrame`] for bad
+    /// pairing.
     pub fn open(root: impl AsRef<Path>) -> Result<Self, DatasetError> {
         let root = root.as_ref().to_owned();
         if !root.is_dir() {
@@ -82,36 +88,28 @@ impl Dataset {
             });
         }
         let camera_file = CameraFile::read(&camera_path)?;
-        let depth_dir = root.join("depth");
-        if !depth_dir.is_dir() {
-            return Err(DatasetError::Missing {
-                path: depth_dir,
-                what: "folder of 16-bit depth PNGs",
-            });
-        }
-        let depth_files = list_stems(&depth_dir, DEPTH_EXTENSIONS)?;
-        let color_dir = root.join("color");
-        let color_files = if color_dir.is_dir() {
-            let color = list_stems(&color_dir, COLOR_EXTENSIONS)?;
-            if let Some((frame, path)) = color.iter().find(|(s, _)| !depth_files.contains_key(*s)) {
-                return Err(DatasetError::UnpairedFrame {
-                    path: path.clone(),
-                    frame: frame.clone(),
-                    missing: "depth",
-                });
-            }
-            if let Some((frame, path)) = depth_files.iter().find(|(s, _)| !color.contains_key(*s)) {
-                return Err(DatasetError::UnpairedFrame {
-                    path: path.clone(),
-                    frame: frame.clone(),
-                    missing: "colour",
-                });
-            }
-            Some(color)
-        } else {
-            None
+        let listed = |dir: &str, extensions| {
+            let dir = root.join(dir);
+            dir.is_dir()
+                .then(|| list_stems(&dir, extensions))
+                .transpose()
         };
-        let frames = depth_files.keys().cloned().collect();
+        let depth_files = listed("depth", DEPTH_EXTENSIONS)?;
+        let color_files = listed("color", COLOR_EXTENSIONS)?;
+        let frames = match (&depth_files, &color_files) {
+            (None, None) => {
+                return Err(DatasetError::Missing {
+                    path: root.join("depth"),
+                    what: "folder of 16-bit depth PNGs (or, for a colour-only dataset, color/)",
+                })
+            }
+            (Some(depth), Some(color)) => {
+                check_paired(color, depth, "depth")?;
+                check_paired(depth, color, "colour")?;
+                depth.keys().cloned().collect()
+            }
+            (Some(only), None) | (None, Some(only)) => only.keys().cloned().collect(),
+        };
         Ok(Self {
             root,
             camera_file,
@@ -146,9 +144,17 @@ impl Dataset {
         self.color_files.is_some()
     }
 
-    fn depth_path(&self, frame: &str) -> Result<&Path, DatasetError> {
-        self.depth_files
-            .get(frame)
+    /// Whether frames have depth images (`false` for a colour-only dataset).
+    pub fn has_depth(&self) -> bool {
+        self.depth_files.is_some()
+    }
+
+    /// The frame's depth file, else its colour file (every frame has one of them).
+    fn frame_path(&self, frame: &str) -> Result<&Path, DatasetError> {
+        [&self.depth_files, &self.color_files]
+            .into_iter()
+            .flatten()
+            .find_map(|files| files.get(frame))
             .map(PathBuf::as_path)
             .ok_or_else(|| DatasetError::UnknownFrame {
                 root: self.root.clone(),
@@ -160,12 +166,24 @@ impl Dataset {
         (self.camera().width, self.camera().height)
     }
 
-    /// Decodes one frame's depth.
+    /// Decodes one frame's depth; in a colour-only dataset, a depth image without any reading
+    /// (every pixel NaN).
     ///
     /// # Errors
     /// [`DatasetError::UnknownFrame`] and the image errors of [`read_depth_png`].
     pub fn load_depth(&self, frame: &str) -> Result<DepthImage, DatasetError> {
-        read_depth_png(self.depth_path(frame)?, self.size(), self.depth_unit_m())
+        let path = self.frame_path(frame)?;
+        if self.depth_files.is_none() {
+            let (w, h) = self.size();
+            let no_reading = vec![f32::NAN; w as usize * h as usize];
+            return DepthImage::from_meters(w, h, no_reading).map_err(|source| {
+                DatasetError::Core {
+                    path: path.to_owned(),
+                    source,
+                }
+            });
+        }
+        read_depth_png(path, self.size(), self.depth_unit_m())
     }
 
     /// Decodes one frame's colour, `None` for a depth-only dataset.
@@ -173,7 +191,7 @@ impl Dataset {
     /// # Errors
     /// [`DatasetError::UnknownFrame`] and the image errors of [`read_color_image`].
     pub fn load_color(&self, frame: &str) -> Result<Option<ColorImage>, DatasetError> {
-        self.depth_path(frame)?;
+        self.frame_path(frame)?;
         match self.color_files.as_ref().and_then(|c| c.get(frame)) {
             Some(path) => read_color_image(path, self.size()).map(Some),
             None => Ok(None),
@@ -188,7 +206,7 @@ impl Dataset {
         let depth = self.load_depth(frame)?;
         let color = self.load_color(frame)?;
         RgbdFrame::new(*self.camera(), depth, color).map_err(|source| DatasetError::Core {
-            path: self.depth_files[frame].clone(),
+            path: self.frame_path(frame).unwrap_or(&self.root).to_owned(),
             source,
         })
     }
@@ -205,7 +223,7 @@ impl Dataset {
     /// [`crate::read_budget::MAX_JSON_FILE_BYTES`]), [`DatasetError::Json`] (which also
     /// covers impossible values such as a zero axis or an inverted box).
     pub fn load_truth(&self, frame: &str) -> Result<Option<FrameTruth>, DatasetError> {
-        self.depth_path(frame)?;
+        self.frame_path(frame)?;
         let path = self.truth_path(frame);
         if !path.is_file() {
             return Ok(None);
@@ -220,12 +238,28 @@ impl Dataset {
     /// # Errors
     /// [`DatasetError::UnknownFrame`] and the image errors of [`read_mask_png`].
     pub fn load_mask(&self, frame: &str) -> Result<Option<InstanceMask>, DatasetError> {
-        self.depth_path(frame)?;
+        self.frame_path(frame)?;
         let path = self.root.join("mask").join(format!("{frame}.png"));
         if !path.is_file() {
             return Ok(None);
         }
         read_mask_png(&path, self.size()).map(Some)
+    }
+}
+
+/// Fails on the first frame of `files` that `partners` lacks (`missing` names the partner kind).
+fn check_paired(
+    files: &BTreeMap<String, PathBuf>,
+    partners: &BTreeMap<String, PathBuf>,
+    missing: &'static str,
+) -> Result<(), DatasetError> {
+    match files.iter().find(|(s, _)| !partners.contains_key(*s)) {
+        Some((frame, path)) => Err(DatasetError::UnpairedFrame {
+            path: path.clone(),
+            frame: frame.clone(),
+            missing,
+        }),
+        None => Ok(()),
     }
 }
 

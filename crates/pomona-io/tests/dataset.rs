@@ -272,8 +272,42 @@ fn missing_pieces_are_named() {
     let err = r.unwrap_err();
     assert!(matches!(err, DatasetError::Missing { .. }));
     assert_names_file(&err, "camera.json");
-    let (_d, r) = broken(|root| std::fs::remove_dir_all(root.join("depth")).unwrap());
-    assert!(matches!(r.unwrap_err(), DatasetError::Missing { .. }));
+    let (_d, r) = broken(|root| {
+        std::fs::remove_dir_all(root.join("depth")).unwrap();
+        std::fs::remove_dir_all(root.join("color")).unwrap();
+    });
+    let err = r.unwrap_err();
+    assert!(matches!(err, DatasetError::Missing { .. }));
+    assert_names_file(&err, "depth");
+}
+
+#[test]
+fn a_dataset_without_depth_is_colour_only() {
+    let dir = tempfile::tempdir().unwrap();
+    write_small(dir.path());
+    let with_depth = Dataset::open(dir.path()).unwrap();
+    let before: Vec<_> = with_depth
+        .frames()
+        .iter()
+        .map(|f| {
+            let color = with_depth.load_color(f).unwrap();
+            (f.clone(), color, with_depth.load_truth(f).unwrap())
+        })
+        .collect();
+    std::fs::remove_dir_all(dir.path().join("depth")).unwrap();
+    let ds = Dataset::open(dir.path()).unwrap();
+    assert!(!ds.has_depth() && ds.has_color());
+    assert_eq!(ds.frames(), with_depth.frames());
+    for (f, color, truth) in before {
+        let frame = ds.load_frame(&f).unwrap();
+        assert!(frame.depth().as_slice().iter().all(|z| z.is_nan()));
+        assert_eq!(frame.color(), color.as_ref());
+        assert_eq!(ds.load_truth(&f).unwrap(), truth);
+    }
+    assert!(matches!(
+        ds.load_frame("no-such-frame"),
+        Err(DatasetError::UnknownFrame { .. })
+    ));
 }
 
 #[test]

@@ -43,6 +43,10 @@ pub struct CalibrationParams {
     pub tolerance_m: f64,
     /// Truth fruit less visible than this are neither findable nor false when detected.
     pub min_visibility: f64,
+    /// When set, held-out detections are matched in the image instead, as
+    /// [`EvalConfig::radius_fraction_2d`] (`tolerance_m` then unused).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub radius_fraction_2d: Option<f64>,
     /// How the operating confidence is chosen.
     pub operating_point: OperatingPoint,
 }
@@ -54,6 +58,7 @@ impl Default for CalibrationParams {
             folds: 3,
             tolerance_m: eval.tolerance_m,
             min_visibility: eval.min_visibility,
+            radius_fraction_2d: eval.radius_fraction_2d,
             operating_point: OperatingPoint::MaxF1,
         }
     }
@@ -166,6 +171,7 @@ fn held_out_labels(
     let config = EvalConfig {
         tolerance_m: params.tolerance_m,
         min_visibility: params.min_visibility,
+        radius_fraction_2d: params.radius_fraction_2d,
         ..EvalConfig::default()
     };
     let m = match_frame(&frame.truth, detections, frame.frame.camera(), &config);

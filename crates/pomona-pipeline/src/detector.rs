@@ -61,6 +61,12 @@ pub trait Pipeline: Send + Sync {
     /// Whether frames must have colour.
     fn needs_color(&self) -> bool;
 
+    /// Whether frames must have depth. A method that also works from colour alone (giving
+    /// detections placed by a size prior) returns `false` and can run on colour-only datasets.
+    fn needs_depth(&self) -> bool {
+        true
+    }
+
     /// Trains a model from labelled frames. `progress` is called with (frames done, total).
     ///
     /// # Errors

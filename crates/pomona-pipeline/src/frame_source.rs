@@ -134,6 +134,11 @@ impl DatasetFrames {
         }
     }
 
+    /// Whether every dataset has depth images (`false` when any is colour-only).
+    pub fn has_depth(&self) -> bool {
+        self.datasets.iter().all(Dataset::has_depth)
+    }
+
     /// `(dataset, frame stem)` of frame `i`.
     pub fn frame_ref(&self, i: usize) -> Option<(&Dataset, &str)> {
         let (d, f) = self.frames.get(i)?;

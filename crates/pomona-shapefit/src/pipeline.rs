@@ -648,6 +648,8 @@ fn detection(c: &Candidate, shape: &Shape, score: f64, camera: &PinholeCamera) -
         fruit_axis,
         symmetry_plane_normal: None,
         bbox_px: PixelBox::new(lo.0, lo.1, hi.0, hi.1).ok(),
+        center_px: None,
+        radius_px: None,
         kind: None,
         support_points: Some(c.points.len()),
         fit_rms_m: fit_rms_m(shape, &c.points),

@@ -21,8 +21,8 @@
 
 use nalgebra::{Isometry3, Point3, Vector3};
 use pomona_core::{
-    ColorImage, DepthImage, FrameTruth, FruitTruth, InstanceMask, PinholeCamera, PixelBox,
-    RgbdFrame,
+    ColorImage, DepthImage, FrameTruth, FruitTruth, ImageCircle, InstanceMask, PinholeCamera,
+    PixelBox, RgbdFrame,
 };
 
 use crate::depth_noise::SurfaceSample;
@@ -308,15 +308,19 @@ fn truth_and_mask(
             continue;
         }
         let b = boxes[k];
+        let center_m = camera_from_scene * fruit.center;
+        let circle = ImageCircle::of_sphere(camera, &center_m, 0.5 * fruit.diameter_m());
         fruits.push(FruitTruth {
             id: k.to_string(),
             kind: fruit.kind.name().to_string(),
-            center_m: Some(camera_from_scene * fruit.center),
+            center_m: Some(center_m),
             diameter_m: Some(fruit.diameter_m()),
             axis: Some(camera_from_scene.rotation * fruit.axis()),
             bbox_px: Some(PixelBox::new(
                 b.0 as f64, b.1 as f64, b.2 as f64, b.3 as f64,
             )?),
+            center_px: circle.map(|c| c.center_px),
+            radius_px: circle.map(|c| c.radius_px),
             visibility: Some(visible[k] as f64 / z.alone[k].max(visible[k]) as f64),
             extra: serde_json::Map::new(),
         });

@@ -34,6 +34,12 @@ pub struct CloudArgs {
 /// Dataset errors naming the file, an unknown frame, or a failed write.
 pub fn run(args: &CloudArgs) -> Result<()> {
     let dataset = Dataset::open(&args.dataset).context("cannot open dataset")?;
+    if !dataset.has_depth() {
+        bail!(
+            "{}: a colour-only dataset (no depth/ folder) has no point cloud",
+            args.dataset.display()
+        );
+    }
     let frame = match &args.frame {
         Some(f) if dataset.frames().contains(f) => f.clone(),
         Some(f) => bail!(

@@ -22,7 +22,7 @@ use pomona_io::Dataset;
 
 use crate::detection_folder::{prepare, write_failures, FailedFrame, RunIdentity};
 use crate::detection_run::{
-    check_color, detect_frames, load_detector, min_confidence, thread_pool,
+    check_inputs, detect_frames, load_detector, min_confidence, thread_pool,
 };
 use crate::error_line::error_line;
 use crate::exit_status::FramesFailed;
@@ -135,7 +135,7 @@ pub fn run_with(pipelines: &[Box<dyn Pipeline>], args: &DetectArgs) -> Result<De
     let pipeline = pomona::find_pipeline(pipelines, &args.pipeline)?;
     let dataset = Dataset::open(&args.data)
         .with_context(|| format!("cannot open dataset {}", args.data.display()))?;
-    check_color(pipeline, dataset.has_color(), &args.data)?;
+    check_inputs(pipeline, &dataset)?;
     let detector = load_detector(pipeline, args.model.as_deref(), &args.set)?;
     let min_confidence = min_confidence(&detector, args.min_confidence)?;
     let model = detector.model_for_color(dataset.has_color()).clone();

@@ -2,8 +2,9 @@
 //! and all-point AP, precision and recall at a threshold, centre and diameter errors — as a
 //! Markdown summary on stdout, optionally a JSON report and a precision-recall PNG.
 //!
-//! The semantics (greedy matching within a 3D tolerance, ignored low-visibility truth, 2D-box
-//! truth, incomplete frames) live in `pomona-eval`; this module only reads files and reports.
+//! The semantics (greedy matching within a 3D tolerance, or in the image with `--2d`; ignored
+//! low-visibility truth, 2D-box truth, incomplete frames) live in `pomona-eval`; this module only
+//! reads files and reports.
 
 use std::path::{Path, PathBuf};
 
@@ -11,24 +12,23 @@ use anyhow::{bail, Context, Result};
 use pomona_eval::{evaluate, load_detections, write_pr_plot, DetectionSet, EvalConfig, FrameInput};
 use pomona_io::Dataset;
 
+use crate::matching_args::MatchingArgs;
+
 /// Frames listed by name in a warning before the rest are only counted.
 const WARN_LIST: usize = 10;
 
 /// Arguments of `pomona eval`.
 #[derive(Debug, clap::Args)]
 pub struct EvalArgs {
-    /// Dataset folder (camera.json, depth/, truth/).
+    /// Dataset folder (camera.json, depth/ and/or color/, truth/).
     #[arg(long)]
     pub data: PathBuf,
     /// Folder of detection files, one `<frame>.json` per frame.
     #[arg(long)]
     pub detections: PathBuf,
-    /// Largest centre distance, millimetres, at which a detection matches a fruit.
-    #[arg(long, default_value_t = 50.0)]
-    pub tolerance_mm: f64,
-    /// Truth fruit less visible than this (0–1) are ignored: neither found nor missed.
-    #[arg(long, default_value_t = 0.5)]
-    pub min_visibility: f64,
+    /// How detections are matched to truth.
+    #[command(flatten)]
+    pub matching: MatchingArgs,
     /// Score threshold of the reported precision/recall. Default: the operating confidence the
     /// detection files record (calibrated models), otherwise score 0 (an SVM's boundary).
     #[arg(long, allow_negative_numbers = true, conflicts_with = "min_confidence")]
@@ -142,16 +142,16 @@ pub fn run(args: &EvalArgs) -> Result<()> {
     let dataset = Dataset::open(&args.data)
         .with_context(|| format!("cannot open dataset {}", args.data.display()))?;
     let mut detections = load_detections(&args.detections, &dataset)?;
-    let config = EvalConfig {
-        tolerance_m: args.tolerance_mm / 1000.0,
-        min_visibility: args.min_visibility,
+    let operating_point = EvalConfig {
         threshold: args.threshold.unwrap_or(0.0),
         min_confidence: match (args.min_confidence, args.threshold) {
             (Some(c), _) => Some(c),
             (None, Some(_)) => None,
             (None, None) => recorded_operating_confidence(&detections),
         },
+        ..EvalConfig::default()
     };
+    let config = args.matching.config(operating_point, dataset.has_depth());
     config.validate()?;
     if args.min_confidence.is_none() && args.threshold.is_none() {
         if let Some(c) = config.min_confidence {

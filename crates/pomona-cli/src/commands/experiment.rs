@@ -36,6 +36,7 @@ use serde::Serialize;
 
 use crate::commands::train::open_frames;
 use crate::detection_run::{detect_frames, thread_pool};
+use crate::matching_args::MatchingArgs;
 use crate::params;
 use crate::progress::progress_bar;
 use pomona::{Detector, ModelSource, ParamOverride};
@@ -69,12 +70,9 @@ pub struct ExperimentArgs {
     /// Seed of the splits and of training.
     #[arg(long, value_name = "S", default_value_t = 0)]
     pub seed: u64,
-    /// Largest centre distance, millimetres, at which a detection matches a fruit.
-    #[arg(long, default_value_t = 50.0)]
-    pub tolerance_mm: f64,
-    /// Truth fruit less visible than this (0–1) are ignored: neither found nor missed.
-    #[arg(long, default_value_t = 0.5)]
-    pub min_visibility: f64,
+    /// How detections are matched to truth.
+    #[command(flatten)]
+    pub matching: MatchingArgs,
     /// Score threshold of the reported precision/recall for models without calibration (default
     /// 0, an SVM's decision boundary); calibrated models report at their operating confidence.
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
@@ -571,23 +569,25 @@ pub fn run_with(
     let found = pomona::find_pipeline(pipelines, &args.pipeline)?;
     let configured = params::configured(found, &args.train_set)?;
     let pipeline = configured.as_deref().unwrap_or(found);
-    let config = EvalConfig {
-        tolerance_m: args.tolerance_mm / 1000.0,
-        min_visibility: args.min_visibility,
-        threshold: args.threshold,
-        min_confidence: None,
+    let plan = plan(pipeline, args)?;
+    let (camera, test_has_depth) = match plan.test.frame_ref(0) {
+        Some((ds, _)) => (*ds.camera(), ds.has_depth()),
+        None => bail!("{}: no labelled frames", dirs(&plan.test_data)),
     };
+    let config = args.matching.config(
+        EvalConfig {
+            threshold: args.threshold,
+            ..EvalConfig::default()
+        },
+        test_has_depth,
+    );
     config.validate()?;
     let calibration = CalibrationParams {
         folds: args.calibration_folds as usize,
         tolerance_m: config.tolerance_m,
         min_visibility: config.min_visibility,
+        radius_fraction_2d: config.radius_fraction_2d,
         ..CalibrationParams::default()
-    };
-    let plan = plan(pipeline, args)?;
-    let camera = match plan.test.frame_ref(0) {
-        Some((ds, _)) => *ds.camera(),
-        None => bail!("{}: no labelled frames", dirs(&plan.test_data)),
     };
     let pool = thread_pool(args.threads.map(|n| n as usize))?;
     let run = Splits {

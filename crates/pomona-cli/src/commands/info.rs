@@ -32,6 +32,7 @@ struct DatasetInfo {
     cy: f64,
     depth_unit_m: f64,
     has_color: bool,
+    has_depth: bool,
     frames: Vec<FrameInfo>,
 }
 
@@ -88,6 +89,7 @@ fn gather(args: &InfoArgs) -> Result<DatasetInfo> {
         cy: cam.cy,
         depth_unit_m: dataset.depth_unit_m(),
         has_color: dataset.has_color(),
+        has_depth: dataset.has_depth(),
         frames,
     })
 }
@@ -99,12 +101,17 @@ fn print_table(info: &DatasetInfo) {
         info.width, info.height, info.fx, info.fy, info.cx, info.cy, info.depth_unit_m
     );
     println!(
-        "frames    {}  colour: {}",
+        "frames    {}  colour: {}  depth: {}",
         info.frames.len(),
         if info.has_color {
             "yes"
         } else {
             "no (depth only)"
+        },
+        if info.has_depth {
+            "yes"
+        } else {
+            "no (colour only)"
         }
     );
     println!();

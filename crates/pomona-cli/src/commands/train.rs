@@ -9,13 +9,14 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::{bail, Context, Result};
+use pomona_eval::EvalConfig;
 use pomona_io::Dataset;
 use pomona_learn::OperatingPoint;
 use pomona_pipeline::{
     train_calibrated, CalibrationParams, DatasetFrames, FrameSource, Pipeline, TrainOptions,
 };
 
-use crate::detection_run::{check_color, thread_pool};
+use crate::detection_run::{check_inputs, thread_pool};
 use crate::progress::progress_bar;
 
 /// Arguments of `pomona train`.
@@ -94,17 +95,17 @@ pub struct TrainSummary {
     pub support_vectors: usize,
 }
 
-/// Opens `data` folders as one lazily loaded frame source, checking colour for `pipeline`.
+/// Opens `data` folders as one lazily loaded frame source, checking each has the images `pipeline` needs.
 ///
 /// # Errors
-/// A dataset that cannot be opened (naming it), colour missing for a colour pipeline, or no
+/// A dataset that cannot be opened (naming it), colour or depth missing for a pipeline that needs it, or no
 /// frame with truth.
 pub fn open_frames(pipeline: &dyn Pipeline, data: &[PathBuf]) -> Result<DatasetFrames> {
     let mut datasets = Vec::with_capacity(data.len());
     for dir in data {
         let ds =
             Dataset::open(dir).with_context(|| format!("cannot open dataset {}", dir.display()))?;
-        check_color(pipeline, ds.has_color(), dir)?;
+        check_inputs(pipeline, &ds)?;
         datasets.push(ds);
     }
     let frames = DatasetFrames::new(datasets);
@@ -136,6 +137,13 @@ pub fn run_with(pipelines: &[Box<dyn Pipeline>], args: &TrainArgs) -> Result<Tra
     let configured = crate::params::configured(found, &args.set)?;
     let pipeline = configured.as_deref().unwrap_or(found);
     let frames = open_frames(pipeline, &args.data)?;
+    let mut calibration = args.calibration();
+    if !frames.has_depth() && calibration.folds > 0 {
+        // A colour-only detector's 3D centre is a size-prior guess: judge held-out detections
+        // in the image, as `pomona eval` does on such data.
+        calibration.radius_fraction_2d = EvalConfig::image_2d().radius_fraction_2d;
+        eprintln!("note: the data has no depth, so calibration matches detections in the image");
+    }
     let pool = thread_pool(args.threads.map(|n| n as usize))?;
     let bar = progress_bar(frames.len(), "training");
     let started = Instant::now();
@@ -144,15 +152,7 @@ pub fn run_with(pipelines: &[Box<dyn Pipeline>], args: &TrainArgs) -> Result<Tra
         bar.set_position(done as u64);
     };
     let trained = pool
-        .install(|| {
-            train_calibrated(
-                pipeline,
-                &frames,
-                &args.options(),
-                &args.calibration(),
-                &progress,
-            )
-        })
+        .install(|| train_calibrated(pipeline, &frames, &args.options(), &calibration, &progress))
         .with_context(|| format!("training `{}`", pipeline.name()))?;
     let model = trained.model;
     let seconds = started.elapsed().as_secs_f64();

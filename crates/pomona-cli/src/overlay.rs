@@ -75,12 +75,6 @@ fn to_px(x: f64) -> i32 {
     x.round().clamp(-1e6, 1e6) as i32
 }
 
-/// Projected radius in pixels of a sphere of `diameter_m` at depth `z`.
-fn radius_px(camera: &PinholeCamera, diameter_m: f64, z: f64) -> Option<i32> {
-    (z > 0.0 && diameter_m.is_finite() && diameter_m > 0.0)
-        .then(|| to_px(camera.fx * 0.5 * diameter_m / z).max(2))
-}
-
 fn draw_err<E: std::fmt::Debug>(e: E) -> anyhow::Error {
     anyhow!("drawing the overlay: {e:?}")
 }
@@ -109,21 +103,29 @@ pub fn draw_overlay(
             let ignored = fruit.visibility.is_some_and(|v| v < min_visibility);
             let color = if ignored { TRUTH_IGNORED } else { TRUTH };
             let width = if ignored { 1 } else { 2 };
-            if let Some(c) = fruit.center_m {
-                let Some(p) = camera.project(&c) else {
-                    continue;
-                };
+            // The circle only when the fruit states one (not the box's inscribed circle).
+            let stated = (fruit.center_px.is_some() && fruit.radius_px.is_some())
+                || (fruit.center_m.is_some() && fruit.diameter_m.is_some());
+            let circle = fruit.image_circle(camera).filter(|_| stated);
+            let center = fruit
+                .center_m
+                .and_then(|c| camera.project(&c))
+                .or(circle.map(|c| c.center_px));
+            if let Some(p) = center {
                 let (x, y) = (to_px(p.x), to_px(p.y));
                 let arm = 5;
                 for seg in [[(x - arm, y), (x + arm, y)], [(x, y - arm), (x, y + arm)]] {
                     root.draw(&PathElement::new(seg.to_vec(), color.stroke_width(width)))
                         .map_err(draw_err)?;
                 }
-                if let Some(r) = fruit.diameter_m.and_then(|d| radius_px(camera, d, c.z)) {
-                    root.draw(&Circle::new((x, y), r, color.stroke_width(width)))
-                        .map_err(draw_err)?;
-                }
-            } else if let Some(b) = &fruit.bbox_px {
+            }
+            if let Some(c) = circle {
+                let (x, y) = (to_px(c.center_px.x), to_px(c.center_px.y));
+                let r = to_px(c.radius_px).max(2);
+                root.draw(&Circle::new((x, y), r, color.stroke_width(width)))
+                    .map_err(draw_err)?;
+            }
+            if let (Some(b), None) = (&fruit.bbox_px, fruit.center_m) {
                 let rect = [
                     (to_px(b.xmin), to_px(b.ymin)),
                     (to_px(b.xmax), to_px(b.ymax)),
@@ -134,14 +136,17 @@ pub fn draw_overlay(
         }
         let det_style = ("sans-serif", 13).into_font().color(&DETECTION);
         for d in detections {
-            let Some(p) = camera.project(&d.center_m) else {
+            // The detection's circle (`ImageCircle` rule: its own, its sphere projected, or its
+            // box's); a bare centre gets a small marker circle.
+            let circle = d.image_circle(camera);
+            let Some(p) = circle
+                .map(|c| c.center_px)
+                .or_else(|| camera.project(&d.center_m))
+            else {
                 continue;
             };
             let (x, y) = (to_px(p.x), to_px(p.y));
-            let r = d
-                .diameter_m
-                .and_then(|dm| radius_px(camera, dm, d.center_m.z))
-                .unwrap_or(NO_SIZE_RADIUS_PX);
+            let r = circle.map_or(NO_SIZE_RADIUS_PX, |c| to_px(c.radius_px).max(2));
             root.draw(&Circle::new((x, y), r, DETECTION.stroke_width(2)))
                 .map_err(draw_err)?;
             root.draw(&Circle::new((x, y), 2, DETECTION.filled()))

@@ -61,6 +61,9 @@ pub struct SplitSummary {
     pub recall: Option<MeanSd>,
     /// Median centre error, metres.
     pub center_error_median_m: Option<MeanSd>,
+    /// Median centre error in truth radii (2D evaluations only).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub center_error_median_radii: Option<MeanSd>,
     /// Average curve: interpolated precision (max precision at recall ≥ r) averaged over splits
     /// at r = 0, 0.01, …, 1; `None` when a split has no curve.
     pub mean_pr_curve: Option<Vec<(f64, f64)>>,
@@ -97,6 +100,7 @@ impl SplitSummary {
             precision: fig(|r| r.precision),
             recall: fig(|r| r.recall),
             center_error_median_m: fig(|r| r.center_error_m.median),
+            center_error_median_radii: fig(|r| r.center_error_radii.and_then(|e| e.median)),
             mean_pr_curve,
         }
     }

@@ -164,10 +164,17 @@ pub fn run_with(pipelines: &[Box<dyn Pipeline>], args: &TrainArgs) -> Result<Tra
         seconds,
         support_vectors: model.svm.n_support(),
     };
+    // Methods without an SVM (color-contour's perceptron) store an empty one: say nothing of it.
+    let classifier = match summary.support_vectors {
+        0 => String::new(),
+        n => format!(
+            " The classifier keeps {n} support vectors (γ = {:.4}).",
+            model.svm.gamma
+        ),
+    };
     println!(
         "Trained `{}` on {} labelled frame(s) from {} dataset(s) in {:.1} s ({:.0} ms/frame; \
-         seed {}, {}-fold cross-validation{}). The classifier keeps {} support vectors \
-         (γ = {:.4}). Model written to {}.",
+         seed {}, {}-fold cross-validation{}).{classifier} Model written to {}.",
         summary.pipeline,
         summary.frames,
         args.data.len(),
@@ -176,8 +183,6 @@ pub fn run_with(pipelines: &[Box<dyn Pipeline>], args: &TrainArgs) -> Result<Tra
         args.seed,
         args.folds,
         if args.full_grid { ", full grid" } else { "" },
-        summary.support_vectors,
-        model.svm.gamma,
         args.out.display()
     );
     match &model.calibration {

@@ -1,11 +1,12 @@
 //! Overlay images: truth and detections drawn on a frame's colour image, for looking at what a
 //! detector did (`pomona demo`, `pomona detect --overlay`).
 //!
-//! Truth fruit: green — a cross at the projected centre and a circle of the projected diameter
-//! (`r = fx · d/2 / z`); truth that evaluation ignores (visibility below the threshold) is drawn
-//! thinner in a pale green; truth with only a 2D box gets its box. Detections: red — a circle of
-//! the projected diameter (a small fixed circle when the method gives no size), a dot at the
-//! centre and a label `score | ⌀ mm`. Frames without colour are drawn on their depth as grey.
+//! Truth fruit: green — a cross at the projected centre and the fruit's image circle (its
+//! `center_px`/`radius_px`, or its sphere projected: `pomona_core::ImageCircle`); truth that
+//! evaluation ignores (visibility below the threshold) is drawn thinner in a pale green; truth
+//! without a 3D centre also gets its box. Detections: red — their image circle by the same rule
+//! (color-contour's own circle, a sphere projected, a box's inscribed circle, or a small fixed
+//! circle when the method gives no size), a dot at the centre and a label `score | ⌀ mm`. Frames without colour are drawn on their depth as grey.
 //! Drawing uses `plotters`' bitmap backend on the image buffer and DejaVu Sans compiled into the
 //! binary (via `ab_glyph`), as `pomona-eval`'s PR plots do, so no system font is needed.
 
@@ -15,7 +16,7 @@ use std::sync::OnceLock;
 use anyhow::{anyhow, bail, Result};
 use plotters::prelude::*;
 use plotters::style::{register_font, FontStyle};
-use pomona_core::{ColorImage, DepthImage, Detection, FrameTruth, PinholeCamera};
+use pomona_core::{ColorImage, DepthImage, Detection, FrameTruth, FruitTruth, PinholeCamera};
 use pomona_io::Dataset;
 
 /// Radius, pixels, of a detection without a diameter.
@@ -100,74 +101,11 @@ pub fn draw_overlay(
     {
         let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
         for fruit in truth.map(|t| t.fruits.as_slice()).unwrap_or_default() {
-            let ignored = fruit.visibility.is_some_and(|v| v < min_visibility);
-            let color = if ignored { TRUTH_IGNORED } else { TRUTH };
-            let width = if ignored { 1 } else { 2 };
-            // The circle only when the fruit states one (not the box's inscribed circle).
-            let stated = (fruit.center_px.is_some() && fruit.radius_px.is_some())
-                || (fruit.center_m.is_some() && fruit.diameter_m.is_some());
-            let circle = fruit.image_circle(camera).filter(|_| stated);
-            let center = fruit
-                .center_m
-                .and_then(|c| camera.project(&c))
-                .or(circle.map(|c| c.center_px));
-            if let Some(p) = center {
-                let (x, y) = (to_px(p.x), to_px(p.y));
-                let arm = 5;
-                for seg in [[(x - arm, y), (x + arm, y)], [(x, y - arm), (x, y + arm)]] {
-                    root.draw(&PathElement::new(seg.to_vec(), color.stroke_width(width)))
-                        .map_err(draw_err)?;
-                }
-            }
-            if let Some(c) = circle {
-                let (x, y) = (to_px(c.center_px.x), to_px(c.center_px.y));
-                let r = to_px(c.radius_px).max(2);
-                root.draw(&Circle::new((x, y), r, color.stroke_width(width)))
-                    .map_err(draw_err)?;
-            }
-            if let (Some(b), None) = (&fruit.bbox_px, fruit.center_m) {
-                let rect = [
-                    (to_px(b.xmin), to_px(b.ymin)),
-                    (to_px(b.xmax), to_px(b.ymax)),
-                ];
-                root.draw(&Rectangle::new(rect, color.stroke_width(width)))
-                    .map_err(draw_err)?;
-            }
+            draw_truth(&root, camera, fruit, min_visibility)?;
         }
         let det_style = ("sans-serif", 13).into_font().color(&DETECTION);
         for d in detections {
-            // The detection's circle (`ImageCircle` rule: its own, its sphere projected, or its
-            // box's); a bare centre gets a small marker circle.
-            let circle = d.image_circle(camera);
-            let Some(p) = circle
-                .map(|c| c.center_px)
-                .or_else(|| camera.project(&d.center_m))
-            else {
-                continue;
-            };
-            let (x, y) = (to_px(p.x), to_px(p.y));
-            let r = circle.map_or(NO_SIZE_RADIUS_PX, |c| to_px(c.radius_px).max(2));
-            root.draw(&Circle::new((x, y), r, DETECTION.stroke_width(2)))
-                .map_err(draw_err)?;
-            root.draw(&Circle::new((x, y), 2, DETECTION.filled()))
-                .map_err(draw_err)?;
-            let label = match d.diameter_m {
-                Some(dm) => format!("{:.2} | ⌀{:.0} mm", d.score, dm * 1e3),
-                None => format!("{:.2}", d.score),
-            };
-            let (tw, th) = root
-                .estimate_text_size(&label, &det_style)
-                .map_err(draw_err)?;
-            let (tw, th) = (tw as i32, th as i32);
-            let tx = (x - tw / 2).clamp(0, (w as i32 - tw).max(0));
-            let ty = (y - r - th - 3).clamp(0, (h as i32 - th).max(0));
-            root.draw(&Rectangle::new(
-                [(tx - 2, ty - 1), (tx + tw + 2, ty + th + 1)],
-                WHITE.mix(0.7).filled(),
-            ))
-            .map_err(draw_err)?;
-            root.draw(&Text::new(label, (tx, ty), det_style.clone()))
-                .map_err(draw_err)?;
+            draw_detection(&root, camera, d, &det_style, (w, h))?;
         }
         if !title.is_empty() {
             let style = ("sans-serif", 14).into_font().color(&WHITE);
@@ -183,6 +121,94 @@ pub fn draw_overlay(
         root.present().map_err(draw_err)?;
     }
     ColorImage::from_rgb(w, h, buf).map_err(|e| anyhow!("drawing the overlay: {e}"))
+}
+
+type Area<'a> = DrawingArea<BitMapBackend<'a>, plotters::coord::Shift>;
+
+/// One truth fruit: cross, circle, and box when it has no 3D centre (see the module docs).
+fn draw_truth(
+    root: &Area<'_>,
+    camera: &PinholeCamera,
+    fruit: &FruitTruth,
+    min_visibility: f64,
+) -> Result<()> {
+    let ignored = fruit.visibility.is_some_and(|v| v < min_visibility);
+    let color = if ignored { TRUTH_IGNORED } else { TRUTH };
+    let width = if ignored { 1 } else { 2 };
+    // The circle only when the fruit states one (not the box's inscribed circle).
+    let stated = (fruit.center_px.is_some() && fruit.radius_px.is_some())
+        || (fruit.center_m.is_some() && fruit.diameter_m.is_some());
+    let circle = fruit.image_circle(camera).filter(|_| stated);
+    let center = fruit
+        .center_m
+        .and_then(|c| camera.project(&c))
+        .or(circle.map(|c| c.center_px));
+    if let Some(p) = center {
+        let (x, y) = (to_px(p.x), to_px(p.y));
+        let arm = 5;
+        for seg in [[(x - arm, y), (x + arm, y)], [(x, y - arm), (x, y + arm)]] {
+            root.draw(&PathElement::new(seg.to_vec(), color.stroke_width(width)))
+                .map_err(draw_err)?;
+        }
+    }
+    if let Some(c) = circle {
+        let (x, y) = (to_px(c.center_px.x), to_px(c.center_px.y));
+        let r = to_px(c.radius_px).max(2);
+        root.draw(&Circle::new((x, y), r, color.stroke_width(width)))
+            .map_err(draw_err)?;
+    }
+    if let (Some(b), None) = (&fruit.bbox_px, fruit.center_m) {
+        let rect = [
+            (to_px(b.xmin), to_px(b.ymin)),
+            (to_px(b.xmax), to_px(b.ymax)),
+        ];
+        root.draw(&Rectangle::new(rect, color.stroke_width(width)))
+            .map_err(draw_err)?;
+    }
+    Ok(())
+}
+
+/// One detection: its circle, a dot at its centre and a label (see the module docs).
+fn draw_detection(
+    root: &Area<'_>,
+    camera: &PinholeCamera,
+    d: &Detection,
+    det_style: &TextStyle<'_>,
+    (w, h): (u32, u32),
+) -> Result<()> {
+    // The detection's circle (`ImageCircle` rule: its own, its sphere projected, or its
+    // box's); a bare centre gets a small marker circle.
+    let circle = d.image_circle(camera);
+    let Some(p) = circle
+        .map(|c| c.center_px)
+        .or_else(|| camera.project(&d.center_m))
+    else {
+        return Ok(());
+    };
+    let (x, y) = (to_px(p.x), to_px(p.y));
+    let r = circle.map_or(NO_SIZE_RADIUS_PX, |c| to_px(c.radius_px).max(2));
+    root.draw(&Circle::new((x, y), r, DETECTION.stroke_width(2)))
+        .map_err(draw_err)?;
+    root.draw(&Circle::new((x, y), 2, DETECTION.filled()))
+        .map_err(draw_err)?;
+    let label = match d.diameter_m {
+        Some(dm) => format!("{:.2} | ⌀{:.0} mm", d.score, dm * 1e3),
+        None => format!("{:.2}", d.score),
+    };
+    let (tw, th) = root
+        .estimate_text_size(&label, det_style)
+        .map_err(draw_err)?;
+    let (tw, th) = (tw as i32, th as i32);
+    let tx = (x - tw / 2).clamp(0, (w as i32 - tw).max(0));
+    let ty = (y - r - th - 3).clamp(0, (h as i32 - th).max(0));
+    root.draw(&Rectangle::new(
+        [(tx - 2, ty - 1), (tx + tw + 2, ty + th + 1)],
+        WHITE.mix(0.7).filled(),
+    ))
+    .map_err(draw_err)?;
+    root.draw(&Text::new(label, (tx, ty), det_style.clone()))
+        .map_err(draw_err)?;
+    Ok(())
 }
 
 /// Draws the overlay (see [`draw_overlay`]) and writes it as a PNG (atomically).

@@ -246,8 +246,26 @@ fn dirs(d: &[PathBuf]) -> String {
         .join(", ")
 }
 
-/// The summary as a Markdown table.
+/// The summary as a Markdown table: a heading saying what was run, then one row per figure.
 pub fn summary_markdown(r: &ExperimentReport) -> String {
+    let mut out = summary_heading(r);
+    let image_2d = r.eval.radius_fraction_2d.is_some();
+    for (k, v, p) in summary_rows(r) {
+        // Each evaluation reports its centre error one way: metres in 3D, truth radii in 2D.
+        let shown = match k {
+            "centre error (median)" => !image_2d,
+            "centre error (median, truth radii)" => image_2d,
+            _ => true,
+        };
+        if shown {
+            out.push_str(&format!("| {k} | {v} | {p} |\n"));
+        }
+    }
+    out
+}
+
+/// The figures of the summary table: (name, mean ± sd over splits, pooled).
+fn summary_rows(r: &ExperimentReport) -> [(&'static str, String, String); 9] {
     let s = &r.summary;
     let fmt = |v: Option<f64>, scale: f64, digits: usize, unit: &str| {
         v.map_or_else(
@@ -256,7 +274,7 @@ pub fn summary_markdown(r: &ExperimentReport) -> String {
         )
     };
     let pooled = |f: &dyn Fn(&EvalReport) -> String| r.pooled.as_ref().map_or("".into(), f);
-    let rows = [
+    [
         (
             "AP (VOC 11-point)",
             fmt_mean_sd(s.ap_voc11, 1.0, 3, ""),
@@ -302,7 +320,12 @@ pub fn summary_markdown(r: &ExperimentReport) -> String {
             fmt_mean_sd(r.detect_ms_per_frame, 1.0, 1, " ms"),
             String::new(),
         ),
-    ];
+    ]
+}
+
+/// The heading and table header of the summary: protocol, data, matching, operating point.
+fn summary_heading(r: &ExperimentReport) -> String {
+    let s = &r.summary;
     let what = match r.protocol {
         Protocol::RandomSplits => format!(
             "{} ({} labelled frames), {} random splits, train fraction {}",
@@ -337,22 +360,11 @@ pub fn summary_markdown(r: &ExperimentReport) -> String {
         Some(f) => format!("matched in the image within {f} truth radii"),
         None => format!("tolerance {:.0} mm", r.eval.tolerance_m * 1e3),
     };
-    let mut out = format!(
+    format!(
         "## Experiment: `{}` {what}, seed {}, {matching}, operating point: {operating}{kinds}\n\n\
          | metric | mean ± sd over splits | pooled test frames |\n|---|---|---|\n",
         r.pipeline, r.seed,
-    );
-    let image_2d = r.eval.radius_fraction_2d.is_some();
-    // Each evaluation reports its centre error one way: metres in 3D, truth radii in 2D.
-    let rows = rows.into_iter().filter(|(k, _, _)| match *k {
-        "centre error (median)" => !image_2d,
-        "centre error (median, truth radii)" => image_2d,
-        _ => true,
-    });
-    for (k, v, p) in rows {
-        out.push_str(&format!("| {k} | {v} | {p} |\n"));
-    }
-    out
+    )
 }
 
 /// Refuses a cross-domain experiment whose test folders include a training folder (compared

@@ -39,6 +39,8 @@ enum Command {
     /// Render a small synthetic scene set, run every detector with a built-in model on it,
     /// evaluate, and draw overlays.
     Demo(commands::demo::DemoArgs),
+    /// Plan the picks of seed 004's two-arm robot: which arm picks which fruit, in which order.
+    Plan(commands::plan::PlanArgs),
 }
 
 fn main() -> ExitCode {
@@ -49,6 +51,7 @@ fn main() -> ExitCode {
         Command::Convert(args) => commands::convert::run(args),
         Command::Eval(args) => commands::eval::run(args),
         Command::Synth(args) => commands::synth::run(args),
+        Command::Plan(args) => commands::plan::run(args),
         Command::Train(args) => commands::train::run(args),
         Command::Detect(args) => commands::detect::run(args),
         Command::Experiment(args) => commands::experiment::run(args),

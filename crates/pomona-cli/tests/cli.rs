@@ -1053,3 +1053,77 @@ fn without_the_rerun_feature_rrd_is_refused_saying_why() {
     assert!(err.contains("without the `rerun` feature"), "{err}");
     assert!(!rrd.exists());
 }
+
+/// `pomona plan`: every reachable target in exactly one arm's list, unreachable ones listed,
+/// times that add up to the makespan; `--exact` is never worse; a bad file is named.
+#[test]
+fn plan_assigns_every_reachable_target_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let targets = dir.path().join("t.json");
+    std::fs::write(
+        &targets,
+        r#"{"targets": [
+            {"id": "left", "center_m": [-0.4, 0.0, 0.6]},
+            {"id": "right", "center_m": [1.0, 0.0, 0.6]},
+            {"id": "mid1", "center_m": [0.3, 0.1, 0.7]},
+            {"id": "mid2", "center_m": [0.3, -0.1, 0.8]},
+            {"id": "far", "center_m": [0.0, 0.0, 3.0]}]}"#,
+    )
+    .unwrap();
+    let mut makespans = Vec::new();
+    for extra in [&[][..], &["--exact"][..]] {
+        let out = dir.path().join("plan.json");
+        let mut args = vec![
+            "plan",
+            "--targets",
+            targets.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        let run = pomona(&args);
+        assert!(run.status.success(), "{}", stderr(&run));
+        let plan: serde_json::Value =
+            serde_json::from_slice(&std::fs::read(&out).unwrap()).unwrap();
+        let ids = |v: &serde_json::Value| -> Vec<String> {
+            v.as_array()
+                .unwrap()
+                .iter()
+                .map(|s| s.as_str().unwrap().to_owned())
+                .collect()
+        };
+        let (a, b) = (ids(&plan["arms"]["a"]), ids(&plan["arms"]["b"]));
+        assert!(
+            a.contains(&"left".to_owned()) && b.contains(&"right".to_owned()),
+            "{plan}"
+        );
+        assert_eq!(ids(&plan["unreachable"]), vec!["far"]);
+        let mut all: Vec<String> = a.into_iter().chain(b).collect();
+        all.sort();
+        assert_eq!(all, vec!["left", "mid1", "mid2", "right"]);
+        let t = |k: &str| plan["time_s"][k].as_f64().unwrap();
+        let makespan = plan["makespan_s"].as_f64().unwrap();
+        assert!((makespan - t("a").max(t("b"))).abs() < 1e-9);
+        makespans.push(makespan);
+    }
+    assert!(makespans[1] <= makespans[0] + 1e-9, "{makespans:?}");
+
+    std::fs::write(
+        &targets,
+        r#"{"targets": [{"id": "x", "center_m": [0, 0]}]}"#,
+    )
+    .unwrap();
+    let bad = pomona(&[
+        "plan",
+        "--targets",
+        targets.to_str().unwrap(),
+        "--out",
+        dir.path().join("p2.json").to_str().unwrap(),
+    ]);
+    assert!(!bad.status.success());
+    assert!(
+        stderr(&bad).contains(targets.to_str().unwrap()),
+        "{}",
+        stderr(&bad)
+    );
+}

@@ -7,5 +7,6 @@ pub mod detect;
 pub mod eval;
 pub mod experiment;
 pub mod info;
+pub mod plan;
 pub mod synth;
 pub mod train;

@@ -152,6 +152,13 @@ impl Pipeline for ColorContourPipeline {
         ))
     }
 
+    fn complete_stage_params(
+        &self,
+        stage_params: &serde_json::Value,
+    ) -> Result<serde_json::Value, PipelineError> {
+        pomona_pipeline::complete_with_defaults::<ColorContourStageParams>(stage_params)
+    }
+
     fn load(&self, model: &ModelFile) -> Result<Box<dyn Detector>, PipelineError> {
         let stage: ColorContourStageParams = serde_json::from_value(model.stage_params.clone())
             .map_err(|e| PipelineError::StageParams(e.to_string()))?;

@@ -119,4 +119,31 @@ pub trait Pipeline: Send + Sync {
     /// [`PipelineError::StageParams`] when the model's stage parameters do not parse or are
     /// invalid.
     fn load(&self, model: &ModelFile) -> Result<Box<dyn Detector>, PipelineError>;
+
+    /// A model's stage parameters with every key this version knows, defaults filled in for
+    /// those the model was saved without (parameters added later), so a parameter override can
+    /// name any of them. The default keeps them as they are; pipelines with typed parameters
+    /// round-trip them with [`complete_with_defaults`].
+    ///
+    /// # Errors
+    /// [`PipelineError::StageParams`] when they do not parse.
+    fn complete_stage_params(
+        &self,
+        stage_params: &serde_json::Value,
+    ) -> Result<serde_json::Value, PipelineError> {
+        Ok(stage_params.clone())
+    }
+}
+
+/// `stage_params` parsed as `T` (serde defaults filling missing keys) and written back: the
+/// usual [`Pipeline::complete_stage_params`].
+///
+/// # Errors
+/// [`PipelineError::StageParams`] when they do not parse as `T`.
+pub fn complete_with_defaults<T: serde::Serialize + serde::de::DeserializeOwned>(
+    stage_params: &serde_json::Value,
+) -> Result<serde_json::Value, PipelineError> {
+    let typed: T = serde_json::from_value(stage_params.clone())
+        .map_err(|e| PipelineError::StageParams(e.to_string()))?;
+    serde_json::to_value(&typed).map_err(|e| PipelineError::StageParams(e.to_string()))
 }

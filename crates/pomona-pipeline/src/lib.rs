@@ -31,7 +31,7 @@ pub use calibration::{
     load_detector, train_calibrated, CalibratedDetector, CalibratedTraining, CalibrationParams,
 };
 pub use detection_evaluation::{detect_and_evaluate, DetectionEvaluation};
-pub use detector::{Detector, Pipeline, TrainOptions};
+pub use detector::{complete_with_defaults, Detector, Pipeline, TrainOptions};
 pub use error::PipelineError;
 pub use frame_source::{ChainedFrames, DatasetFrames, FrameSource, LabelledFrame};
 pub use pomona_learn::ModelFile;

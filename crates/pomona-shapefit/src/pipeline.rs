@@ -407,6 +407,13 @@ impl Pipeline for ShapeFitPipeline {
         fit_classifier(stage_params, values, labels, options)
     }
 
+    fn complete_stage_params(
+        &self,
+        stage_params: &serde_json::Value,
+    ) -> Result<serde_json::Value, PipelineError> {
+        pomona_pipeline::complete_with_defaults::<ShapeFitStageParams>(stage_params)
+    }
+
     fn load(&self, model: &ModelFile) -> Result<Box<dyn Detector>, PipelineError> {
         let stage_params: ShapeFitStageParams = serde_json::from_value(model.stage_params.clone())
             .map_err(|e| PipelineError::StageParams(e.to_string()))?;

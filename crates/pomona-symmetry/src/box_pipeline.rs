@@ -45,6 +45,13 @@ macro_rules! box_pipeline {
                 $crate::training::train($name, &self.params, frames, options, progress)
             }
 
+            fn complete_stage_params(
+                &self,
+                stage_params: &serde_json::Value,
+            ) -> Result<serde_json::Value, pomona_pipeline::PipelineError> {
+                pomona_pipeline::complete_with_defaults::<$crate::StageParams>(stage_params)
+            }
+
             fn load(
                 &self,
                 model: &pomona_learn::ModelFile,

@@ -277,6 +277,17 @@ impl<'p> DetectorBuilder<'p> {
         };
         let load = |(mut model, source): (ModelFile, ModelSource)| -> Result<Loaded, Error> {
             let owner = format!("the model of `{name}` ({source})");
+            if !self.overrides.is_empty() {
+                // A model saved before a parameter existed lacks its key; fill the defaults in
+                // so every current parameter can be overridden.
+                model.stage_params = pipeline
+                    .complete_stage_params(&model.stage_params)
+                    .map_err(|e| Error::Load {
+                        pipeline: name.to_owned(),
+                        model: source.to_string(),
+                        source: Box::new(e),
+                    })?;
+            }
             apply_overrides(&mut model.stage_params, &self.overrides, &owner)?;
             let detector =
                 pomona_pipeline::load_detector(pipeline, &model).map_err(|e| Error::Load {
@@ -306,4 +317,34 @@ fn builtin_model(
     let label = format!("<{source} of {pipeline}>");
     let model = ModelFile::from_json(text, Path::new(&label), pipeline)?;
     Ok((model, source))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The built-in shape-fit model was saved before `coaxial_merge` existed; its parameters
+    /// can still be overridden (the defaults are filled in first), and a typo is still an error.
+    #[test]
+    fn parameters_newer_than_the_model_can_be_overridden() -> Result<(), Box<dyn std::error::Error>>
+    {
+        let text = registry::pipeline("shape-fit")?
+            .default_model()
+            .unwrap_or_default();
+        let model: serde_json::Value = serde_json::from_str(text)?;
+        assert!(
+            model["stage_params"]["params"]
+                .get("coaxial_merge")
+                .is_none(),
+            "the test needs a built-in model saved without the key"
+        );
+        Detector::builder("shape-fit")?
+            .set("params.coaxial_merge.max_gap_radii", 0.5)
+            .build()?;
+        let typo = Detector::builder("shape-fit")?
+            .set("params.coaxial_merge.max_gap_radius", 0.5)
+            .build();
+        assert!(matches!(typo, Err(Error::UnknownParameter { .. })));
+        Ok(())
+    }
 }

@@ -8,4 +8,5 @@ pub mod eval;
 pub mod experiment;
 pub mod info;
 pub mod synth;
+pub mod track;
 pub mod train;

@@ -100,7 +100,8 @@ pub fn circle_from_boundaries(points: &[Point2<f64>]) -> Option<(Point2<f64>, f6
     }
     (0..4)
         .filter_map(|skip| {
-            let triple: Vec<Point2<f64>> = (0..4).filter(|&i| i != skip).map(|i| points[i]).collect();
+            let triple: Vec<Point2<f64>> =
+                (0..4).filter(|&i| i != skip).map(|i| points[i]).collect();
             let (c, r) = fit_circle(&triple)?;
             ((points[skip] - c).norm() <= r + INSIDE_SLACK_PX).then_some((c, r))
         })
@@ -116,7 +117,9 @@ pub fn fit_circle(points: &[Point2<f64>]) -> Option<(Point2<f64>, f64)> {
     }
     // Centre the points for conditioning, then solve x² + y² + D x + E y + F = 0.
     let n = points.len() as f64;
-    let mean = points.iter().fold(Point2::origin(), |m, p| m + p.coords / n);
+    let mean = points
+        .iter()
+        .fold(Point2::origin(), |m, p| m + p.coords / n);
     let mut a = [[0.0f64; 3]; 3];
     let mut b = [0.0f64; 3];
     for p in points {
@@ -186,7 +189,10 @@ mod tests {
             assert_eq!(points.len(), 4, "{start:?}: {ends:?}");
             let (c, fitted_r) = fit_circle(&points).unwrap();
             // Boundary pixels lie just outside the disc: within a pixel of the truth.
-            assert!((c.x - cx).abs() < 1.0 && (c.y - cy).abs() < 1.0, "{start:?}: {c}");
+            assert!(
+                (c.x - cx).abs() < 1.0 && (c.y - cy).abs() < 1.0,
+                "{start:?}: {c}"
+            );
             assert!((fitted_r - r).abs() < 1.5, "{fitted_r}");
         }
     }
@@ -196,8 +202,13 @@ mod tests {
         // A disc cut by the left image border, with a one-pixel hole right of the start.
         let mut inside = disc(5.0, 30.0, 20.0);
         let mut holed = |x: i64, y: i64| (x, y) != (8, 30) && inside(x, y);
-        let ends =
-            scan_four_directions(&mut holed, (6, 30), (80, 60), 60, &EdgeScanParams::default());
+        let ends = scan_four_directions(
+            &mut holed,
+            (6, 30),
+            (80, 60),
+            60,
+            &EdgeScanParams::default(),
+        );
         assert_eq!(ends[0], ScanEnd::ImageBorder);
         assert_eq!(ends[1], ScanEnd::Boundary(Point2::new(26.0, 30.0)));
         // Too short a scan cannot reach the boundary.
@@ -223,7 +234,10 @@ mod tests {
             let mut pts = all;
             pts[cut] = c + (pts[cut] - c) * 0.6;
             let (fc, fr) = circle_from_boundaries(&pts).unwrap();
-            assert!((fc - c).norm() < 1e-9 && (fr - r).abs() < 1e-9, "cut {cut}: {fc} {fr}");
+            assert!(
+                (fc - c).norm() < 1e-9 && (fr - r).abs() < 1e-9,
+                "cut {cut}: {fc} {fr}"
+            );
             // The plain least-squares fit is pulled towards the cut point.
             let (lc, _) = fit_circle(&pts).unwrap();
             assert!((lc - c).norm() > 1.0);
@@ -236,7 +250,11 @@ mod tests {
         let on = |a: f64| Point2::new(c.x + r * a.cos(), c.y + r * a.sin());
         let (fc, fr) = fit_circle(&[on(0.1), on(1.9), on(4.0)]).unwrap();
         assert!((fc - c).norm() < 1e-9 && (fr - r).abs() < 1e-9);
-        let line = [Point2::new(0.0, 0.0), Point2::new(1.0, 1.0), Point2::new(2.0, 2.0)];
+        let line = [
+            Point2::new(0.0, 0.0),
+            Point2::new(1.0, 1.0),
+            Point2::new(2.0, 2.0),
+        ];
         assert!(fit_circle(&line).is_none());
         assert!(fit_circle(&line[..2]).is_none());
     }

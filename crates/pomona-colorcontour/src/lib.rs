@@ -60,7 +60,7 @@ pub use params::ColorContourParams;
 pub use pipeline::{
     ColorContourDetector, ColorContourPipeline, ColorContourStageParams, PIPELINE_NAME,
 };
+pub use pixel_f1::{best_f1_threshold, pixel_counts, value_histograms, PixelCounts};
 pub use spiral_search::{spiral_points, SpiralParams};
 pub use tracking::{ApproachTracker, TrackEstimate, TrackParams, TrackStatus};
-pub use pixel_f1::{best_f1_threshold, pixel_counts, value_histograms, PixelCounts};
 pub use training_pixels::{fruit_labels, training_pixels};

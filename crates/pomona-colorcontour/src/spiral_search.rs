@@ -42,7 +42,9 @@ impl SpiralParams {
     /// Whether the steps are usable: `1 ≤ first_step_px ≤ max_step_px` and at least one ring
     /// per step.
     pub fn is_valid(&self) -> bool {
-        self.first_step_px >= 1 && self.first_step_px <= self.max_step_px && self.rings_per_step >= 1
+        self.first_step_px >= 1
+            && self.first_step_px <= self.max_step_px
+            && self.rings_per_step >= 1
     }
 }
 

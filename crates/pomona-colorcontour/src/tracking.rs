@@ -33,8 +33,8 @@ use pomona_core::ColorImage;
 use serde::{Deserialize, Serialize};
 
 use crate::{
-    circle_from_boundaries, scan_four_directions, spiral_points, EdgeScanParams, HSigmaLut, ScanEnd,
-    SpiralParams,
+    circle_from_boundaries, scan_four_directions, spiral_points, EdgeScanParams, HSigmaLut,
+    ScanEnd, SpiralParams,
 };
 
 /// Every tunable of the tracker, defaulted to seed 004's values where it gives them.
@@ -372,7 +372,10 @@ mod tests {
         let est = t.update(&scene(160, 120, &[(78.0, 64.0, 15.0)]));
         assert_eq!(est.status, TrackStatus::Searched);
         assert!(est.probes > 1);
-        assert!((est.center_px - Point2::new(78.0, 64.0)).norm() < 1.5, "{est:?}");
+        assert!(
+            (est.center_px - Point2::new(78.0, 64.0)).norm() < 1.5,
+            "{est:?}"
+        );
     }
 
     #[test]
@@ -389,7 +392,10 @@ mod tests {
         // after two lost frames, so the spiral search accepts it.
         let est = t.update(&scene(120, 90, &[(30.0, 50.0, 26.0)]));
         assert_eq!(est.status, TrackStatus::Searched);
-        assert!((est.center_px - Point2::new(30.0, 50.0)).norm() < 1.5, "{est:?}");
+        assert!(
+            (est.center_px - Point2::new(30.0, 50.0)).norm() < 1.5,
+            "{est:?}"
+        );
         assert!((est.radius_px - 26.0).abs() < 2.0);
         let est = t.update(&scene(120, 90, &[(31.0, 50.0, 26.0)]));
         assert_eq!(est.status, TrackStatus::Confirmed);

@@ -9,7 +9,8 @@
 //! 2. one scene of the spec's domain (wide or orchard) is drawn with the fruit at that start
 //!    distance (the distance band is narrowed to ±[`START_BAND_HALF_M`] around it);
 //! 3. the target is the fruit nearest the image centre among the ripe ones (albedo green over
-//!    red at most [`RIPE_MAX_GREEN_OVER_RED`]: a harvester picks orange to yellow fruit) at
+//!    red at most [`RIPE_MAX_GREEN_OVER_RED`]: a harvester picks orange fruit, not yellow or
+//!    green ones) at
 //!    least [`TARGET_MIN_VISIBILITY`] visible in the first frame, preferring one with no other
 //!    fruit in its corridor (below); the most visible fruit if none qualifies;
 //! 4. leaves whose bounding sphere reaches into the arm's corridor (the cylinder of the
@@ -68,9 +69,10 @@ pub const START_BAND_HALF_M: f64 = 0.05;
 pub const MIN_CLEARANCE_M: f64 = 0.08;
 /// Clearance around the target's radius kept free of leaves along the approach, metres.
 pub const CORRIDOR_MARGIN_M: f64 = 0.01;
-/// Targets are ripe: albedo green over red at most this (orange 0.28, yellow 0.69,
-/// yellow-green 1.2; see [`crate::orchard_albedo`]).
-pub const RIPE_MAX_GREEN_OVER_RED: f64 = 0.75;
+/// Targets are ripe: albedo green over red at most this (orange 0.28, orange-yellow at ripeness
+/// 0.3 about 0.5, yellow 0.69, yellow-green 1.2; see [`crate::orchard_albedo`]). A harvester
+/// picks ripe fruit, and seed 004's tracker follows orange.
+pub const RIPE_MAX_GREEN_OVER_RED: f64 = 0.5;
 /// Largest start distance, metres (inside the wide domain's distance limits).
 const MAX_START_M: f64 = 2.9;
 /// Gravity, m/s², for the sway pendulum.
@@ -219,7 +221,11 @@ impl Plan {
         let mut rng = frame_rng(spec.seed, u64::from(index));
         let camera = spec.scene.camera;
         let mut speed = uniform(&mut rng, APPROACH_SPEED_M_PER_S.0, APPROACH_SPEED_M_PER_S.1);
-        let end = uniform(&mut rng, APPROACH_END_DISTANCE_M.0, APPROACH_END_DISTANCE_M.1);
+        let end = uniform(
+            &mut rng,
+            APPROACH_END_DISTANCE_M.0,
+            APPROACH_END_DISTANCE_M.1,
+        );
         let duration_s = f64::from(spec.frames - 1) / APPROACH_FPS;
         let start = (end + speed * duration_s).min(MAX_START_M);
         let mut scene_spec = spec.scene.clone();
@@ -231,7 +237,10 @@ impl Plan {
         let mut scene = scene_spec.sample_with(&mut rng);
         let sway: Vec<Sway> = scene.fruits.iter().map(|_| Sway::draw(&mut rng)).collect();
         let first = crate::render(&scene, &camera)?;
-        let centre = (0.5 * f64::from(camera.width), 0.5 * f64::from(camera.height));
+        let centre = (
+            0.5 * f64::from(camera.width),
+            0.5 * f64::from(camera.height),
+        );
         let off_centre = |t: &pomona_core::FruitTruth| {
             t.bbox_px.map_or(f64::INFINITY, |b| {
                 let (u, v) = (0.5 * (b.xmin + b.xmax), 0.5 * (b.ymin + b.ymax));
@@ -278,7 +287,9 @@ impl Plan {
                 radius + CORRIDOR_MARGIN_M + leaf.bounding_radius_m(),
             )
         });
-        let travel = (speed * duration_s).min(distance - radius - MIN_CLEARANCE_M).max(0.0);
+        let travel = (speed * duration_s)
+            .min(distance - radius - MIN_CLEARANCE_M)
+            .max(0.0);
         speed = travel / duration_s;
         let direction = body.center.coords / distance;
         let look = Rotation3::rotation_between(&Vector3::z(), &direction)
@@ -344,7 +355,7 @@ fn corridor_free_of_fruit(scene: &Scene, k: usize) -> bool {
 }
 
 /// Whether a fruit is ripe enough to be a harvesting target: its albedo's green is at most
-/// [`RIPE_MAX_GREEN_OVER_RED`] of its red (orange to yellow; yellow-green and green are not).
+/// [`RIPE_MAX_GREEN_OVER_RED`] of its red (orange to orange-yellow; yellow and green are not).
 fn is_ripe(fruit: &crate::FruitBody) -> bool {
     let [r, g, _] = fruit.material.albedo;
     g <= RIPE_MAX_GREEN_OVER_RED * r
@@ -480,7 +491,10 @@ mod tests {
 
     #[test]
     fn sway_moves_fruit_but_keeps_the_scene_and_path() {
-        let (still, swaying) = (Plan::draw(&spec(false), 1).unwrap(), Plan::draw(&spec(true), 1).unwrap());
+        let (still, swaying) = (
+            Plan::draw(&spec(false), 1).unwrap(),
+            Plan::draw(&spec(true), 1).unwrap(),
+        );
         assert_eq!(still.record.target_id, swaying.record.target_id);
         assert_eq!(still.scene, swaying.scene);
         let (a, pose_a) = still.frame(3, false);

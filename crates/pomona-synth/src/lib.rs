@@ -89,7 +89,8 @@ mod wide_scene;
 pub use approach::{
     generate_approach, ApproachRecord, ApproachSpec, ApproachSummary, APPROACH_END_DISTANCE_M,
     APPROACH_FILE, APPROACH_FPS, APPROACH_SPEED_M_PER_S, CORRIDOR_MARGIN_M, MIN_CLEARANCE_M,
-    RIPE_MAX_GREEN_OVER_RED, START_BAND_HALF_M, SWAY_AMPLITUDE_M, SWAY_PENDULUM_M, TARGET_MIN_VISIBILITY,
+    RIPE_MAX_GREEN_OVER_RED, START_BAND_HALF_M, SWAY_AMPLITUDE_M, SWAY_PENDULUM_M,
+    TARGET_MIN_VISIBILITY,
 };
 pub use backdrop::{Backdrop, BackdropKind};
 pub use background::Background;

@@ -220,7 +220,10 @@ mod tests {
             }
         }
         assert!(clusters >= 6, "{clusters} clusters in 12 frames");
-        assert!(greenest > 0.9, "no yellow-green fruit: largest g/r {greenest}");
+        assert!(
+            greenest > 0.9,
+            "no yellow-green fruit: largest g/r {greenest}"
+        );
         assert_eq!(orchard_albedo(0.0), ORCHARD_ORANGE);
         assert_eq!(orchard_albedo(1.0), ORCHARD_YELLOW_GREEN);
     }
@@ -233,7 +236,11 @@ mod tests {
             let low = orchard_light(LightPreset::LowSun, &mut rng, &up);
             assert!(low.sun.elevation_deg <= 15.0 && low.sun.azimuth_deg.abs() >= 60.0);
             let back = orchard_light(LightPreset::Backlight, &mut rng, &up);
-            assert!(back.sun.azimuth_deg.abs() >= 150.0, "{}", back.sun.azimuth_deg);
+            assert!(
+                back.sun.azimuth_deg.abs() >= 150.0,
+                "{}",
+                back.sun.azimuth_deg
+            );
             // Facing the camera: the light comes from beyond the fruit (+z).
             assert!(back.light.towards_light.z > 0.0);
             let dim = orchard_light(LightPreset::Dim, &mut rng, &up);

@@ -16,8 +16,8 @@ use pomona_core::PinholeCamera;
 use rand::Rng;
 use serde::{Deserialize, Serialize};
 
-use crate::rng::{frame_rng, uniform, SynthRng};
 use crate::orchard_scene::sample_orchard;
+use crate::rng::{frame_rng, uniform, SynthRng};
 use crate::wide_scene::{sample_wide, WIDE_DISTANCE_LIMITS_M, WIDE_DISTANCE_M};
 use crate::{
     Backdrop, BackdropKind, Background, CameraPreset, Domain, FruitBody, FruitChoice, FruitKind,

@@ -27,8 +27,8 @@
 use nalgebra::{Point3, Rotation3, Unit, Vector3};
 use rand::Rng;
 
-use crate::rng::{uniform, SynthRng};
 use crate::orchard_scene::orchard_light;
+use crate::rng::{uniform, SynthRng};
 use crate::scene_spec::{cuts_fruit, segment_distance};
 use crate::{
     Backdrop, BackdropKind, Background, Blush, FruitBody, FruitKind, FruitShape, ImageEffects,

@@ -424,9 +424,8 @@ pub fn run(args: &SynthArgs) -> Result<()> {
     if let Some(spec) = args.to_approach_spec() {
         let bar = progress_bar((spec.sequences * spec.frames) as usize, "rendering");
         let started = Instant::now();
-        let summary = generate_approach(&spec, &args.out, &|_| bar.inc(1)).with_context(|| {
-            format!("generating approach sequences in {}", args.out.display())
-        })?;
+        let summary = generate_approach(&spec, &args.out, &|_| bar.inc(1))
+            .with_context(|| format!("generating approach sequences in {}", args.out.display()))?;
         bar.finish_and_clear();
         println!(
             "wrote {} approach sequences ({} frames{}) to {} in {:.1} s",
@@ -610,7 +609,10 @@ mod tests {
 
     #[test]
     fn orchard_and_approach_options() {
-        let a = parse(&["--domain", "orchard", "--fruit", "orange", "--light", "low-sun"]).unwrap();
+        let a = parse(&[
+            "--domain", "orchard", "--fruit", "orange", "--light", "low-sun",
+        ])
+        .unwrap();
         a.check().unwrap();
         let s = a.to_spec().scene;
         assert_eq!(s.domain, Domain::Orchard);
@@ -621,7 +623,10 @@ mod tests {
         let a = parse(&["--domain", "orchard", "--approach", "4", "--sway"]).unwrap();
         a.check().unwrap();
         let spec = a.to_approach_spec().unwrap();
-        assert_eq!((spec.sequences, spec.frames, spec.seed, spec.sway), (4, 3, 9, true));
+        assert_eq!(
+            (spec.sequences, spec.frames, spec.seed, spec.sway),
+            (4, 3, 9, true)
+        );
         for (bad, flag) in [
             (&["--sway"][..], "--sway"),
             (&["--approach", "2", "--domain", "narrow"], "--approach"),
@@ -630,7 +635,9 @@ mod tests {
             let err = format!("{:#}", parse(bad).unwrap().check().unwrap_err());
             assert!(err.contains(flag), "{err}");
         }
-        assert!(is_sequence_dir("seq-0012") && !is_sequence_dir("seq-") && !is_sequence_dir("seqs"));
+        assert!(
+            is_sequence_dir("seq-0012") && !is_sequence_dir("seq-") && !is_sequence_dir("seqs")
+        );
     }
 
     #[test]

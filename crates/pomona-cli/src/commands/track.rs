@@ -122,6 +122,8 @@ pub struct TrackReport {
     pub success_rate: f64,
     /// Mean time of one tracker update, milliseconds (one thread, decoding excluded).
     pub ms_per_frame: f64,
+    /// Median update time, milliseconds.
+    pub ms_per_frame_median: f64,
     /// Slowest update, milliseconds.
     pub ms_per_frame_max: f64,
     /// Frames tracked.
@@ -193,7 +195,11 @@ fn model_file(path: Option<&Path>) -> Result<ModelFile> {
                 .default_model()
                 .context("color-contour ships no built-in model")?;
             let label = format!("<built-in model of {PIPELINE_NAME}>");
-            Ok(ModelFile::from_json(text, Path::new(&label), PIPELINE_NAME)?)
+            Ok(ModelFile::from_json(
+                text,
+                Path::new(&label),
+                PIPELINE_NAME,
+            )?)
         }
     }
 }
@@ -324,11 +330,15 @@ pub fn run(args: &TrackArgs) -> Result<TrackReport> {
         });
     }
     let succeeded = per_sequence.iter().filter(|s| s.success).count();
+    let mut sorted = times.clone();
+    sorted.sort_by(f64::total_cmp);
+    let median = sorted.get(sorted.len() / 2).copied().unwrap_or(0.0);
     let report = TrackReport {
         sequences: per_sequence.len(),
         succeeded,
         success_rate: succeeded as f64 / per_sequence.len().max(1) as f64,
         ms_per_frame: times.iter().sum::<f64>() / times.len().max(1) as f64,
+        ms_per_frame_median: median,
         ms_per_frame_max: times.iter().copied().fold(0.0, f64::max),
         frames: times.len(),
         searched_frames: searched,
@@ -338,7 +348,7 @@ pub fn run(args: &TrackArgs) -> Result<TrackReport> {
     };
     println!(
         "tracked {} sequences ({} frames, init {}): success_rate {:.3} ({} of {}), ms_per_frame \
-         {:.4} (max {:.3}), {} frames found by search, {} lost",
+         {:.4} (median {:.4}, max {:.3}), {} frames found by search, {} lost",
         report.sequences,
         report.frames,
         match args.init {
@@ -349,6 +359,7 @@ pub fn run(args: &TrackArgs) -> Result<TrackReport> {
         report.succeeded,
         report.sequences,
         report.ms_per_frame,
+        report.ms_per_frame_median,
         report.ms_per_frame_max,
         report.searched_frames,
         report.lost_frames

@@ -47,6 +47,16 @@ pub enum ScanEnd {
     TooFar,
 }
 
+impl ScanEnd {
+    /// The boundary pixel, if the scan found one.
+    pub fn boundary(&self) -> Option<Point2<f64>> {
+        match self {
+            ScanEnd::Boundary(p) => Some(*p),
+            ScanEnd::ImageBorder | ScanEnd::TooFar => None,
+        }
+    }
+}
+
 /// The four directions of the scan: left, right, up, down.
 pub const SCAN_DIRECTIONS: [(i64, i64); 4] = [(-1, 0), (1, 0), (0, -1), (0, 1)];
 
@@ -179,13 +189,7 @@ mod tests {
                 80,
                 &EdgeScanParams::default(),
             );
-            let points: Vec<Point2<f64>> = ends
-                .iter()
-                .filter_map(|e| match e {
-                    ScanEnd::Boundary(p) => Some(*p),
-                    _ => None,
-                })
-                .collect();
+            let points: Vec<Point2<f64>> = ends.iter().filter_map(ScanEnd::boundary).collect();
             assert_eq!(points.len(), 4, "{start:?}: {ends:?}");
             let (c, fitted_r) = fit_circle(&points).unwrap();
             // Boundary pixels lie just outside the disc: within a pixel of the truth.

@@ -30,6 +30,7 @@
 
 use pomona_core::nalgebra::Point2;
 use pomona_core::ColorImage;
+use pomona_pipeline::PipelineError;
 use serde::{Deserialize, Serialize};
 
 use crate::{
@@ -157,23 +158,28 @@ impl ApproachTracker {
     /// target, or its truth).
     ///
     /// # Errors
-    /// The reason, when `params` are invalid (see [`TrackParams::invalid_reason`]) or the start
-    /// circle is not finite and positive.
+    /// [`PipelineError::InvalidParameter`] when `params` are invalid (see
+    /// [`TrackParams::invalid_reason`]) or the start circle is not finite and positive.
     pub fn new(
         lut: HSigmaLut,
         threshold: u8,
         params: TrackParams,
         center_px: Point2<f64>,
         radius_px: f64,
-    ) -> Result<Self, String> {
+    ) -> Result<Self, PipelineError> {
+        let invalid = |name: &str, reason: String| PipelineError::InvalidParameter {
+            name: name.into(),
+            reason,
+        };
         if let Some(reason) = params.invalid_reason() {
-            return Err(reason.to_string());
+            return Err(invalid("track", reason.to_string()));
         }
         if !(center_px.x.is_finite() && center_px.y.is_finite() && radius_px > 0.0)
             || !radius_px.is_finite()
         {
-            return Err(format!(
-                "the start circle must be finite with a positive radius, got {center_px} r {radius_px}"
+            return Err(invalid(
+                "start circle",
+                format!("must be finite with a positive radius, got {center_px} r {radius_px}"),
             ));
         }
         Ok(Self {
@@ -283,13 +289,7 @@ impl ApproachTracker {
                 max_scan,
                 &self.params.edge_scan,
             );
-            let points: Vec<Point2<f64>> = ends
-                .iter()
-                .filter_map(|e| match e {
-                    ScanEnd::Boundary(p) => Some(*p),
-                    _ => None,
-                })
-                .collect();
+            let points: Vec<Point2<f64>> = ends.iter().filter_map(ScanEnd::boundary).collect();
             let Some((c, r)) = circle_from_boundaries(&points) else {
                 break;
             };

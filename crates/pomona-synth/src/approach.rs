@@ -46,6 +46,7 @@ use pomona_io::{write_json, DatasetWriter};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
+use crate::dataset::in_thread_pool;
 use crate::rng::{frame_rng, mix64, uniform, SynthRng};
 use crate::{render_view, Domain, Scene, SceneSpec, SynthError, DEPTH_UNIT_M};
 
@@ -416,17 +417,7 @@ pub fn generate_approach(
             frames: spec.sequences * spec.frames,
         })
     };
-    match spec.threads {
-        Some(n) => rayon::ThreadPoolBuilder::new()
-            .num_threads(n)
-            .build()
-            .map_err(|e| SynthError::ThreadPool {
-                threads: n,
-                reason: e.to_string(),
-            })?
-            .install(run),
-        None => run(),
-    }
+    in_thread_pool(spec.threads, run)
 }
 
 /// Contents of the set's `synth.json`.

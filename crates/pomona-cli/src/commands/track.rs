@@ -267,7 +267,7 @@ fn track_sequence(
     track.init_circle_px = Some([c0.x, c0.y, r0]);
     let (lut, threshold) = table.clone();
     let mut tracker = ApproachTracker::new(lut, threshold, TrackParams::default(), c0, r0)
-        .map_err(|reason| anyhow::anyhow!("cannot start the tracker: {reason}"))?;
+        .context("cannot start the tracker")?;
     for stem in dataset.frames() {
         let color = dataset
             .load_color(stem)?

@@ -88,9 +88,9 @@ impl TrackParams {
             Some("spiral needs 1 ≤ first_step_px ≤ max_step_px and rings_per_step ≥ 1")
         } else if !(lo > 0.0 && lo <= hi) {
             Some("radius_range_px needs 0 < min ≤ max")
-        } else if !(self.max_radius_change >= 1.0) {
+        } else if self.max_radius_change.is_nan() || self.max_radius_change < 1.0 {
             Some("max_radius_change must be at least 1")
-        } else if !(self.max_scan_radii >= 1.0) {
+        } else if self.max_scan_radii.is_nan() || self.max_scan_radii < 1.0 {
             Some("max_scan_radii must be at least 1")
         } else {
             None
@@ -174,8 +174,10 @@ impl ApproachTracker {
         if let Some(reason) = params.invalid_reason() {
             return Err(invalid("track", reason.to_string()));
         }
-        if !(center_px.x.is_finite() && center_px.y.is_finite() && radius_px > 0.0)
-            || !radius_px.is_finite()
+        if !(center_px.x.is_finite()
+            && center_px.y.is_finite()
+            && radius_px > 0.0
+            && radius_px.is_finite())
         {
             return Err(invalid(
                 "start circle",

@@ -36,6 +36,9 @@ enum Command {
     Detect(commands::detect::DetectArgs),
     /// Repeated random train/test splits of one dataset: train, detect, evaluate; mean ± sd.
     Experiment(commands::experiment::ExperimentArgs),
+    /// Follow the target fruit through approach sequences (`synth --approach`) with the
+    /// colour-contour tracker; reports success rate and time per frame.
+    Track(commands::track::TrackArgs),
     /// Render a small synthetic scene set, run every detector with a built-in model on it,
     /// evaluate, and draw overlays.
     Demo(commands::demo::DemoArgs),
@@ -56,6 +59,7 @@ fn main() -> ExitCode {
         Command::Detect(args) => commands::detect::run(args),
         Command::Experiment(args) => commands::experiment::run(args),
         Command::Demo(args) => commands::demo::run(args),
+        Command::Track(args) => commands::track::run(args).map(|_| ()),
     };
     if let Err(err) = &result {
         eprintln!("error: {}", pomona_cli::error_line::error_line(err));

@@ -39,7 +39,7 @@ fn oranges(
             camera: camera.camera(),
             noise: match domain {
                 Domain::Narrow => NoiseModel::Tof,
-                Domain::Wide => NoiseModel::for_camera(camera),
+                Domain::Wide | Domain::Orchard => NoiseModel::for_camera(camera),
             },
             light,
             domain,

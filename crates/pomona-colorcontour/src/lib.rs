@@ -19,21 +19,29 @@
 //! ([`Contour`]); concave and straight windows, the jump rule, wrap-around joining and the
 //! support score ([`contour_circles`]); overlap relative to the smaller circle
 //! ([`prune_overlapping`]); the size test before the overlap test, and 3D from depth instead of
-//! stereo ([`stages::FruitStage`], [`sphere_from_depth`]). Not built here: tracking (§3.3) and
-//! stereo matching (§4).
+//! stereo ([`stages::FruitStage`], [`sphere_from_depth`]). Not built here: stereo matching (§4).
+//!
+//! Tracking during the arm's approach (§3.3) is [`ApproachTracker`]: a 5×5 colour check at the
+//! expected position, a four-direction edge scan and circle fit ([`scan_four_directions`],
+//! [`circle_from_boundaries`]), and a rectangular spiral search with growing steps ([`spiral_points`]) when
+//! the fruit is not where expected, with recovery after loss; it classifies pixels with a
+//! model's colour table ([`ColorContourStageParams::color_table`]).
 
 mod arc_half_angle;
 mod circle_in_space;
 mod circle_pruning;
 mod contour;
 mod contour_circles;
+mod edge_scan;
 mod hsigma;
 mod hsigma_lut;
 mod mlp;
 mod params;
 mod pipeline;
 mod pixel_f1;
+mod spiral_search;
 pub mod stages;
+mod tracking;
 mod training_pixels;
 
 pub use arc_half_angle::{arc_half_angle, arc_radius};
@@ -41,6 +49,10 @@ pub use circle_in_space::{sphere_from_depth, sphere_from_size, SphereFromCircle}
 pub use circle_pruning::{disc_overlap_area, prune_overlapping};
 pub use contour::{smooth_mask, trace_contours, Contour};
 pub use contour_circles::{contour_circles, ContourCircle, EdgeFitParams};
+pub use edge_scan::{
+    circle_from_boundaries, fit_circle, scan_four_directions, EdgeScanParams, ScanEnd,
+    SCAN_DIRECTIONS,
+};
 pub use hsigma::{hsigma, hsigma_integers, hsigma_of_integers};
 pub use hsigma_lut::{quantise_probability, HSigmaLut};
 pub use mlp::{HSigmaSample, Mlp, MlpParams};
@@ -49,4 +61,6 @@ pub use pipeline::{
     ColorContourDetector, ColorContourPipeline, ColorContourStageParams, PIPELINE_NAME,
 };
 pub use pixel_f1::{best_f1_threshold, pixel_counts, value_histograms, PixelCounts};
+pub use spiral_search::{spiral_points, SpiralParams};
+pub use tracking::{ApproachTracker, TrackEstimate, TrackParams, TrackStatus};
 pub use training_pixels::{fruit_labels, training_pixels};

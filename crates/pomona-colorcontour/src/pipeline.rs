@@ -28,6 +28,41 @@ pub struct ColorContourStageParams {
     pub mlp: Mlp,
 }
 
+impl ColorContourStageParams {
+    /// The stage parameters of a `color-contour` model file.
+    ///
+    /// # Errors
+    /// [`PipelineError::StageParams`] when the file's `stage_params` are not this pipeline's.
+    pub fn from_model(model: &ModelFile) -> Result<Self, PipelineError> {
+        serde_json::from_value(model.stage_params.clone())
+            .map_err(|e| PipelineError::StageParams(e.to_string()))
+    }
+
+    /// The perceptron compiled into its lookup table, and the table value from which a pixel
+    /// is fruit (what the detector's colour stage and the tracker use).
+    ///
+    /// # Errors
+    /// [`PipelineError::StageParams`] for an unusable perceptron;
+    /// [`PipelineError::InvalidParameter`] for a colour threshold outside [0, 1].
+    pub fn color_table(&self) -> Result<(HSigmaLut, u8), PipelineError> {
+        if !self.mlp.is_valid() {
+            return Err(PipelineError::StageParams(
+                "the colour perceptron's weights are inconsistent or not finite".into(),
+            ));
+        }
+        if !(0.0..=1.0).contains(&self.params.color_threshold) {
+            return Err(PipelineError::InvalidParameter {
+                name: "color_threshold".into(),
+                reason: "must lie in [0, 1]".into(),
+            });
+        }
+        Ok((
+            HSigmaLut::compile(&self.mlp),
+            quantise_probability(self.params.color_threshold),
+        ))
+    }
+}
+
 /// The colour-contour method (seed 004). `params` are used for training; a loaded model carries
 /// its own.
 #[derive(Debug, Clone, Default)]
@@ -160,8 +195,7 @@ impl Pipeline for ColorContourPipeline {
     }
 
     fn load(&self, model: &ModelFile) -> Result<Box<dyn Detector>, PipelineError> {
-        let stage: ColorContourStageParams = serde_json::from_value(model.stage_params.clone())
-            .map_err(|e| PipelineError::StageParams(e.to_string()))?;
+        let stage = ColorContourStageParams::from_model(model)?;
         Ok(Box::new(ColorContourDetector::new(&stage)?))
     }
 }
@@ -182,19 +216,12 @@ impl ColorContourDetector {
     /// [`PipelineError::StageParams`] for an unusable perceptron;
     /// [`PipelineError::InvalidParameter`] for out-of-range parameters.
     pub fn new(stage: &ColorContourStageParams) -> Result<Self, PipelineError> {
-        if !stage.mlp.is_valid() {
-            return Err(PipelineError::StageParams(
-                "the colour perceptron's weights are inconsistent or not finite".into(),
-            ));
-        }
+        let (lut, threshold) = stage.color_table()?;
         let p = &stage.params;
         let invalid = |name: &str, reason: &str| PipelineError::InvalidParameter {
             name: name.into(),
             reason: reason.into(),
         };
-        if !(0.0..=1.0).contains(&p.color_threshold) {
-            return Err(invalid("color_threshold", "must lie in [0, 1]"));
-        }
         let (lo, hi) = p.radius_range_m;
         if !(lo > 0.0 && lo <= hi) {
             return Err(invalid("radius_range_m", "needs 0 < min ≤ max"));
@@ -207,10 +234,7 @@ impl ColorContourDetector {
             return Err(invalid("prior_radius_m", "must be positive"));
         }
         Ok(Self {
-            color: ColorClassStage {
-                lut: HSigmaLut::compile(&stage.mlp),
-                threshold: quantise_probability(p.color_threshold),
-            },
+            color: ColorClassStage { lut, threshold },
             smoothing_half_window: p.edge_fit.smoothing_half_window,
             min_component_px: p.min_component_px,
             edge_fit: EdgeFitStage { params: p.edge_fit },

@@ -34,7 +34,7 @@ impl SyntheticFrames {
                 camera: camera.camera(),
                 noise: match domain {
                     Domain::Narrow => NoiseModel::Tof,
-                    Domain::Wide => NoiseModel::for_camera(camera),
+                    Domain::Wide | Domain::Orchard => NoiseModel::for_camera(camera),
                 },
                 green_fraction,
                 domain,

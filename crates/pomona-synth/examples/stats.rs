@@ -24,7 +24,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         Some(_) => return Err("domain must be narrow or wide".into()),
     };
     let noise = match domain {
-        Domain::Wide => NoiseModel::for_camera(CameraPreset::KinectV2),
+        Domain::Wide | Domain::Orchard => NoiseModel::for_camera(CameraPreset::KinectV2),
         Domain::Narrow => NoiseModel::None,
     };
     let spec = SceneSpec {

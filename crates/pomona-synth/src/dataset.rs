@@ -120,7 +120,22 @@ pub fn generate_dataset(
     let run = || -> Result<Vec<usize>, SynthError> {
         (0..spec.frames).into_par_iter().map(one_frame).collect()
     };
-    let counts = match spec.threads {
+    let counts = in_thread_pool(spec.threads, run)?;
+    Ok(DatasetSummary {
+        frames: spec.frames,
+        fruits: counts.iter().sum(),
+    })
+}
+
+/// Runs `run` on a pool of `threads` workers (`None`: rayon's global pool).
+///
+/// # Errors
+/// [`SynthError::ThreadPool`] if the pool cannot start, else `run`'s error.
+pub(crate) fn in_thread_pool<T: Send>(
+    threads: Option<usize>,
+    run: impl FnOnce() -> Result<T, SynthError> + Send,
+) -> Result<T, SynthError> {
+    match threads {
         Some(n) => rayon::ThreadPoolBuilder::new()
             .num_threads(n)
             .build()
@@ -128,13 +143,9 @@ pub fn generate_dataset(
                 threads: n,
                 reason: e.to_string(),
             })?
-            .install(run)?,
-        None => run()?,
-    };
-    Ok(DatasetSummary {
-        frames: spec.frames,
-        fruits: counts.iter().sum(),
-    })
+            .install(run),
+        None => run(),
+    }
 }
 
 fn write_view(

@@ -7,6 +7,11 @@
 //!   every factor a detector could overfit to (distance, camera tilt, canopy density, leaf shape,
 //!   background, shadows, exposure, fruit shape and colour, depth-sensor artefacts) is drawn per
 //!   frame from a wide range, so a model trained on it holds on other renderers and real frames.
+//! * `orchard` — citrus-orchard scenes for the colour-contour method of seed 004 (ranges in the
+//!   `orchard_scene` module, e.g. [`crate::ORCHARD_FRUIT_COUNT`]): the wide domain's canopy,
+//!   backgrounds and shadows, but 5–20 fruit per frame with many touching clusters, fruit
+//!   colours from orange to yellow-green, a milder camera tilt, and the sun, sky light and
+//!   exposure of one [`crate::LightPreset`] (`day`, `dim`, `harsh`, `low-sun`, `backlight`).
 
 use serde::{Deserialize, Serialize};
 
@@ -19,17 +24,20 @@ pub enum Domain {
     Narrow,
     /// Domain-randomised worlds (the CLI default).
     Wide,
+    /// Citrus orchard under a chosen light preset.
+    Orchard,
 }
 
 impl Domain {
-    /// Both domains, in CLI order.
-    pub const ALL: [Domain; 2] = [Domain::Narrow, Domain::Wide];
+    /// Every domain, in CLI order.
+    pub const ALL: [Domain; 3] = [Domain::Narrow, Domain::Wide, Domain::Orchard];
 
     /// The name used on the command line and in the truth `synth` record.
     pub fn name(self) -> &'static str {
         match self {
             Domain::Narrow => "narrow",
             Domain::Wide => "wide",
+            Domain::Orchard => "orchard",
         }
     }
 }

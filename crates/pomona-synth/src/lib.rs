@@ -20,6 +20,15 @@
 //! Hold-out knobs ([`SceneSpec::leaf_families`], [`SceneSpec::backgrounds`],
 //! [`SceneSpec::wide_distance_m`]) restrict one factor for cross-domain validation. What each
 //! wide frame drew is recorded as a [`WideDraw`] in its truth `extra["synth"]`.
+//! [`Domain::Orchard`] draws citrus-orchard frames for seed 004's colour-contour method: 5–20
+//! fruit with many touching clusters, orange to yellow-green, under one [`LightPreset`]
+//! (including `low-sun` and `backlight`); see the `ORCHARD_*` constants.
+//!
+//! ## Approach sequences
+//! [`generate_approach`] renders sequences of frames in which the camera moves towards one
+//! target fruit at 0.2–0.5 m/s and 25 fps, optionally with the fruit swaying on their stems,
+//! for the approach tracker of seed 004 §3.3 (each sequence a dataset plus an
+//! [`ApproachRecord`] naming the target).
 //!
 //! ## Pipeline
 //! [`SceneSpec`] (what to draw) → [`SceneSpec::sample`] → [`Scene`] (fruit bodies, leaves, stems,
@@ -48,6 +57,7 @@
 //!   state, no time, no thread-count dependence.
 //! * Stereo: see [`StereoRig`] for the rig convention and `rig.json`.
 
+mod approach;
 mod backdrop;
 mod background;
 mod blush;
@@ -65,6 +75,7 @@ mod leaf;
 mod leaf_family;
 mod lighting;
 mod material;
+mod orchard_scene;
 mod render;
 mod rng;
 mod scene;
@@ -75,6 +86,12 @@ mod stereo;
 mod wide_draw;
 mod wide_scene;
 
+pub use approach::{
+    generate_approach, ApproachRecord, ApproachSpec, ApproachSummary, APPROACH_END_DISTANCE_M,
+    APPROACH_FILE, APPROACH_FPS, APPROACH_SPEED_M_PER_S, CORRIDOR_MARGIN_M, MIN_CLEARANCE_M,
+    RIPE_MAX_GREEN_OVER_RED, START_BAND_HALF_M, SWAY_AMPLITUDE_M, SWAY_PENDULUM_M,
+    TARGET_MIN_VISIBILITY,
+};
 pub use backdrop::{Backdrop, BackdropKind};
 pub use background::Background;
 pub use blush::Blush;
@@ -95,6 +112,10 @@ pub use leaf::{Leaf, LeafHit};
 pub use leaf_family::LeafFamily;
 pub use lighting::{Light, LightPreset};
 pub use material::Material;
+pub use orchard_scene::{
+    orchard_albedo, ORCHARD_CLUSTER_PROBABILITY, ORCHARD_CLUSTER_SIZE, ORCHARD_FRUIT_COUNT,
+    ORCHARD_ORANGE, ORCHARD_PITCH_ROLL_MAX_DEG, ORCHARD_YELLOW, ORCHARD_YELLOW_GREEN,
+};
 pub use render::{render, render_view, RenderedFrame};
 pub use rng::{frame_rng, SynthRng};
 pub use scene::Scene;

@@ -1,12 +1,19 @@
 //! Illumination: one directional light (sun or lamp) plus ambient light, and the Blinn–Phong
 //! shading model that turns a surface point into a colour.
 //!
-//! Three presets cover the illumination changes the detectors must survive: `day` (moderate sun),
-//! `dim` (overcast dusk: weak, slightly blue light and more sensor noise) and `harsh` (strong
-//! low-ambient sun: deep shading, clipped highlights). Shadows are not cast.
+//! Five presets cover the illumination changes the detectors must survive: `day` (moderate sun),
+//! `dim` (overcast dusk: weak, slightly blue light and more sensor noise), `harsh` (strong
+//! low-ambient sun: deep shading, clipped highlights), `low-sun` (warm light grazing from one
+//! side a few degrees above the horizon: long shading, one half of each fruit dark) and
+//! `backlight` (the sun behind the canopy, facing the camera: the visible faces of the fruit get
+//! only sky light). The narrow domain draws a direction per frame as below and casts no
+//! shadows; the orchard domain turns each preset into a sun with cast shadows and an exposure
+//! (ranges in `orchard_scene.rs`).
 
 use nalgebra::{Unit, Vector3};
 use serde::{Deserialize, Serialize};
+
+use rand::Rng;
 
 use crate::rng::{uniform, SynthRng};
 use crate::Material;
@@ -21,11 +28,21 @@ pub enum LightPreset {
     Dim,
     /// Strong directional light with little ambient fill.
     Harsh,
+    /// Warm sun low on one side.
+    LowSun,
+    /// Sun behind the canopy, facing the camera.
+    Backlight,
 }
 
 impl LightPreset {
     /// All presets, in CLI order.
-    pub const ALL: [LightPreset; 3] = [LightPreset::Day, LightPreset::Dim, LightPreset::Harsh];
+    pub const ALL: [LightPreset; 5] = [
+        LightPreset::Day,
+        LightPreset::Dim,
+        LightPreset::Harsh,
+        LightPreset::LowSun,
+        LightPreset::Backlight,
+    ];
 
     /// The name used on the command line and in `synth.json`.
     pub fn name(self) -> &'static str {
@@ -33,23 +50,44 @@ impl LightPreset {
             LightPreset::Day => "day",
             LightPreset::Dim => "dim",
             LightPreset::Harsh => "harsh",
+            LightPreset::LowSun => "low-sun",
+            LightPreset::Backlight => "backlight",
         }
     }
 
-    /// Draws a light for one frame: the direction varies per frame, always from the camera's side
-    /// of the canopy and mostly from above.
+    /// Draws a light for one frame (narrow domain): the direction varies per frame. `day`,
+    /// `dim` and `harsh` light from the camera's side of the canopy and mostly from above
+    /// (unchanged since before the other presets); `low-sun` from the left or right, at most
+    /// about 17° above the horizon, from the camera's side; `backlight` from behind the canopy.
     pub fn sample(self, rng: &mut SynthRng) -> Light {
-        // Towards the light, in the camera frame (y down, z forward): from behind the camera,
-        // left or right, usually above.
-        let towards = Vector3::new(
-            uniform(rng, -0.9, 0.9),
-            uniform(rng, -1.0, 0.25),
-            -uniform(rng, 0.7, 1.3),
-        );
+        // Towards the light, in the camera frame (y down, z forward).
+        let towards = match self {
+            // From behind the camera, left or right, usually above.
+            LightPreset::Day | LightPreset::Dim | LightPreset::Harsh => Vector3::new(
+                uniform(rng, -0.9, 0.9),
+                uniform(rng, -1.0, 0.25),
+                -uniform(rng, 0.7, 1.3),
+            ),
+            LightPreset::LowSun => {
+                let side = if rng.gen_bool(0.5) { 1.0 } else { -1.0 };
+                Vector3::new(
+                    side * uniform(rng, 0.7, 1.0),
+                    -uniform(rng, 0.05, 0.3),
+                    -uniform(rng, 0.1, 0.6),
+                )
+            }
+            LightPreset::Backlight => Vector3::new(
+                uniform(rng, -0.5, 0.5),
+                -uniform(rng, 0.2, 0.8),
+                uniform(rng, 0.5, 1.0),
+            ),
+        };
         let (intensity, ambient, color, image_noise_sigma) = match self {
             LightPreset::Day => (0.85, 0.32, [1.0, 1.0, 0.97], 1.5),
             LightPreset::Dim => (0.35, 0.12, [0.85, 0.9, 1.0], 3.5),
             LightPreset::Harsh => (1.45, 0.07, [1.0, 0.98, 0.92], 1.5),
+            LightPreset::LowSun => (1.1, 0.15, [1.0, 0.82, 0.6], 2.0),
+            LightPreset::Backlight => (1.3, 0.22, [1.0, 0.97, 0.9], 2.0),
         };
         Light {
             towards_light: Unit::new_normalize(towards),

@@ -16,6 +16,7 @@ use pomona_core::PinholeCamera;
 use rand::Rng;
 use serde::{Deserialize, Serialize};
 
+use crate::orchard_scene::sample_orchard;
 use crate::rng::{frame_rng, uniform, SynthRng};
 use crate::wide_scene::{sample_wide, WIDE_DISTANCE_LIMITS_M, WIDE_DISTANCE_M};
 use crate::{
@@ -42,11 +43,12 @@ pub struct SceneSpec {
     pub camera: PinholeCamera,
     /// Depth noise model.
     pub noise: NoiseModel,
-    /// Illumination preset.
+    /// Illumination preset (narrow and orchard domains; the wide domain draws its own sun).
     pub light: LightPreset,
     /// Fraction of peppers coloured like the leaves, in `[0, 1]`.
     pub green_fraction: f64,
-    /// Inclusive range of fruit per frame.
+    /// Inclusive range of fruit per frame (narrow and wide; the orchard domain places
+    /// [`crate::ORCHARD_FRUIT_COUNT`]).
     pub fruit_count: (u32, u32),
     /// Range of the distance from the camera to the front of the fruit layer, metres (narrow
     /// domain; the wide domain uses `wide_distance_m`).
@@ -211,6 +213,7 @@ impl SceneSpec {
         match self.domain {
             Domain::Narrow => self.sample_narrow(rng),
             Domain::Wide => sample_wide(self, rng),
+            Domain::Orchard => sample_orchard(self, rng),
         }
     }
 

@@ -1,15 +1,15 @@
-//! The record of what a wide-domain frame drew ([`WideDraw`]), written to the frame's truth
+//! The record of what a wide- or orchard-domain frame drew ([`WideDraw`]), written to the frame's truth
 //! `extra` under `"synth"` (documented in `docs/formats.md`), so results can be sliced by
 //! factor and hold-out experiments can check what their data contained.
 
 use serde::{Deserialize, Serialize};
 
-use crate::{Background, LeafFamily, NoiseModel};
+use crate::{Background, LeafFamily, LightPreset, NoiseModel};
 
 /// The values drawn for one wide frame, written to truth `extra.synth`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct WideDraw {
-    /// Always `"wide"`.
+    /// `"wide"` or `"orchard"`.
     pub domain: String,
     /// Leaf outline family of every leaf in the frame.
     pub leaf_family: LeafFamily,
@@ -53,6 +53,9 @@ pub struct WideDraw {
     pub leaf_families: Vec<LeafFamily>,
     /// The backgrounds this dataset draws from.
     pub backgrounds: Vec<Background>,
+    /// Orchard only: the light preset (absent in the wide domain, which draws its own).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub light: Option<LightPreset>,
 }
 
 /// The sun of a wide frame.

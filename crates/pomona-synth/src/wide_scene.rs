@@ -27,11 +27,12 @@
 use nalgebra::{Point3, Rotation3, Unit, Vector3};
 use rand::Rng;
 
+use crate::orchard_scene::orchard_light;
 use crate::rng::{uniform, SynthRng};
 use crate::scene_spec::{cuts_fruit, segment_distance};
 use crate::{
     Backdrop, BackdropKind, Background, Blush, FruitBody, FruitKind, FruitShape, ImageEffects,
-    Leaf, LeafFamily, Light, Material, Scene, SceneSpec, Stem, SunDraw, WideDraw,
+    Leaf, LeafFamily, Light, LightPreset, Material, Scene, SceneSpec, Stem, SunDraw, WideDraw,
 };
 
 /// Default band of camera-to-fruit-centre distances, metres (`--distance-m`).
@@ -112,13 +113,58 @@ pub const WIDE_COLOUR_MIX: [f64; 4] = [0.45, 0.2, 0.2, 0.15];
 /// Gloss: the kind's specular weight is scaled by this factor, drawn log-uniformly.
 pub const WIDE_GLOSS_SCALE: (f64, f64) = (0.3, 2.5);
 
+/// What distinguishes one family of worlds drawn by this sampler from another (the wide
+/// domain, the orchard domain): everything else (canopy, backgrounds, stalks, shadows) is
+/// shared.
+pub(crate) struct WorldProfile {
+    /// The domain's name, recorded in [`WideDraw::domain`].
+    pub(crate) domain: &'static str,
+    /// Inclusive range of fruit per frame.
+    pub(crate) fruit_count: (u32, u32),
+    /// Largest camera pitch and roll either way, degrees.
+    pub(crate) pitch_roll_max_deg: (f64, f64),
+    /// Probability that a placed fruit starts a cluster.
+    pub(crate) cluster_probability: f64,
+    /// Fruit per cluster.
+    pub(crate) cluster_size: (u32, u32),
+    /// Draws a fruit's surface (and blush) for a kind.
+    pub(crate) colour: fn(&mut SynthRng, FruitKind) -> (Material, Option<Blush>),
+    /// `None`: the wide domain's random sun, sky, exposure, white balance and vignetting;
+    /// otherwise a preset's (`orchard_scene.rs`).
+    pub(crate) lighting: Option<LightPreset>,
+}
+
+/// The drawn illumination and camera response of one frame.
+pub(crate) struct FrameLight {
+    pub(crate) light: Light,
+    pub(crate) sun: SunDraw,
+    pub(crate) exposure: f64,
+    pub(crate) white_balance: [f64; 3],
+    pub(crate) vignetting: f64,
+}
+
 /// Draws one wide-domain scene (`spec` must be valid).
 pub(crate) fn sample_wide(spec: &SceneSpec, rng: &mut SynthRng) -> Scene {
+    let profile = WorldProfile {
+        domain: "wide",
+        fruit_count: spec.fruit_count,
+        pitch_roll_max_deg: (WIDE_PITCH_MAX_DEG, WIDE_ROLL_MAX_DEG),
+        cluster_probability: WIDE_CLUSTER_PROBABILITY,
+        cluster_size: WIDE_CLUSTER_SIZE,
+        colour: wide_colour,
+        lighting: None,
+    };
+    sample_world(spec, &profile, rng)
+}
+
+/// Draws one scene of `profile`'s family (`spec` must be valid).
+pub(crate) fn sample_world(spec: &SceneSpec, profile: &WorldProfile, rng: &mut SynthRng) -> Scene {
     let kind = spec.fruit.pick(rng);
     let family = spec.leaf_families[rng.gen_range(0..spec.leaf_families.len())];
     let background = spec.backgrounds[rng.gen_range(0..spec.backgrounds.len())];
-    let pitch_deg = uniform(rng, -WIDE_PITCH_MAX_DEG, WIDE_PITCH_MAX_DEG);
-    let roll_deg = uniform(rng, -WIDE_ROLL_MAX_DEG, WIDE_ROLL_MAX_DEG);
+    let (pitch_max, roll_max) = profile.pitch_roll_max_deg;
+    let pitch_deg = uniform(rng, -pitch_max, pitch_max);
+    let roll_deg = uniform(rng, -roll_max, roll_max);
     // Looking down by `pitch` makes the world's up lean towards the camera's −z.
     let camera_from_level = Rotation3::from_axis_angle(&Vector3::z_axis(), roll_deg.to_radians())
         * Rotation3::from_axis_angle(&Vector3::x_axis(), -pitch_deg.to_radians());
@@ -127,6 +173,7 @@ pub(crate) fn sample_wide(spec: &SceneSpec, rng: &mut SynthRng) -> Scene {
     let leaf_length = uniform(rng, WIDE_LEAF_LENGTH_M.0, WIDE_LEAF_LENGTH_M.1);
     let w = WideSampler {
         spec,
+        profile,
         up: Unit::new_normalize(camera_from_level * -Vector3::y()),
         row,
         band,
@@ -150,13 +197,31 @@ pub(crate) fn sample_wide(spec: &SceneSpec, rng: &mut SynthRng) -> Scene {
     );
     w.add_petioles(rng, &leaves, &fruits, &mut stems);
 
-    let (light, sun) = w.sample_light(rng, &camera_from_level);
-    let exposure = uniform(rng, WIDE_EXPOSURE.0.ln(), WIDE_EXPOSURE.1.ln()).exp();
-    let white_balance: [f64; 3] =
-        std::array::from_fn(|_| uniform(rng, WIDE_WHITE_BALANCE.0, WIDE_WHITE_BALANCE.1));
-    let vignetting = uniform(rng, WIDE_VIGNETTING.0, WIDE_VIGNETTING.1);
+    let FrameLight {
+        light,
+        sun,
+        exposure,
+        white_balance,
+        vignetting,
+    } = match profile.lighting {
+        None => {
+            let (light, sun) = w.sample_light(rng, &camera_from_level);
+            let exposure = uniform(rng, WIDE_EXPOSURE.0.ln(), WIDE_EXPOSURE.1.ln()).exp();
+            let white_balance: [f64; 3] =
+                std::array::from_fn(|_| uniform(rng, WIDE_WHITE_BALANCE.0, WIDE_WHITE_BALANCE.1));
+            let vignetting = uniform(rng, WIDE_VIGNETTING.0, WIDE_VIGNETTING.1);
+            FrameLight {
+                light,
+                sun,
+                exposure,
+                white_balance,
+                vignetting,
+            }
+        }
+        Some(preset) => orchard_light(preset, rng, &camera_from_level),
+    };
     let draw = WideDraw {
-        domain: "wide".to_string(),
+        domain: profile.domain.to_string(),
         leaf_family: family,
         leaf_length_m: leaf_length,
         background,
@@ -178,6 +243,7 @@ pub(crate) fn sample_wide(spec: &SceneSpec, rng: &mut SynthRng) -> Scene {
         noise: spec.noise,
         leaf_families: spec.leaf_families.clone(),
         backgrounds: spec.backgrounds.clone(),
+        light: profile.lighting,
     };
     let mut truth_extra = serde_json::Map::new();
     if let Ok(value) = serde_json::to_value(&draw) {
@@ -205,6 +271,7 @@ pub(crate) fn sample_wide(spec: &SceneSpec, rng: &mut SynthRng) -> Scene {
 /// Per-frame state of the wide sampler.
 struct WideSampler<'a> {
     spec: &'a SceneSpec,
+    profile: &'a WorldProfile,
     /// The world's up direction in the camera frame (tilted by pitch and roll).
     up: Unit<Vector3<f64>>,
     /// Row distance, metres.
@@ -247,7 +314,8 @@ impl WideSampler<'_> {
         kind: FruitKind,
         stems: &mut Vec<Stem>,
     ) -> (Vec<FruitBody>, usize) {
-        let count = rng.gen_range(self.spec.fruit_count.0..=self.spec.fruit_count.1) as usize;
+        let (lo, hi) = self.profile.fruit_count;
+        let count = rng.gen_range(lo..=hi) as usize;
         let mut fruits: Vec<FruitBody> = Vec::new();
         let mut cluster_of: Vec<usize> = Vec::new();
         let mut clusters = 0;
@@ -269,9 +337,10 @@ impl WideSampler<'_> {
             }
             fruits.push(body);
             cluster_of.push(fruits.len() - 1);
-            if fruits.len() < count && rng.gen_bool(WIDE_CLUSTER_PROBABILITY) {
+            if fruits.len() < count && rng.gen_bool(self.profile.cluster_probability) {
                 let id = fruits.len() - 1;
-                let size = rng.gen_range(WIDE_CLUSTER_SIZE.0..=WIDE_CLUSTER_SIZE.1) as usize;
+                let (lo, hi) = self.profile.cluster_size;
+                let size = rng.gen_range(lo..=hi) as usize;
                 let mut members = 1;
                 for _ in 0..4 * size {
                     if members >= size || fruits.len() >= count {
@@ -354,7 +423,7 @@ impl WideSampler<'_> {
         max_tilt_deg: f64,
     ) -> FruitBody {
         let orientation = self.hanging(rng, max_tilt_deg.to_radians());
-        let (material, blush) = wide_colour(rng, kind);
+        let (material, blush) = (self.profile.colour)(rng, kind);
         FruitBody::new(kind, center, orientation, shape, material).with_blush(blush)
     }
 

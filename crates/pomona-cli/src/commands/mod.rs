@@ -9,4 +9,5 @@ pub mod experiment;
 pub mod info;
 pub mod plan;
 pub mod synth;
+pub mod track;
 pub mod train;

@@ -1,8 +1,8 @@
 //! `pomona synth`: generate a synthetic RGB-D dataset of fruit in a crop row, with exact truth
 //! and instance masks, for training detectors and benchmarking them.
 //!
-//! Thin layer over `pomona_synth::generate_dataset`: parses the options, guards the output
-//! folder (never mixes two datasets), and shows progress.
+//! Thin layer over `pomona_synth::generate_dataset` (and `generate_approach` for `--approach`):
+//! parses the options, guards the output folder (never mixes two datasets), and shows progress.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -10,8 +10,9 @@ use std::time::Instant;
 use anyhow::{bail, Context, Result};
 use clap::ValueEnum;
 use pomona_synth::{
-    generate_dataset, Background, CameraPreset, DatasetSpec, Domain, FruitChoice, FruitKind,
-    LeafFamily, LightPreset, NoiseModel, SceneSpec, StereoRig, WIDE_DISTANCE_LIMITS_M,
+    generate_approach, generate_dataset, ApproachSpec, Background, CameraPreset, DatasetSpec,
+    Domain, FruitChoice, FruitKind, LeafFamily, LightPreset, NoiseModel, SceneSpec, StereoRig,
+    WIDE_DISTANCE_LIMITS_M,
 };
 
 use crate::progress::progress_bar;
@@ -22,9 +23,17 @@ pub struct SynthArgs {
     /// Output dataset folder; created if missing, and must be empty unless --force.
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
-    /// Number of frames to render.
+    /// Number of frames to render (per sequence with --approach).
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
     pub frames: u32,
+    /// Render N approach sequences instead of independent frames: the camera moves towards one
+    /// target fruit at 0.2–0.5 m/s, 25 fps, into DIR/seq-0000/… (each a dataset with
+    /// approach.json naming the target). Needs --domain wide or orchard.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=10_000))]
+    pub approach: Option<u32>,
+    /// With --approach: the fruit sway on their stems (pendulums, 1–3 cm, about 1–1.8 Hz).
+    #[arg(long)]
+    pub sway: bool,
     /// Dataset seed: the same arguments and seed give byte-identical files.
     #[arg(long, value_name = "S")]
     pub seed: u64,
@@ -36,7 +45,9 @@ pub struct SynthArgs {
     pub camera: CameraArg,
     /// Scene family: `wide` draws domain-randomised worlds (distance, camera tilt, canopy, leaf
     /// shapes, backgrounds, shadows, exposure, fruit shape and colour, sensor artefacts);
-    /// `narrow` the original crop row (byte-identical to earlier versions per seed).
+    /// `narrow` the original crop row (byte-identical to earlier versions per seed); `orchard`
+    /// citrus trees for the colour-contour method (5–20 fruit, touching clusters, orange to
+    /// yellow-green, the --light preset's sun and exposure, backgrounds soil, second-row, sky).
     #[arg(long, value_enum, default_value_t = DomainArg::Wide)]
     pub domain: DomainArg,
     /// Depth noise. Default: `none` for the narrow domain; for the wide domain the camera's
@@ -53,7 +64,8 @@ pub struct SynthArgs {
     /// Wide only: backgrounds to draw from, comma-separated (default: all).
     #[arg(long, value_enum, value_delimiter = ',', value_name = "LIST")]
     pub backgrounds: Option<Vec<BackgroundArg>>,
-    /// Illumination (narrow domain; the wide domain draws its own sun, sky light and exposure).
+    /// Illumination (narrow and orchard domains; the wide domain draws its own sun, sky light
+    /// and exposure). Ranges per preset: docs/formats.md.
     #[arg(long, value_enum, default_value_t = LightArg::Day)]
     pub light: LightArg,
     /// Fraction of peppers coloured like the leaves, 0 to 1 (narrow domain; the wide domain draws
@@ -67,7 +79,8 @@ pub struct SynthArgs {
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=1024))]
     pub threads: Option<u64>,
     /// Replace a dataset already in DIR (removes its camera.json, color/, depth/, truth/, mask/,
-    /// stereo/, rig.json, synth.json; other files are left alone).
+    /// stereo/, rig.json, synth.json and approach sequences seq-NNNN/; other files are left
+    /// alone).
     #[arg(long)]
     pub force: bool,
 }
@@ -124,6 +137,8 @@ pub enum DomainArg {
     Narrow,
     /// Domain-randomised worlds.
     Wide,
+    /// Citrus orchard under the --light preset.
+    Orchard,
 }
 
 /// `--leaf-families` values.
@@ -182,6 +197,10 @@ pub enum LightArg {
     Dim,
     /// Strong sun, little ambient light.
     Harsh,
+    /// Warm sun low on one side.
+    LowSun,
+    /// Sun behind the canopy, facing the camera.
+    Backlight,
 }
 
 fn parse_fraction(s: &str) -> Result<f64, String> {
@@ -193,7 +212,20 @@ fn parse_fraction(s: &str) -> Result<f64, String> {
     }
 }
 
+/// Backgrounds of `--domain orchard` unless `--backgrounds` is given (no greenhouse or cloth).
+pub const ORCHARD_BACKGROUNDS: [Background; 3] =
+    [Background::Soil, Background::SecondRow, Background::Sky];
+
 impl SynthArgs {
+    /// The approach-sequence spec these arguments describe, with `--approach`.
+    pub fn to_approach_spec(&self) -> Option<ApproachSpec> {
+        let n = self.approach?;
+        let frames = self.to_spec();
+        let mut spec = ApproachSpec::new(frames.scene, n, self.frames, self.seed, self.sway);
+        spec.threads = frames.threads;
+        Some(spec)
+    }
+
     /// The library spec these arguments describe.
     pub fn to_spec(&self) -> DatasetSpec {
         let fruit = match self.fruit {
@@ -213,6 +245,7 @@ impl SynthArgs {
         let domain = match self.domain {
             DomainArg::Narrow => Domain::Narrow,
             DomainArg::Wide => Domain::Wide,
+            DomainArg::Orchard => Domain::Orchard,
         };
         let noise = match (self.noise, domain) {
             (Some(NoiseArg::None), _) | (None, Domain::Narrow) => NoiseModel::None,
@@ -220,7 +253,7 @@ impl SynthArgs {
             (Some(NoiseArg::Tof), _) => NoiseModel::Tof,
             (Some(NoiseArg::TofMultipath), _) => NoiseModel::TofMultipath,
             (Some(NoiseArg::Stereo), _) => NoiseModel::Stereo,
-            (None, Domain::Wide) => NoiseModel::for_camera(camera),
+            (None, Domain::Wide | Domain::Orchard) => NoiseModel::for_camera(camera),
         };
         let defaults = SceneSpec::default();
         let leaf_families = self
@@ -236,7 +269,11 @@ impl SynthArgs {
                     })
                     .collect()
             });
-        let backgrounds = self.backgrounds.as_ref().map_or(defaults.backgrounds, |v| {
+        let default_backgrounds = match domain {
+            Domain::Orchard => ORCHARD_BACKGROUNDS.to_vec(),
+            Domain::Narrow | Domain::Wide => defaults.backgrounds,
+        };
+        let backgrounds = self.backgrounds.as_ref().map_or(default_backgrounds, |v| {
             v.iter()
                 .map(|b| match b {
                     BackgroundArg::Soil => Background::Soil,
@@ -251,6 +288,8 @@ impl SynthArgs {
             LightArg::Day => LightPreset::Day,
             LightArg::Dim => LightPreset::Dim,
             LightArg::Harsh => LightPreset::Harsh,
+            LightArg::LowSun => LightPreset::LowSun,
+            LightArg::Backlight => LightPreset::Backlight,
         };
         let scene = SceneSpec {
             fruit,
@@ -290,6 +329,20 @@ impl SynthArgs {
                 }
             }
         }
+        if self.sway && self.approach.is_none() {
+            bail!("--sway only applies to approach sequences (--approach N)");
+        }
+        if self.approach.is_some() {
+            if self.domain == DomainArg::Narrow {
+                bail!("--approach needs --domain wide or orchard (the narrow row has a fixed distance)");
+            }
+            if self.stereo {
+                bail!("--stereo is not available with --approach");
+            }
+            if self.frames < 2 {
+                bail!("--approach needs --frames of at least 2");
+            }
+        }
         self.to_spec()
             .scene
             .validate()
@@ -298,7 +351,8 @@ impl SynthArgs {
     }
 }
 
-/// What a generated dataset consists of; `--force` removes exactly these before writing.
+/// What a generated dataset consists of; `--force` removes exactly these (and `seq-NNNN/`
+/// approach sequences) before writing.
 const DATASET_ENTRIES: [&str; 8] = [
     "camera.json",
     "synth.json",
@@ -309,6 +363,12 @@ const DATASET_ENTRIES: [&str; 8] = [
     "mask",
     "stereo",
 ];
+
+/// Whether `name` is an approach sequence's folder (`seq-` and digits).
+fn is_sequence_dir(name: &str) -> bool {
+    name.strip_prefix("seq-")
+        .is_some_and(|d| !d.is_empty() && d.bytes().all(|b| b.is_ascii_digit()))
+}
 
 /// Makes sure writing into `out` cannot mix two datasets.
 fn prepare_output(out: &Path, force: bool) -> Result<()> {
@@ -329,7 +389,17 @@ fn prepare_output(out: &Path, force: bool) -> Result<()> {
             out.display()
         );
     }
-    for name in DATASET_ENTRIES {
+    let sequences = std::fs::read_dir(out)
+        .with_context(|| format!("cannot list {}", out.display()))?
+        .filter_map(|e| e.ok())
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .filter(|n| is_sequence_dir(n));
+    let names: Vec<String> = DATASET_ENTRIES
+        .iter()
+        .map(|s| s.to_string())
+        .chain(sequences)
+        .collect();
+    for name in names {
         let path = out.join(name);
         let removed = if path.is_dir() {
             std::fs::remove_dir_all(&path)
@@ -350,8 +420,24 @@ fn prepare_output(out: &Path, force: bool) -> Result<()> {
 /// written (the message names it).
 pub fn run(args: &SynthArgs) -> Result<()> {
     args.check()?;
-    let spec = args.to_spec();
     prepare_output(&args.out, args.force)?;
+    if let Some(spec) = args.to_approach_spec() {
+        let bar = progress_bar((spec.sequences * spec.frames) as usize, "rendering");
+        let started = Instant::now();
+        let summary = generate_approach(&spec, &args.out, &|_| bar.inc(1))
+            .with_context(|| format!("generating approach sequences in {}", args.out.display()))?;
+        bar.finish_and_clear();
+        println!(
+            "wrote {} approach sequences ({} frames{}) to {} in {:.1} s",
+            summary.sequences.len(),
+            summary.frames,
+            if args.sway { ", fruit swaying" } else { "" },
+            args.out.display(),
+            started.elapsed().as_secs_f64()
+        );
+        return Ok(());
+    }
+    let spec = args.to_spec();
     let bar = progress_bar(args.frames as usize, "rendering");
     let started = Instant::now();
     let summary = generate_dataset(&spec, &args.out, &|_| bar.inc(1))
@@ -519,6 +605,39 @@ mod tests {
         }
         let twice = parse(&["--leaf-families", "lobed,lobed"]).unwrap();
         assert!(format!("{:#}", twice.check().unwrap_err()).contains("leaf-families"));
+    }
+
+    #[test]
+    fn orchard_and_approach_options() {
+        let a = parse(&[
+            "--domain", "orchard", "--fruit", "orange", "--light", "low-sun",
+        ])
+        .unwrap();
+        a.check().unwrap();
+        let s = a.to_spec().scene;
+        assert_eq!(s.domain, Domain::Orchard);
+        assert_eq!(s.light, LightPreset::LowSun);
+        assert_eq!(s.backgrounds, ORCHARD_BACKGROUNDS.to_vec());
+        assert_eq!(s.noise, NoiseModel::TofMultipath);
+        assert!(a.to_approach_spec().is_none());
+        let a = parse(&["--domain", "orchard", "--approach", "4", "--sway"]).unwrap();
+        a.check().unwrap();
+        let spec = a.to_approach_spec().unwrap();
+        assert_eq!(
+            (spec.sequences, spec.frames, spec.seed, spec.sway),
+            (4, 3, 9, true)
+        );
+        for (bad, flag) in [
+            (&["--sway"][..], "--sway"),
+            (&["--approach", "2", "--domain", "narrow"], "--approach"),
+            (&["--approach", "2", "--stereo"], "--stereo"),
+        ] {
+            let err = format!("{:#}", parse(bad).unwrap().check().unwrap_err());
+            assert!(err.contains(flag), "{err}");
+        }
+        assert!(
+            is_sequence_dir("seq-0012") && !is_sequence_dir("seq-") && !is_sequence_dir("seqs")
+        );
     }
 
     #[test]

@@ -1,0 +1,85 @@
+//! `pomona synth --approach` and `pomona track` through the binary: approach sequences are
+//! written as datasets with their target, and the tracker follows the target to the last frame.
+
+#![allow(clippy::unwrap_used)]
+
+#[path = "support/run.rs"]
+mod run;
+
+use run::{pomona, stderr, stdout};
+
+#[test]
+fn approach_sequences_are_tracked_to_the_target() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = dir.path().join("approach");
+    let data_s = data.to_str().unwrap();
+    let out = pomona(&[
+        "synth",
+        "--out",
+        data_s,
+        "--approach",
+        "3",
+        "--frames",
+        "12",
+        "--seed",
+        "21",
+        "--domain",
+        "orchard",
+        "--fruit",
+        "orange",
+        "--camera",
+        "sr4000",
+        "--sway",
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(
+        stdout(&out).contains("3 approach sequences"),
+        "{}",
+        stdout(&out)
+    );
+    for s in 0..3 {
+        let seq = data.join(format!("seq-{s:04}"));
+        assert!(seq.join("approach.json").exists());
+        assert!(seq.join("color/000011.png").exists());
+    }
+
+    let tracks = dir.path().join("tracks");
+    let report = dir.path().join("report.json");
+    let out = pomona(&[
+        "track",
+        "--data",
+        data_s,
+        "--out",
+        tracks.to_str().unwrap(),
+        "--json",
+        report.to_str().unwrap(),
+        "--init",
+        "truth",
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+    assert_eq!(report["sequences"], 3);
+    assert_eq!(report["frames"], 36);
+    let rate = report["success_rate"].as_f64().unwrap();
+    assert!(rate >= 2.0 / 3.0, "success rate {rate}: {report}");
+    assert!(report["ms_per_frame"].as_f64().unwrap() > 0.0);
+    let track: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(tracks.join("seq-0000.json")).unwrap())
+            .unwrap();
+    assert_eq!(track["frames"].as_array().unwrap().len(), 12);
+    assert!(track["frames"][11]["error_radii"].is_number(), "{track}");
+
+    // Tracking a folder without sequences is an error naming it.
+    let empty = dir.path().join("empty");
+    std::fs::create_dir(&empty).unwrap();
+    let out = pomona(&[
+        "track",
+        "--data",
+        empty.to_str().unwrap(),
+        "--out",
+        tracks.to_str().unwrap(),
+    ]);
+    assert!(!out.status.success());
+    assert!(stderr(&out).contains("empty"), "{}", stderr(&out));
+}

@@ -13,3 +13,4 @@ pub mod exit_status;
 pub mod overlay;
 pub mod params;
 pub mod progress;
+pub mod shard;

@@ -272,6 +272,7 @@ fn detect_args(
         overlay: None,
         min_confidence: None,
         resume: false,
+        shard: None,
     }
 }
 

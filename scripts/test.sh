@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # The project's test command: `cargo test --workspace --locked` (extra arguments are passed on),
-# then a count of the real-data tests that skipped because ../shared/data is absent, so a skip is
-# never mistaken for a pass. With POMONA_REQUIRE_DATA=1 such tests fail instead of skipping.
+# then the Python package's pytest suite (scripts/py-test.sh: a venv under target/, pip install
+# ./crates/pomona-py), then a count of the real-data tests that skipped because ../shared/data is
+# absent, so a skip is never mistaken for a pass. With POMONA_REQUIRE_DATA=1 such tests fail
+# instead of skipping.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -10,6 +12,7 @@ trap 'rm -f "$skip_log"' EXIT
 export POMONA_SKIP_LOG="$skip_log"
 
 cargo test --workspace --locked "$@"
+scripts/py-test.sh
 
 skipped=$(wc -l <"$skip_log")
 if [ "$skipped" -gt 0 ]; then

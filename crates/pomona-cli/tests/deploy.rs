@@ -20,7 +20,12 @@ fn files(dir: &Path) -> BTreeMap<String, Vec<u8>> {
     std::fs::read_dir(dir)
         .unwrap()
         .map(|e| e.unwrap().path())
-        .map(|p| (p.file_name().unwrap().to_string_lossy().into_owned(), std::fs::read(&p).unwrap()))
+        .map(|p| {
+            (
+                p.file_name().unwrap().to_string_lossy().into_owned(),
+                std::fs::read(&p).unwrap(),
+            )
+        })
         .collect()
 }
 
@@ -113,7 +118,10 @@ fn the_kubernetes_indexed_job_command_makes_the_unsharded_files() {
     std::os::unix::fs::symlink(&data, volume.join("season-2026")).unwrap();
     let command = command
         .replace("/data/", &format!("{}/", volume.display()))
-        .replace("exec pomona ", &format!("exec {} ", env!("CARGO_BIN_EXE_pomona")));
+        .replace(
+            "exec pomona ",
+            &format!("exec {} ", env!("CARGO_BIN_EXE_pomona")),
+        );
     for index in 0..shards {
         let out = Command::new("sh")
             .args(["-c", &command])

@@ -8,9 +8,7 @@
 //! Arrays handed back to Python take ownership of the Rust buffers (no copy).
 
 use numpy::ndarray::{Array2, Array3};
-use numpy::{
-    PyArray2, PyArray3, PyArrayMethods, PyReadonlyArray2, PyReadonlyArray3, PyUntypedArrayMethods,
-};
+use numpy::{PyArray2, PyArray3, PyReadonlyArray2, PyReadonlyArray3, PyUntypedArrayMethods};
 use pomona_core::{ColorImage, DepthImage, PointCloud, RgbdFrame};
 use pomona_io::CameraFile;
 use pyo3::exceptions::{PyTypeError, PyValueError};
@@ -135,8 +133,8 @@ pub fn depth_to_array<'py>(py: Python<'py>, depth: &DepthImage) -> Bound<'py, Py
 /// `color` as a `(H, W, 3)` uint8 RGB array.
 pub fn color_to_array<'py>(py: Python<'py>, color: ColorImage) -> Bound<'py, PyArray3<u8>> {
     let shape = (color.height() as usize, color.width() as usize, 3);
-    let values =
-        Array3::from_shape_vec(shape, color.into_rgb()).unwrap_or_else(|_| Array3::zeros((0, 0, 3)));
+    let values = Array3::from_shape_vec(shape, color.into_rgb())
+        .unwrap_or_else(|_| Array3::zeros((0, 0, 3)));
     PyArray3::from_owned_array(py, values)
 }
 
@@ -148,7 +146,7 @@ pub fn cloud_to_array<'py>(py: Python<'py>, cloud: &PointCloud) -> Bound<'py, Py
         .filter(|p| p.iter().all(|c| c.is_finite()))
         .flat_map(|p| [p.x, p.y, p.z])
         .collect();
-    let values = Array2::from_shape_vec((xyz.len() / 3, 3), xyz)
-        .unwrap_or_else(|_| Array2::zeros((0, 3)));
+    let values =
+        Array2::from_shape_vec((xyz.len() / 3, 3), xyz).unwrap_or_else(|_| Array2::zeros((0, 3)));
     PyArray2::from_owned_array(py, values)
 }

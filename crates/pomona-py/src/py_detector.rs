@@ -40,9 +40,7 @@ impl Detector {
             .inner
             .min_confidence_for(min_confidence)
             .map_err(to_py)?;
-        let found = py
-            .detach(|| self.inner.detect(frame))
-            .map_err(to_py)?;
+        let found = py.detach(|| self.inner.detect(frame)).map_err(to_py)?;
         Ok(self
             .inner
             .frame_record("", frame.color().is_some(), &found, threshold))

@@ -7,42 +7,13 @@
 
 #[path = "support/run.rs"]
 mod run;
-use run::{pomona, stderr, synth_dataset};
+use run::{detect, files, pomona, stderr, synth_dataset};
 
-use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
+use std::process::{Command, Stdio};
 use std::time::Instant;
 
 use rand::{Rng, SeedableRng};
-
-fn detect(pipeline: &str, data: &Path, out: &Path, extra: &[&str]) -> Output {
-    let mut args = vec![
-        "detect",
-        "--pipeline",
-        pipeline,
-        "--data",
-        data.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ];
-    args.extend_from_slice(extra);
-    pomona(&args)
-}
-
-/// Every file of `dir` by name, with its bytes (none when `dir` does not exist).
-fn files(dir: &Path) -> BTreeMap<String, Vec<u8>> {
-    let Ok(entries) = std::fs::read_dir(dir) else {
-        return BTreeMap::new();
-    };
-    entries
-        .map(|e| e.unwrap().path())
-        .map(|p| {
-            let name = p.file_name().unwrap().to_string_lossy().into_owned();
-            (name, std::fs::read(&p).unwrap())
-        })
-        .collect()
-}
 
 /// How many `.json` files `dir` holds now (while a run may be writing into it).
 fn json_count(dir: &Path) -> usize {

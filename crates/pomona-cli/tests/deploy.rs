@@ -6,7 +6,7 @@
 
 #[path = "support/run.rs"]
 mod run;
-use run::{pomona, stderr, synth_dataset};
+use run::{detect, files, stderr, synth_dataset};
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -16,33 +16,12 @@ fn repo() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
 }
 
-fn files(dir: &Path) -> BTreeMap<String, Vec<u8>> {
-    std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .map(|p| {
-            (
-                p.file_name().unwrap().to_string_lossy().into_owned(),
-                std::fs::read(&p).unwrap(),
-            )
-        })
-        .collect()
-}
-
 /// A dataset of `frames` frames and the files of one unsharded `pomona detect` over it.
 fn reference(dir: &Path, frames: u32) -> (PathBuf, BTreeMap<String, Vec<u8>>) {
     let data = dir.join("data");
     synth_dataset(&data, frames, 17);
     let whole = dir.join("whole");
-    let out = pomona(&[
-        "detect",
-        "--pipeline",
-        "shape-fit",
-        "--data",
-        data.to_str().unwrap(),
-        "--out",
-        whole.to_str().unwrap(),
-    ]);
+    let out = detect("shape-fit", &data, &whole, &[]);
     assert!(out.status.success(), "{}", stderr(&out));
     (data, files(&whole))
 }

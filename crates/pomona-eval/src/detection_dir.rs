@@ -24,6 +24,14 @@ pub struct DetectionSet {
 }
 
 impl DetectionSet {
+    /// Takes the detections of `frame` out of the set (none when it has no file).
+    pub fn take(&mut self, frame: &str) -> Vec<pomona_core::Detection> {
+        self.by_frame
+            .remove(frame)
+            .map(|d| d.detections)
+            .unwrap_or_default()
+    }
+
     /// The operating confidence every detection file records, when they all record the same
     /// one (the default operating point of an evaluation).
     pub fn recorded_operating_confidence(&self) -> Option<f64> {

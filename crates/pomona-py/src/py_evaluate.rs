@@ -48,15 +48,10 @@ pub fn evaluate<'py>(
     let mut frames = Vec::new();
     for stem in dataset.frames() {
         if let Some(truth) = dataset.load_truth(stem).map_err(to_py)? {
-            let detections = found
-                .by_frame
-                .remove(stem)
-                .map(|d| d.detections)
-                .unwrap_or_default();
             frames.push(FrameInput {
                 frame: stem.clone(),
                 truth,
-                detections,
+                detections: found.take(stem),
             });
         }
     }

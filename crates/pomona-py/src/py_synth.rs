@@ -23,6 +23,7 @@ use crate::py_error::to_py;
 /// Raises ``PomonaError`` for an unknown name, a folder that already holds a dataset, or an
 /// unwritable file.
 #[pyfunction]
+#[allow(clippy::too_many_arguments)] // one per keyword argument of the Python function
 #[pyo3(signature = (out, frames, seed, *, fruit = "pepper", camera = "kinect-v2", domain = "wide", noise = None))]
 pub fn synth(
     py: Python<'_>,

@@ -92,15 +92,10 @@ fn scored_frames(
             kept += truth.fruits.len();
             left_out += before - truth.fruits.len();
         }
-        let detections = detections
-            .by_frame
-            .remove(frame)
-            .map(|d| d.detections)
-            .unwrap_or_default();
         frames.push(FrameInput {
             frame: frame.clone(),
             truth,
-            detections,
+            detections: detections.take(frame),
         });
     }
     warn_frames(&without_truth, "have no truth file and are not evaluated");

@@ -122,7 +122,7 @@ impl Detector {
     /// thread, with the GIL released. ``frames``: stems to do (default: all).
     ///
     /// Returns one dict per frame: ``frame``, ``detections`` (number written), ``seconds``
-    /// (detection time), ``error`` (``None``, or why the frame failed: a failure does not stop
+    /// (detection time, reading and writing excluded), ``error`` (``None``, or why the frame failed: a failure does not stop
     /// the others) and ``file`` (the dataset file at fault, when known).
     ///
     /// Raises ``PomonaError`` for an unreadable dataset, an unknown frame, a colour pipeline on a
@@ -162,10 +162,12 @@ impl Detector {
             frames
                 .iter()
                 .map(|stem| {
-                    let started = Instant::now();
+                    let mut seconds = 0.0;
                     let written = (|| -> Result<usize, pomona::Error> {
                         let frame = dataset.load_frame(stem)?;
+                        let started = Instant::now();
                         let found = self.inner.detect(&frame)?;
+                        seconds = started.elapsed().as_secs_f64();
                         let record = self.inner.frame_record(
                             stem,
                             frame.color().is_some(),
@@ -175,7 +177,7 @@ impl Detector {
                         pomona_io::write_json(&out.join(format!("{stem}.json")), &record)?;
                         Ok(record.detections.len())
                     })();
-                    (stem, written, started.elapsed().as_secs_f64())
+                    (stem, written, seconds)
                 })
                 .collect::<Vec<_>>()
         });

@@ -12,8 +12,9 @@ if [ ! -x "$venv/bin/python" ]; then
   python3 -m venv "$venv"
 fi
 "$venv/bin/python" -m pip install --quiet --disable-pip-version-check --upgrade pip
-# The test profile reuses what `cargo test` just compiled; a user's plain install builds release.
-export MATURIN_PEP517_ARGS="${MATURIN_PEP517_ARGS:---profile test}"
+# The dev profile (a cdylib cannot be built with `--profile test`, which makes a test harness):
+# quick to compile; a user's plain install builds release.
+export MATURIN_PEP517_ARGS="${MATURIN_PEP517_ARGS:---profile dev}"
 pip=("$venv/bin/python" -m pip install --quiet --disable-pip-version-check)
 "${pip[@]}" "./crates/pomona-py[test]"
 # pip keeps an installed package of the same version: reinstall this checkout's build.

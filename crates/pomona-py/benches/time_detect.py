@@ -42,12 +42,13 @@ def main() -> None:
     rust_ms: list[float] = []
     py_u16_ms: list[float] = []
     py_f32_ms: list[float] = []
-    for _ in range(rounds):
+    for round_ in range(rounds):
         out = subprocess.run(
             [rust_bin, data, pipeline, str(repeats)], capture_output=True, text=True, check=True
         ).stdout
         rust_ms += [float(t) for t in out.split("(")[-1].rstrip(")\n").split()]
-        for depth, times in ((raw, py_u16_ms), (metres, py_f32_ms)):
+        sides = [(raw, py_u16_ms), (metres, py_f32_ms)]
+        for depth, times in sides if round_ % 2 == 0 else sides[::-1]:  # alternate the order
             for _ in range(repeats):
                 started = time.perf_counter()
                 detector.detect(depth, color, camera=camera)

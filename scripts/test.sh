@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
 # The project's test command: `cargo test --workspace --locked` (extra arguments are passed on),
-# the recording tests of the `rerun` feature,
-# then a count of the real-data tests that skipped because ../shared/data is absent, so a skip is
-# never mistaken for a pass. With POMONA_REQUIRE_DATA=1 such tests fail instead of skipping.
+# then the Python package's pytest suite (scripts/py-test.sh: a venv under target/, pip install
+# ./crates/pomona-py), then a count of the real-data tests that skipped because ../shared/data is
+# absent, so a skip is never mistaken for a pass. With POMONA_REQUIRE_DATA=1 such tests fail
+# instead of skipping. (The `rerun` feature of pomona-cli, `detect --rrd`, is not built here:
+# see crates/pomona-cli/Cargo.toml.)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -11,8 +13,7 @@ trap 'rm -f "$skip_log"' EXIT
 export POMONA_SKIP_LOG="$skip_log"
 
 cargo test --workspace --locked "$@"
-# The run recording (`detect --rrd`) lives behind pomona-cli's `rerun` feature, off by default.
-cargo test -p pomona-cli --features rerun --locked --test cli "$@" -- rrd
+scripts/py-test.sh
 
 skipped=$(wc -l <"$skip_log")
 if [ "$skipped" -gt 0 ]; then

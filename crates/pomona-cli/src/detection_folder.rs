@@ -12,7 +12,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
 use pomona_core::FrameDetections;
-use pomona_eval::FAILURES_FILE;
+use pomona_eval::failures_file;
 use serde::Serialize;
 
 /// What makes a detection file this run's: the fields every file of the run shares.
@@ -134,18 +134,20 @@ struct FailuresFile<'a> {
     failures: &'a [FailedFrame],
 }
 
-/// Writes `out/failures.json` listing `failures` (atomically), or removes an old one when there
-/// are none. Returns its path when written.
+/// Writes `out/failures.json` (or shard `(I, N)`'s `failures.shard-I-of-N.json`, see
+/// [`pomona_eval::failures_file`]) listing `failures` (atomically), or removes an old one when
+/// there are none. Returns its path when written.
 ///
 /// # Errors
 /// An unwritable or unremovable file.
 pub fn write_failures(
     out: &Path,
+    shard: Option<(usize, usize)>,
     pipeline: &str,
     frames_tried: usize,
     failures: &[FailedFrame],
 ) -> Result<Option<PathBuf>> {
-    let path = out.join(FAILURES_FILE);
+    let path = out.join(failures_file(shard));
     if failures.is_empty() {
         if path.is_file() {
             std::fs::remove_file(&path)
@@ -236,12 +238,20 @@ mod tests {
             file: Some("/d/depth/f1.png".into()),
             error: "bad png".into(),
         }];
-        let path = write_failures(dir.path(), "p", 3, &failed)
+        let path = write_failures(dir.path(), None, "p", 3, &failed)
             .unwrap()
             .unwrap();
+        assert!(path.ends_with("failures.json"));
         let text = std::fs::read_to_string(&path).unwrap();
         assert!(text.contains("f1") && text.contains("bad png"), "{text}");
-        assert_eq!(write_failures(dir.path(), "p", 3, &[]).unwrap(), None);
-        assert!(!path.exists());
+        let shard = write_failures(dir.path(), Some((1, 4)), "p", 3, &failed)
+            .unwrap()
+            .unwrap();
+        assert!(shard.ends_with("failures.shard-1-of-4.json"));
+        assert_eq!(write_failures(dir.path(), None, "p", 3, &[]).unwrap(), None);
+        assert!(
+            !path.exists() && shard.exists(),
+            "a run removes only its own list"
+        );
     }
 }

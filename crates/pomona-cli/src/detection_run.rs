@@ -41,24 +41,15 @@ pub fn load_detector(
     })
 }
 
-/// The confidence threshold of a detection run: `--min-confidence` when given (checked against
-/// the model: an uncalibrated model has no confidences to threshold), else the model's operating
-/// confidence, else none (every detection is kept, as for models trained before calibration).
+/// The confidence threshold of a detection run: `--min-confidence` when given, else the model's
+/// operating confidence, else none ([`Detector::min_confidence_for`]).
 ///
 /// # Errors
 /// `--min-confidence` outside `[0, 1]` or given for a model without calibration.
 pub fn min_confidence(detector: &Detector, requested: Option<f64>) -> Result<Option<f64>> {
-    match (requested, detector.operating_confidence()) {
-        (Some(c), _) if !(0.0..=1.0).contains(&c) => {
-            bail!("--min-confidence must be in [0, 1], got {c}")
-        }
-        (Some(_), None) => bail!(
-            "--min-confidence needs a model with a confidence calibration; this model has none \
-             (retrain it with `pomona train`, which calibrates by default)"
-        ),
-        (Some(c), Some(_)) => Ok(Some(c)),
-        (None, operating) => Ok(operating),
-    }
+    detector
+        .min_confidence_for(requested)
+        .context("bad --min-confidence")
 }
 
 /// Checks that the dataset has the images the pipeline needs: colour for colour methods, depth

@@ -15,3 +15,4 @@ pub mod overlay;
 pub mod params;
 pub mod progress;
 pub mod recording;
+pub mod shard;

@@ -7,42 +7,13 @@
 
 #[path = "support/run.rs"]
 mod run;
-use run::{pomona, stderr, synth_dataset};
+use run::{detect, files, pomona, stderr, synth_dataset};
 
-use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
+use std::process::{Command, Stdio};
 use std::time::Instant;
 
 use rand::{Rng, SeedableRng};
-
-fn detect(pipeline: &str, data: &Path, out: &Path, extra: &[&str]) -> Output {
-    let mut args = vec![
-        "detect",
-        "--pipeline",
-        pipeline,
-        "--data",
-        data.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ];
-    args.extend_from_slice(extra);
-    pomona(&args)
-}
-
-/// Every file of `dir` by name, with its bytes (none when `dir` does not exist).
-fn files(dir: &Path) -> BTreeMap<String, Vec<u8>> {
-    let Ok(entries) = std::fs::read_dir(dir) else {
-        return BTreeMap::new();
-    };
-    entries
-        .map(|e| e.unwrap().path())
-        .map(|p| {
-            let name = p.file_name().unwrap().to_string_lossy().into_owned();
-            (name, std::fs::read(&p).unwrap())
-        })
-        .collect()
-}
 
 /// How many `.json` files `dir` holds now (while a run may be writing into it).
 fn json_count(dir: &Path) -> usize {
@@ -214,6 +185,80 @@ fn an_output_folder_of_another_model_is_refused_unless_it_is_this_runs() {
         "{}",
         stderr(&out)
     );
+}
+
+#[test]
+fn shards_writing_into_one_folder_make_exactly_the_unsharded_files_and_resume() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = dir.path().join("data");
+    synth_dataset(&data, 7, 41);
+    let whole = dir.path().join("whole");
+    assert!(detect("shape-fit", &data, &whole, &[]).status.success());
+    let expected = files(&whole);
+    assert_eq!(expected.len(), 7);
+
+    let sharded = dir.path().join("sharded");
+    for i in 0..3 {
+        let shard = format!("{i}/3");
+        let out = detect("shape-fit", &data, &sharded, &["--shard", &shard]);
+        assert!(out.status.success(), "{shard}: {}", stderr(&out));
+        let done = files(&sharded).len();
+        assert_eq!(done, [3, 5, 7][i], "after shard {shard}");
+    }
+    assert_eq!(files(&sharded), expected, "byte for byte");
+
+    // A shard run again with --resume skips its frames; one frame lost is redone.
+    let frames = frame_names(&data);
+    std::fs::remove_file(sharded.join(format!("{}.json", frames[4]))).unwrap();
+    let out = detect(
+        "shape-fit",
+        &data,
+        &sharded,
+        &["--shard", "1/3", "--resume"],
+    );
+    assert!(out.status.success(), "{}", stderr(&out));
+    let said = String::from_utf8_lossy(&out.stdout).into_owned();
+    assert!(
+        said.contains("1 frame(s) (shard 1/3)") && said.contains("1 already done"),
+        "{said}"
+    );
+    assert_eq!(files(&sharded), expected);
+
+    // Each shard lists its own failures, which `pomona eval` does not take for frames.
+    for f in &frames[2..4] {
+        std::fs::write(data.join("depth").join(format!("{f}.png")), b"not a png").unwrap();
+    }
+    let broken = dir.path().join("broken");
+    for shard in ["0/2", "1/2"] {
+        let out = detect("shape-fit", &data, &broken, &["--shard", shard]);
+        assert_eq!(out.status.code(), Some(3), "{shard}: {}", stderr(&out));
+    }
+    let written = files(&broken);
+    for (name, frame) in [
+        ("failures.shard-0-of-2.json", &frames[2]),
+        ("failures.shard-1-of-2.json", &frames[3]),
+    ] {
+        let listed: serde_json::Value = serde_json::from_slice(&written[name]).unwrap();
+        assert_eq!(listed["failures"][0]["frame"], frame.as_str(), "{name}");
+        assert_eq!(
+            listed["failures"].as_array().map(Vec::len),
+            Some(1),
+            "{name}"
+        );
+    }
+    assert!(!written.contains_key("failures.json"));
+    let eval = pomona(&[
+        "eval",
+        "--data",
+        data.to_str().unwrap(),
+        "--detections",
+        broken.to_str().unwrap(),
+    ]);
+    assert!(!stderr(&eval).contains("failures"), "{}", stderr(&eval));
+
+    let out = detect("shape-fit", &data, &broken, &["--shard", "2/2"]);
+    assert_eq!(out.status.code(), Some(2), "clap's usage error");
+    assert!(stderr(&out).contains("0-based"), "{}", stderr(&out));
 }
 
 #[test]

@@ -274,6 +274,7 @@ fn detect_args(
         min_confidence: None,
         resume: false,
         rrd: None,
+        shard: None,
     }
 }
 

@@ -28,7 +28,9 @@ mod pr_plot;
 mod report;
 mod split_summary;
 
-pub use detection_dir::{detection_file_frame, load_detections, DetectionSet, FAILURES_FILE};
+pub use detection_dir::{
+    detection_file_frame, failures_file, load_detections, DetectionSet, FAILURES_FILE,
+};
 pub use error::EvalError;
 pub use eval_config::EvalConfig;
 pub use evaluation::{evaluate, FrameInput};

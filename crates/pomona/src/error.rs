@@ -78,6 +78,14 @@ pub enum Error {
         /// The stage's reason.
         source: Box<PipelineError>,
     },
+    /// A confidence threshold that cannot be applied.
+    #[error("cannot keep detections at confidence {value}: {reason}")]
+    MinConfidence {
+        /// The threshold asked for.
+        value: f64,
+        /// Why not (out of range, or the model has no calibration).
+        reason: String,
+    },
     /// A frame built in memory is inconsistent (image sizes, camera parameters).
     #[error("invalid frame: {0}")]
     Frame(#[from] pomona_core::CoreError),

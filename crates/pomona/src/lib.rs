@@ -53,6 +53,7 @@
 
 mod detector;
 mod error;
+mod frame_record;
 mod model_info;
 mod param_override;
 mod registry;

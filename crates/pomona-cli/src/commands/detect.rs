@@ -7,7 +7,8 @@
 //! A frame that fails (unreadable image, detection error) does not stop the run: every other
 //! frame is written, the failures go to `<out>/failures.json`, and the command exits with status
 //! 3 (see `exit_status.rs`). `--resume` continues a killed run: frames whose file it would write
-//! unchanged are skipped (see `detection_folder.rs`).
+//! unchanged are skipped (see `detection_folder.rs`). `--shard I/N` processes task `I`'s share of
+//! the frames, for array jobs on a cluster (see `shard.rs`).
 //!
 //! `--rrd OUT.rrd` also writes a rerun recording of the run (see `recording.rs`), recorded from
 //! the worker threads as frames finish and closed before the command returns.
@@ -17,7 +18,6 @@ use std::time::Instant;
 
 use anyhow::{Context, Result};
 use pomona::{ModelSource, Pipeline, StageTimings};
-use pomona_core::FrameDetections;
 use pomona_io::Dataset;
 
 use crate::detection_folder::{prepare, write_failures, FailedFrame, RunIdentity};
@@ -29,6 +29,7 @@ use crate::exit_status::FramesFailed;
 use crate::overlay::{shown, view_of, write_overlay};
 use crate::progress::progress_bar;
 use crate::recording::{self, RunDescription};
+use crate::shard::Shard;
 
 /// Arguments of `pomona detect`.
 #[derive(Debug, Clone, clap::Args)]
@@ -73,6 +74,11 @@ pub struct DetectArgs {
     /// (`--features rerun`; the release binary has it).
     #[arg(long, value_name = "OUT.rrd")]
     pub rrd: Option<PathBuf>,
+    /// Process only task I's share (0-based) of N: every N-th frame of the sorted frame list
+    /// from frame I, so N tasks writing into one --out produce the files of one whole run.
+    /// Failures go to `failures.shard-I-of-N.json`.
+    #[arg(long, value_name = "I/N")]
+    pub shard: Option<Shard>,
 }
 
 /// What a detection run did.
@@ -146,7 +152,15 @@ pub fn run_with(pipelines: &[Box<dyn Pipeline>], args: &DetectArgs) -> Result<De
         model_id: &model.id,
         min_confidence,
     };
-    let already = prepare(&args.out, dataset.frames(), &identity)?;
+    let mine: Vec<String> = match args.shard {
+        Some(shard) => shard
+            .select(dataset.frames())
+            .into_iter()
+            .cloned()
+            .collect(),
+        None => dataset.frames().to_vec(),
+    };
+    let already = prepare(&args.out, &mine, &identity)?;
     let recording = recording::open(
         args.rrd.as_deref(),
         &dataset,
@@ -160,12 +174,11 @@ pub fn run_with(pipelines: &[Box<dyn Pipeline>], args: &DetectArgs) -> Result<De
         std::fs::create_dir_all(dir)
             .with_context(|| format!("cannot create overlay folder {}", dir.display()))?;
     }
-    let frames: Vec<&String> = dataset
-        .frames()
+    let frames: Vec<&String> = mine
         .iter()
         .filter(|f| !(args.resume && already.contains(*f)))
         .collect();
-    let resumed = dataset.frames().len() - frames.len();
+    let resumed = mine.len() - frames.len();
 
     let pool = thread_pool(args.threads.map(|n| n as usize))?;
     let bar = progress_bar(frames.len(), "detecting");
@@ -184,19 +197,12 @@ pub fn run_with(pipelines: &[Box<dyn Pipeline>], args: &DetectArgs) -> Result<De
                 Ok((format!("{}/{stem}", args.data.display()), frame, ()))
             },
             |i, result| {
-                let record = FrameDetections {
-                    frame: frames[i].clone(),
-                    pipeline: name.to_owned(),
-                    detections: result
-                        .detections
-                        .iter()
-                        .filter(|d| kept(d))
-                        .cloned()
-                        .collect(),
-                    operating_confidence: result.model.operating_confidence,
+                let record = detector.frame_record(
+                    frames[i],
+                    dataset.has_color(),
+                    &result.detections,
                     min_confidence,
-                    model_id: Some(result.model.id.clone()),
-                };
+                );
                 pomona_io::write_json(&args.out.join(format!("{}.json", frames[i])), &record)?;
                 if let Some(recording) = &recording {
                     recording.record_frame(&dataset, frames[i], &result.detections, &kept)?;
@@ -239,7 +245,8 @@ pub fn run_with(pipelines: &[Box<dyn Pipeline>], args: &DetectArgs) -> Result<De
     for f in &failures {
         eprintln!("error: frame {}: {}", f.frame, f.error);
     }
-    let report = write_failures(&args.out, name, frames.len(), &failures)?;
+    let shard = args.shard.map(|s| (s.index, s.count));
+    let report = write_failures(&args.out, shard, name, frames.len(), &failures)?;
     let all: usize = batch.done.iter().map(|(_, r, ())| r.detections.len()).sum();
     let written: usize = batch
         .done
@@ -275,9 +282,12 @@ pub fn run_with(pipelines: &[Box<dyn Pipeline>], args: &DetectArgs) -> Result<De
     } else {
         String::new()
     };
+    let shard_note = args
+        .shard
+        .map_or(String::new(), |s| format!(" (shard {s})"));
     println!(
-        "`{name}` ({}) made {all} detections ({kept_note}) in {} frame(s) of {}{resumed_note} in \
-         {:.1} s; detection files in {}",
+        "`{name}` ({}) made {all} detections ({kept_note}) in {} frame(s){shard_note} of \
+         {}{resumed_note} in {:.1} s; detection files in {}",
         summary.model,
         summary.frames,
         args.data.display(),

@@ -50,13 +50,6 @@ pub struct EvalArgs {
     pub kind: Vec<String>,
 }
 
-/// The operating confidence every detection file records, when they all record the same one.
-fn recorded_operating_confidence(detections: &DetectionSet) -> Option<f64> {
-    let mut values = detections.by_frame.values().map(|d| d.operating_confidence);
-    let first = values.next()??;
-    values.all(|v| v == Some(first)).then_some(first)
-}
-
 fn warn_frames(frames: &[String], what: &str) {
     if frames.is_empty() {
         return;
@@ -99,15 +92,10 @@ fn scored_frames(
             kept += truth.fruits.len();
             left_out += before - truth.fruits.len();
         }
-        let detections = detections
-            .by_frame
-            .remove(frame)
-            .map(|d| d.detections)
-            .unwrap_or_default();
         frames.push(FrameInput {
             frame: frame.clone(),
             truth,
-            detections,
+            detections: detections.take(frame),
         });
     }
     warn_frames(&without_truth, "have no truth file and are not evaluated");
@@ -147,7 +135,7 @@ pub fn run(args: &EvalArgs) -> Result<()> {
         min_confidence: match (args.min_confidence, args.threshold) {
             (Some(c), _) => Some(c),
             (None, Some(_)) => None,
-            (None, None) => recorded_operating_confidence(&detections),
+            (None, None) => detections.recorded_operating_confidence(),
         },
         ..EvalConfig::default()
     };

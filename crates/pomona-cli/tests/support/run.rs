@@ -3,6 +3,7 @@
 
 #![allow(clippy::unwrap_used, dead_code)] // test helpers; not every test file uses each one
 
+use std::collections::BTreeMap;
 use std::path::Path;
 use std::process::{Command, Output};
 
@@ -36,4 +37,33 @@ pub fn synth_dataset(root: &Path, frames: u32, seed: u64) {
         ..SceneSpec::default()
     };
     generate_dataset(&DatasetSpec::new(scene, frames, seed), root, &|_| {}).unwrap();
+}
+
+/// Runs `pomona detect --pipeline PIPELINE --data DATA --out OUT` with `extra` arguments.
+pub fn detect(pipeline: &str, data: &Path, out: &Path, extra: &[&str]) -> Output {
+    let mut args = vec![
+        "detect",
+        "--pipeline",
+        pipeline,
+        "--data",
+        data.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    pomona(&args)
+}
+
+/// Every file of `dir` by name, with its bytes (none when `dir` does not exist).
+pub fn files(dir: &Path) -> BTreeMap<String, Vec<u8>> {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return BTreeMap::new();
+    };
+    entries
+        .map(|e| e.unwrap().path())
+        .map(|p| {
+            let name = p.file_name().unwrap().to_string_lossy().into_owned();
+            (name, std::fs::read(&p).unwrap())
+        })
+        .collect()
 }

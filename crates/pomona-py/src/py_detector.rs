@@ -1,0 +1,217 @@
+//! `pomona.Detector`: a detector loaded once (built-in model or a model file, with parameter
+//! overrides) and called on many frames, from numpy arrays or straight from a dataset folder.
+//!
+//! Both calls return or write exactly what `pomona detect` writes: the same facade detector,
+//! the same confidence threshold rule ([`pomona::Detector::min_confidence_for`]) and the same
+//! detection file record ([`pomona::Detector::frame_record`]). Detection runs with the GIL
+//! released.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use pomona::{ParamOverride, RgbdFrame};
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+
+use crate::frame_arrays::frame_from_arrays;
+use crate::json_bridge::{from_python, to_python};
+use crate::py_error::to_py;
+
+/// A fruit detector of one pipeline, loaded once and called many times (thread-safe; the GIL is
+/// released while it detects).
+///
+/// ``Detector("shape-fit")`` loads the pipeline's built-in model; ``model="m.json"`` a model
+/// file from ``pomona train``; ``set={"key": value}`` overrides stage parameters (dotted keys,
+/// as ``pomona detect --set``).
+#[pyclass(frozen, module = "pomona")]
+pub struct Detector {
+    inner: pomona::Detector,
+}
+
+impl Detector {
+    /// Detections of `frame` kept at `min_confidence`, as the detection file's list.
+    fn detect_frame(
+        &self,
+        py: Python<'_>,
+        frame: &RgbdFrame,
+        min_confidence: Option<f64>,
+    ) -> PyResult<pomona::FrameDetections> {
+        let threshold = self
+            .inner
+            .min_confidence_for(min_confidence)
+            .map_err(to_py)?;
+        let found = py.detach(|| self.inner.detect(frame)).map_err(to_py)?;
+        Ok(self
+            .inner
+            .frame_record("", frame.color().is_some(), &found, threshold))
+    }
+}
+
+#[pymethods]
+impl Detector {
+    #[new]
+    #[pyo3(signature = (pipeline = "shape-fit", model = None, set = None))]
+    fn new(
+        pipeline: &str,
+        model: Option<PathBuf>,
+        set: Option<&Bound<'_, PyDict>>,
+    ) -> PyResult<Self> {
+        let mut builder = pomona::Detector::builder(pipeline).map_err(to_py)?;
+        if let Some(path) = model {
+            builder = builder.model_file(path);
+        }
+        if let Some(set) = set {
+            for (key, value) in set.iter() {
+                let key: String = key.extract()?;
+                let value: serde_json::Value = from_python(&value, &format!("value of `{key}`"))?;
+                builder = builder.overrides([ParamOverride::new(key, value)]);
+            }
+        }
+        Ok(Self {
+            inner: builder.build().map_err(to_py)?,
+        })
+    }
+
+    /// The pipeline's name (as written into detection files).
+    #[getter]
+    fn pipeline(&self) -> &'static str {
+        self.inner.pipeline()
+    }
+
+    /// The model's identity: 16 hex digits, as detection files record it.
+    #[getter]
+    fn model_id(&self) -> String {
+        self.inner.model().id.clone()
+    }
+
+    /// The model's operating confidence (``None`` for a model without calibration): the
+    /// default ``min_confidence``.
+    #[getter]
+    fn operating_confidence(&self) -> Option<f64> {
+        self.inner.operating_confidence()
+    }
+
+    /// Finds fruit in one frame.
+    ///
+    /// ``depth``: (H, W) uint16 in ``camera["depth_unit_m"]`` units (0 = no reading) or float32
+    /// metres; ``color``: (H, W, 3) uint8 RGB or ``None``; ``camera``: a dict with the keys of
+    /// ``camera.json``. Returns a list of dicts with the detection JSON's keys (``center_m`` in
+    /// the camera frame, metres; ``score``; ``confidence``; ``diameter_m``...). ``min_confidence``
+    /// ``None`` keeps those at the model's operating confidence (as ``pomona detect``), ``0.0``
+    /// keeps every detection.
+    ///
+    /// Raises ``TypeError`` for arrays of another dtype or shape, ``PomonaError`` for sizes that
+    /// disagree, an invalid camera or a threshold the model cannot apply.
+    #[pyo3(signature = (depth, color = None, *, camera, min_confidence = None))]
+    fn detect<'py>(
+        &self,
+        py: Python<'py>,
+        depth: &Bound<'py, PyAny>,
+        color: Option<&Bound<'py, PyAny>>,
+        camera: &Bound<'py, PyAny>,
+        min_confidence: Option<f64>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let color = color.filter(|c| !c.is_none());
+        let frame = frame_from_arrays(depth, color, camera)?;
+        let record = self.detect_frame(py, &frame, min_confidence)?;
+        to_python(py, &record.detections)
+    }
+
+    /// Detects in frames of the dataset folder ``data`` and writes ``<out>/<frame>.json`` for
+    /// each, byte-identical to ``pomona detect``'s files; one frame after another on this
+    /// thread, with the GIL released. ``frames``: stems to do (default: all).
+    ///
+    /// Returns one dict per frame: ``frame``, ``detections`` (number written), ``seconds``
+    /// (detection time, reading and writing excluded), ``error`` (``None``, or why the frame failed: a failure does not stop
+    /// the others) and ``file`` (the dataset file at fault, when known).
+    ///
+    /// Raises ``PomonaError`` for an unreadable dataset, an unknown frame, a colour pipeline on a
+    /// colour-less dataset, or a threshold the model cannot apply.
+    #[pyo3(signature = (data, out, frames = None, *, min_confidence = None))]
+    fn write_detections<'py>(
+        &self,
+        py: Python<'py>,
+        data: PathBuf,
+        out: PathBuf,
+        frames: Option<Vec<String>>,
+        min_confidence: Option<f64>,
+    ) -> PyResult<Bound<'py, PyList>> {
+        let threshold = self
+            .inner
+            .min_confidence_for(min_confidence)
+            .map_err(to_py)?;
+        let dataset = pomona::Dataset::open(&data).map_err(to_py)?;
+        let pipeline = pomona::pipeline(self.inner.pipeline()).map_err(to_py)?;
+        if pipeline.needs_color() && !dataset.has_color() {
+            return Err(to_py(format!(
+                "{} has no colour images (no color/ folder), and pipeline `{}` needs colour",
+                data.display(),
+                self.inner.pipeline()
+            )));
+        }
+        let frames = frames.unwrap_or_else(|| dataset.frames().to_vec());
+        if let Some(unknown) = frames.iter().find(|f| !dataset.frames().contains(f)) {
+            return Err(to_py(format!(
+                "{} has no frame `{unknown}`",
+                data.display()
+            )));
+        }
+        std::fs::create_dir_all(&out)
+            .map_err(|e| to_py(format!("cannot create {}: {e}", out.display())))?;
+        let results = py.detach(|| {
+            frames
+                .iter()
+                .map(|stem| {
+                    let mut seconds = 0.0;
+                    let written = (|| -> Result<usize, pomona::Error> {
+                        let frame = dataset.load_frame(stem)?;
+                        let started = Instant::now();
+                        let found = self.inner.detect(&frame)?;
+                        seconds = started.elapsed().as_secs_f64();
+                        let record = self.inner.frame_record(
+                            stem,
+                            frame.color().is_some(),
+                            &found,
+                            threshold,
+                        );
+                        pomona_io::write_json(&out.join(format!("{stem}.json")), &record)?;
+                        Ok(record.detections.len())
+                    })();
+                    (stem, written, seconds)
+                })
+                .collect::<Vec<_>>()
+        });
+        let list = PyList::empty(py);
+        for (stem, written, seconds) in results {
+            let row = PyDict::new(py);
+            row.set_item("frame", stem)?;
+            row.set_item("seconds", seconds)?;
+            match written {
+                Ok(n) => {
+                    row.set_item("detections", n)?;
+                    row.set_item("error", py.None())?;
+                    row.set_item("file", py.None())?;
+                }
+                Err(e) => {
+                    row.set_item("detections", 0)?;
+                    row.set_item("error", e.to_string())?;
+                    let file = match &e {
+                        pomona::Error::Dataset(d) => Some(d.path().display().to_string()),
+                        _ => None,
+                    };
+                    row.set_item("file", file)?;
+                }
+            }
+            list.append(row)?;
+        }
+        Ok(list)
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "Detector(pipeline={:?}, model_id={:?})",
+            self.inner.pipeline(),
+            self.inner.model().id
+        )
+    }
+}

@@ -23,6 +23,7 @@ use crate::py_error::to_py;
 /// Raises ``PomonaError`` for unreadable files (naming them), a detection file of a frame the
 /// dataset lacks, a dataset without truth, or invalid parameters.
 #[pyfunction]
+#[allow(clippy::too_many_arguments)] // one per keyword argument of the Python function
 #[pyo3(signature = (data, detections, *, tolerance_mm = 50.0, min_visibility = 0.5, min_confidence = None, threshold = None, image_2d = false))]
 pub fn evaluate<'py>(
     py: Python<'py>,

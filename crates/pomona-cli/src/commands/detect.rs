@@ -17,7 +17,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{Context, Result};
-use pomona::{ModelSource, Pipeline, StageTimings};
+use pomona::{Detection, ModelSource, Pipeline, StageTimings};
 use pomona_io::Dataset;
 
 use crate::detection_folder::{prepare, write_failures, FailedFrame, RunIdentity};
@@ -145,91 +145,52 @@ pub fn run_with(pipelines: &[Box<dyn Pipeline>], args: &DetectArgs) -> Result<De
     let detector = load_detector(pipeline, args.model.as_deref(), &args.set)?;
     let min_confidence = min_confidence(&detector, args.min_confidence)?;
     let model = detector.model_for_color(dataset.has_color()).clone();
-    let kept = |d: &pomona_core::Detection| min_confidence.is_none_or(|c| d.confidence_at_least(c));
     let name = pipeline.name();
     let identity = RunIdentity {
         pipeline: name,
         model_id: &model.id,
         min_confidence,
     };
-    let mine: Vec<String> = match args.shard {
-        Some(shard) => shard
-            .select(dataset.frames())
-            .into_iter()
-            .cloned()
-            .collect(),
-        None => dataset.frames().to_vec(),
+    let (frames, resumed) = frames_to_run(args, &dataset, &identity)?;
+    let writer = FrameWriter {
+        args,
+        dataset: &dataset,
+        detector: &detector,
+        min_confidence,
+        name,
+        recording: recording::open(
+            args.rrd.as_deref(),
+            &dataset,
+            &RunDescription {
+                pipeline: name,
+                model_id: &model.id,
+                min_confidence,
+            },
+        )?,
     };
-    let already = prepare(&args.out, &mine, &identity)?;
-    let recording = recording::open(
-        args.rrd.as_deref(),
-        &dataset,
-        &RunDescription {
-            pipeline: name,
-            model_id: &model.id,
-            min_confidence,
-        },
-    )?;
     if let Some(dir) = &args.overlay {
         std::fs::create_dir_all(dir)
             .with_context(|| format!("cannot create overlay folder {}", dir.display()))?;
     }
-    let frames: Vec<&String> = mine
-        .iter()
-        .filter(|f| !(args.resume && already.contains(*f)))
-        .collect();
-    let resumed = mine.len() - frames.len();
 
     let pool = thread_pool(args.threads.map(|n| n as usize))?;
     let bar = progress_bar(frames.len(), "detecting");
     let started = Instant::now();
-    let kept_words = match min_confidence {
-        Some(c) => format!("with confidence ≥ {c:.2}"),
-        None => "scoring ≥ 0".to_owned(),
-    };
     let batch = pool.install(|| {
         detect_frames(
             &detector,
             frames.len(),
             |i| {
-                let stem = frames[i];
+                let stem = &frames[i];
                 let frame = dataset.load_frame(stem)?;
                 Ok((format!("{}/{stem}", args.data.display()), frame, ()))
             },
-            |i, result| {
-                let record = detector.frame_record(
-                    frames[i],
-                    dataset.has_color(),
-                    &result.detections,
-                    min_confidence,
-                );
-                pomona_io::write_json(&args.out.join(format!("{}.json", frames[i])), &record)?;
-                if let Some(recording) = &recording {
-                    recording.record_frame(&dataset, frames[i], &result.detections, &kept)?;
-                }
-                if let Some(dir) = &args.overlay {
-                    let (image, truth) = view_of(&dataset, frames[i])?;
-                    let shown = match min_confidence {
-                        Some(_) => record.detections.clone(),
-                        None => shown(&result.detections, 0.0),
-                    };
-                    write_overlay(
-                        &dir.join(format!("{}.png", frames[i])),
-                        &image,
-                        dataset.camera(),
-                        truth.as_ref(),
-                        &shown,
-                        0.5,
-                        &format!("{}: {name} ({} {})", frames[i], shown.len(), kept_words),
-                    )?;
-                }
-                Ok(())
-            },
+            |i, result| writer.write(&frames[i], &result.detections),
             &|| bar.inc(1),
         )
     });
     bar.finish_and_clear();
-    if let Some(recording) = recording {
+    if let Some(recording) = writer.recording {
         recording.finish()?;
     }
     let wall = started.elapsed().as_secs_f64();
@@ -247,38 +208,140 @@ pub fn run_with(pipelines: &[Box<dyn Pipeline>], args: &DetectArgs) -> Result<De
     }
     let shard = args.shard.map(|s| (s.index, s.count));
     let report = write_failures(&args.out, shard, name, frames.len(), &failures)?;
-    let all: usize = batch.done.iter().map(|(_, r, ())| r.detections.len()).sum();
-    let written: usize = batch
+    let kept = |d: &Detection| min_confidence.is_none_or(|c| d.confidence_at_least(c));
+    let found: Vec<&[Detection]> = batch
         .done
         .iter()
-        .map(|(_, r, ())| r.detections.iter().filter(|d| kept(d)).count())
-        .sum();
+        .map(|(_, r, ())| r.detections.as_slice())
+        .collect();
     let summary = DetectSummary {
         frames: batch.totals.frames,
         resumed,
         failed: failures.len(),
-        detections: written,
+        detections: found
+            .iter()
+            .flat_map(|d| d.iter())
+            .filter(|d| kept(d))
+            .count(),
         ms_per_frame: batch.totals.ms_per_frame(),
         timings: batch.totals.timings,
         model: model.source.clone(),
     };
-    let kept_note = match (min_confidence, model.operating_confidence) {
+    warn_foreign_files(&args.out, dataset.frames());
+    let thresholds = (min_confidence, model.operating_confidence);
+    print_summary(args, name, &summary, &found, thresholds, wall);
+    if let Some(report) = report {
+        return Err(FramesFailed {
+            failed: failures.len(),
+            total: frames.len(),
+            report,
+        }
+        .into());
+    }
+    Ok(summary)
+}
+
+/// The frames this run detects on: the shard's share of the dataset (all of it without
+/// `--shard`), less those `--resume` finds done; and how many it skipped for that. Checks the
+/// output folder first (see `detection_folder.rs`).
+///
+/// # Errors
+/// An output folder holding detections made differently, or one that cannot be read.
+fn frames_to_run(
+    args: &DetectArgs,
+    dataset: &Dataset,
+    identity: &RunIdentity<'_>,
+) -> Result<(Vec<String>, usize)> {
+    let mine: Vec<String> = match args.shard {
+        Some(shard) => shard
+            .select(dataset.frames())
+            .into_iter()
+            .cloned()
+            .collect(),
+        None => dataset.frames().to_vec(),
+    };
+    let already = prepare(&args.out, &mine, identity)?;
+    let total = mine.len();
+    let frames: Vec<String> = mine
+        .into_iter()
+        .filter(|f| !(args.resume && already.contains(f)))
+        .collect();
+    let resumed = total - frames.len();
+    Ok((frames, resumed))
+}
+
+/// What happens to one frame's detections: its detection file, its part of the recording, its
+/// overlay. Shared by the worker threads.
+struct FrameWriter<'a> {
+    args: &'a DetectArgs,
+    dataset: &'a Dataset,
+    detector: &'a pomona::Detector,
+    min_confidence: Option<f64>,
+    name: &'static str,
+    recording: Option<recording::RunRecording>,
+}
+
+impl FrameWriter<'_> {
+    fn write(&self, stem: &str, detections: &[Detection]) -> Result<()> {
+        let (args, dataset) = (self.args, self.dataset);
+        let record =
+            self.detector
+                .frame_record(stem, dataset.has_color(), detections, self.min_confidence);
+        pomona_io::write_json(&args.out.join(format!("{stem}.json")), &record)?;
+        if let Some(recording) = &self.recording {
+            let kept = |d: &Detection| self.min_confidence.is_none_or(|c| d.confidence_at_least(c));
+            recording.record_frame(dataset, stem, detections, &kept)?;
+        }
+        let Some(dir) = &args.overlay else {
+            return Ok(());
+        };
+        let (image, truth) = view_of(dataset, stem)?;
+        let (shown, kept_words) = match self.min_confidence {
+            Some(c) => (
+                record.detections.clone(),
+                format!("with confidence ≥ {c:.2}"),
+            ),
+            None => (shown(detections, 0.0), "scoring ≥ 0".to_owned()),
+        };
+        write_overlay(
+            &dir.join(format!("{stem}.png")),
+            &image,
+            dataset.camera(),
+            truth.as_ref(),
+            &shown,
+            0.5,
+            &format!("{stem}: {} ({} {kept_words})", self.name, shown.len()),
+        )
+    }
+}
+
+/// The run's closing lines: what was made and kept, where it went, and the stage timings.
+fn print_summary(
+    args: &DetectArgs,
+    name: &str,
+    summary: &DetectSummary,
+    found: &[&[Detection]],
+    (min_confidence, operating): (Option<f64>, Option<f64>),
+    wall_s: f64,
+) {
+    let all: usize = found.iter().map(|d| d.len()).sum();
+    let written = summary.detections;
+    let kept_note = match (min_confidence, operating) {
         (Some(c), Some(op)) if c == op => {
             format!("{written} kept at the model's operating confidence {c:.3}")
         }
         (Some(c), _) => format!("{written} kept at confidence ≥ {c:.3}"),
         (None, _) => format!(
             "all kept: the model has no confidence calibration; {} score ≥ 0",
-            batch
-                .done
+            found
                 .iter()
-                .map(|(_, r, ())| r.detections.iter().filter(|d| d.score >= 0.0).count())
-                .sum::<usize>()
+                .flat_map(|d| d.iter())
+                .filter(|d| d.score >= 0.0)
+                .count()
         ),
     };
-    warn_foreign_files(&args.out, dataset.frames());
-    let resumed_note = if resumed > 0 {
-        format!(" ({resumed} already done, skipped)")
+    let resumed_note = if summary.resumed > 0 {
+        format!(" ({} already done, skipped)", summary.resumed)
     } else {
         String::new()
     };
@@ -287,11 +350,10 @@ pub fn run_with(pipelines: &[Box<dyn Pipeline>], args: &DetectArgs) -> Result<De
         .map_or(String::new(), |s| format!(" (shard {s})"));
     println!(
         "`{name}` ({}) made {all} detections ({kept_note}) in {} frame(s){shard_note} of \
-         {}{resumed_note} in {:.1} s; detection files in {}",
+         {}{resumed_note} in {wall_s:.1} s; detection files in {}",
         summary.model,
         summary.frames,
         args.data.display(),
-        wall,
         args.out.display()
     );
     if let Some(rrd) = &args.rrd {
@@ -309,13 +371,4 @@ pub fn run_with(pipelines: &[Box<dyn Pipeline>], args: &DetectArgs) -> Result<De
             );
         }
     }
-    if let Some(report) = report {
-        return Err(FramesFailed {
-            failed: failures.len(),
-            total: frames.len(),
-            report,
-        }
-        .into());
-    }
-    Ok(summary)
 }

@@ -41,15 +41,16 @@ impl MatchingArgs {
     /// colour-only detector's 3D centre is only a size-prior guess), with a note on stderr when
     /// `--2d` was not given. Not validated: callers validate the whole config.
     pub fn config(&self, base: EvalConfig, data_has_depth: bool) -> EvalConfig {
-        let image_2d = self.image_2d || !data_has_depth;
-        if image_2d && !self.image_2d {
-            eprintln!("note: the data has no depth, so detections are matched in the image (--2d)");
-        }
-        EvalConfig {
+        let config = EvalConfig {
             tolerance_m: self.tolerance_mm / 1000.0,
             min_visibility: self.min_visibility,
-            radius_fraction_2d: image_2d.then_some(self.radius_fraction),
+            radius_fraction_2d: self.image_2d.then_some(self.radius_fraction),
             ..base
         }
+        .for_data(data_has_depth);
+        if config.radius_fraction_2d.is_some() && !self.image_2d {
+            eprintln!("note: the data has no depth, so detections are matched in the image (--2d)");
+        }
+        config
     }
 }

@@ -778,17 +778,7 @@ fn demo_runs_pipelines_with_a_builtin_model() {
 
 /// `pomona detect --pipeline shape-fit` (the built-in model) on `data` into `out`, plus `extra`.
 fn shape_fit_detect(data: &Path, out: &Path, extra: &[&str]) -> Output {
-    let mut args = vec![
-        "detect",
-        "--pipeline",
-        "shape-fit",
-        "--data",
-        data.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ];
-    args.extend_from_slice(extra);
-    pomona(&args)
+    run::detect("shape-fit", data, out, extra)
 }
 
 #[test]
@@ -843,17 +833,7 @@ fn color_contour_runs_on_colour_only_data_and_eval_2d_scores_it() {
     };
     let detect = |label: &str| {
         let out_dir = dir.path().join(label);
-        let out = pomona(&[
-            "detect",
-            "--pipeline",
-            "color-contour",
-            "--min-confidence",
-            "0",
-            "--data",
-            data.to_str().unwrap(),
-            "--out",
-            out_dir.to_str().unwrap(),
-        ]);
+        let out = run::detect("color-contour", &data, &out_dir, &["--min-confidence", "0"]);
         assert!(out.status.success(), "{label}: {}", stderr(&out));
         let dets = read_detections(&out_dir);
         let all: Vec<Detection> = dets.into_iter().flat_map(|f| f.detections).collect();

@@ -2,7 +2,7 @@
 //! and the detector that chains the stages.
 
 use pomona_core::{Detection, RgbdFrame};
-use pomona_learn::{ModelFile, RbfSvm, SvmClassifier};
+use pomona_learn::{ModelFile, SvmClassifier};
 use pomona_pipeline::{
     params_from_json, params_to_json, run_stage, Detector, FrameSource, Pipeline, PipelineError,
     StageTimings, TrainOptions,
@@ -74,20 +74,7 @@ pub struct ColorContourPipeline {
 /// The model file's classifier slot: this method has no SVM (its score is support × colour
 /// purity), so the file carries an empty one that is never evaluated.
 fn no_svm() -> SvmClassifier {
-    SvmClassifier {
-        scaler: None,
-        svm: RbfSvm {
-            n_features: 1,
-            gamma: 1.0,
-            rho: 0.0,
-            support_vectors: Vec::new(),
-            coef: Vec::new(),
-            n_support_negative: 0,
-            n_support_positive: 0,
-            probability: None,
-        },
-        info: None,
-    }
+    SvmClassifier::constant(1, 0.0)
 }
 
 impl Pipeline for ColorContourPipeline {

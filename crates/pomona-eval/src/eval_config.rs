@@ -51,6 +51,19 @@ impl EvalConfig {
         }
     }
 
+    /// This configuration for data with or without depth: data without depth is always matched
+    /// in the image (a colour-only detector's 3D centre is only a size-prior guess), at the
+    /// [`EvalConfig::image_2d`] fraction unless one is set already.
+    pub fn for_data(self, has_depth: bool) -> Self {
+        match (has_depth, self.radius_fraction_2d) {
+            (false, None) => Self {
+                radius_fraction_2d: Self::image_2d().radius_fraction_2d,
+                ..self
+            },
+            _ => self,
+        }
+    }
+
     /// Checks the parameters.
     ///
     /// # Errors

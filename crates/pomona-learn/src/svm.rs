@@ -391,6 +391,26 @@ pub struct SvmClassifier {
 }
 
 impl SvmClassifier {
+    /// A classifier without support vectors whose decision value is `score` for every sample
+    /// (ρ = −score): what a method that stores no trained SVM puts in its model file, and a
+    /// stand-in classifier in tests.
+    pub fn constant(n_features: usize, score: f64) -> Self {
+        Self {
+            scaler: None,
+            svm: RbfSvm {
+                n_features,
+                gamma: 1.0,
+                rho: 0.0 - score, // not `-score`: a score of 0 gives ρ = +0, not −0
+                support_vectors: Vec::new(),
+                coef: Vec::new(),
+                n_support_negative: 0,
+                n_support_positive: 0,
+                probability: None,
+            },
+            info: None,
+        }
+    }
+
     /// Features per sample.
     pub fn n_features(&self) -> usize {
         self.svm.n_features

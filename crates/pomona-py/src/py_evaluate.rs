@@ -47,11 +47,11 @@ pub fn evaluate<'py>(
             (None, Some(_)) => None,
             (None, None) => recorded,
         },
-        // As `pomona eval`: `--2d` on request, and always for data without depth.
-        radius_fraction_2d: (image_2d || !dataset.has_depth())
+        radius_fraction_2d: image_2d
             .then(|| EvalConfig::image_2d().radius_fraction_2d)
             .flatten(),
-    };
+    }
+    .for_data(dataset.has_depth());
     let mut frames = Vec::new();
     for stem in dataset.frames() {
         if let Some(truth) = dataset.load_truth(stem).map_err(to_py)? {

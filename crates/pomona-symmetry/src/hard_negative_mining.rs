@@ -226,7 +226,6 @@ fn mine_frame(
 mod tests {
     use super::*;
     use crate::StageParams;
-    use pomona_learn::RbfSvm;
     use pomona_pipeline::{LabelledFrame, SyntheticFrames};
     use pomona_synth::{CameraPreset, NoiseModel, SceneSpec};
 
@@ -252,20 +251,7 @@ mod tests {
 
     /// A classifier that scores every box +1 (no support vectors, ρ = −1).
     fn accept_all(n_features: usize) -> SvmClassifier {
-        SvmClassifier {
-            scaler: None,
-            svm: RbfSvm {
-                n_features,
-                gamma: 1.0,
-                rho: -1.0,
-                support_vectors: Vec::new(),
-                coef: Vec::new(),
-                n_support_negative: 0,
-                n_support_positive: 0,
-                probability: None,
-            },
-            info: None,
-        }
+        SvmClassifier::constant(n_features, 1.0)
     }
 
     /// With a detector that accepts every box, mining takes exactly the cap of boxes per frame,

@@ -249,23 +249,14 @@ fn dirs(d: &[PathBuf]) -> String {
 /// The summary as a Markdown table: a heading saying what was run, then one row per figure.
 pub fn summary_markdown(r: &ExperimentReport) -> String {
     let mut out = summary_heading(r);
-    let image_2d = r.eval.radius_fraction_2d.is_some();
     for (k, v, p) in summary_rows(r) {
-        // Each evaluation reports its centre error one way: metres in 3D, truth radii in 2D.
-        let shown = match k {
-            "centre error (median)" => !image_2d,
-            "centre error (median, truth radii)" => image_2d,
-            _ => true,
-        };
-        if shown {
-            out.push_str(&format!("| {k} | {v} | {p} |\n"));
-        }
+        out.push_str(&format!("| {k} | {v} | {p} |\n"));
     }
     out
 }
 
 /// The figures of the summary table: (name, mean ± sd over splits, pooled).
-fn summary_rows(r: &ExperimentReport) -> [(&'static str, String, String); 9] {
+fn summary_rows(r: &ExperimentReport) -> [(&'static str, String, String); 8] {
     let s = &r.summary;
     let fmt = |v: Option<f64>, scale: f64, digits: usize, unit: &str| {
         v.map_or_else(
@@ -295,16 +286,19 @@ fn summary_rows(r: &ExperimentReport) -> [(&'static str, String, String); 9] {
             fmt_mean_sd(s.recall, 1.0, 3, ""),
             pooled(&|p| fmt(p.recall, 1.0, 3, "")),
         ),
-        (
-            "centre error (median)",
-            fmt_mean_sd(s.center_error_median_m, 1e3, 1, " mm"),
-            pooled(&|p| fmt(p.center_error_m.median, 1e3, 1, " mm")),
-        ),
-        (
-            "centre error (median, truth radii)",
-            fmt_mean_sd(s.center_error_median_radii, 1.0, 3, " r"),
-            pooled(&|p| fmt(p.center_error_radii.and_then(|e| e.median), 1.0, 3, " r")),
-        ),
+        // Each evaluation measures its centre error one way: metres in 3D, truth radii in 2D.
+        match r.eval.radius_fraction_2d {
+            None => (
+                "centre error (median)",
+                fmt_mean_sd(s.center_error_median_m, 1e3, 1, " mm"),
+                pooled(&|p| fmt(p.center_error_m.median, 1e3, 1, " mm")),
+            ),
+            Some(_) => (
+                "centre error (median, truth radii)",
+                fmt_mean_sd(s.center_error_median_radii, 1.0, 3, " r"),
+                pooled(&|p| fmt(p.center_error_radii.and_then(|e| e.median), 1.0, 3, " r")),
+            ),
+        },
         (
             "diameter error (mean abs)",
             "".into(),

@@ -138,10 +138,11 @@ pub fn run_with(pipelines: &[Box<dyn Pipeline>], args: &TrainArgs) -> Result<Tra
     let pipeline = configured.as_deref().unwrap_or(found);
     let frames = open_frames(pipeline, &args.data)?;
     let mut calibration = args.calibration();
-    if !frames.has_depth() && calibration.folds > 0 {
-        // A colour-only detector's 3D centre is a size-prior guess: judge held-out detections
-        // in the image, as `pomona eval` does on such data.
-        calibration.radius_fraction_2d = EvalConfig::image_2d().radius_fraction_2d;
+    // Held-out detections are judged as `pomona eval` judges them on this data.
+    calibration.radius_fraction_2d = EvalConfig::default()
+        .for_data(frames.has_depth())
+        .radius_fraction_2d;
+    if calibration.radius_fraction_2d.is_some() && calibration.folds > 0 {
         eprintln!("note: the data has no depth, so calibration matches detections in the image");
     }
     let pool = thread_pool(args.threads.map(|n| n as usize))?;

@@ -149,6 +149,54 @@ fn select_inliers<D, E: Estimator<D>>(
         .collect()
 }
 
+/// Least-squares refinement of the best hypothesis on its support (up to [`REFINE_ROUNDS`]
+/// rounds), kept only while the consensus score does not get worse.
+struct Refinement {
+    /// Residual below which a point supports the refit, metres.
+    threshold_m: f64,
+    /// The consensus loop's inlier threshold, metres.
+    inlier_threshold_m: f64,
+}
+
+impl Refinement {
+    /// Returns the refined model and its total score (the inputs when no refit helps).
+    fn run<D, E: Estimator<D>>(
+        &self,
+        estimator: &E,
+        data: &[D],
+        valid: &[usize],
+        score: &impl Fn(f64) -> f64,
+        mut model: E::Model,
+        mut total: f64,
+    ) -> (E::Model, f64) {
+        for _ in 0..REFINE_ROUNDS {
+            let support = select_inliers(estimator, &model, data, valid, self.threshold_m);
+            if support.len() < estimator.min_samples() {
+                break;
+            }
+            let Some(refined) = estimator.refine(&model, data, &support) else {
+                break;
+            };
+            if !estimator.is_model_valid(&refined) {
+                break;
+            }
+            let thr = self.inlier_threshold_m;
+            match total_score(estimator, &refined, data, valid, score, thr, total) {
+                Some((sum, _)) if sum <= total => {
+                    let improved = sum < total;
+                    model = refined;
+                    total = sum;
+                    if !improved {
+                        break;
+                    }
+                }
+                _ => break,
+            }
+        }
+        (model, total)
+    }
+}
+
 /// Hypothesise-and-verify with per-residual `score` (non-negative, `NaN`-safe).
 pub(crate) fn run_loop<D, E, S>(
     estimator: &E,
@@ -213,30 +261,11 @@ where
     };
 
     if let Some(refine_threshold_m) = settings.refine_threshold_m {
-        for _ in 0..REFINE_ROUNDS {
-            let support = select_inliers(estimator, &model, data, &valid, refine_threshold_m);
-            if support.len() < n {
-                break;
-            }
-            let Some(refined) = estimator.refine(&model, data, &support) else {
-                break;
-            };
-            if !estimator.is_model_valid(&refined) {
-                break;
-            }
-            let thr = settings.inlier_threshold_m;
-            match total_score(estimator, &refined, data, &valid, &score, thr, total) {
-                Some((sum, _)) if sum <= total => {
-                    let improved = sum < total;
-                    model = refined;
-                    total = sum;
-                    if !improved {
-                        break;
-                    }
-                }
-                _ => break,
-            }
-        }
+        let refine = Refinement {
+            threshold_m: refine_threshold_m,
+            inlier_threshold_m: settings.inlier_threshold_m,
+        };
+        (model, total) = refine.run(estimator, data, &valid, &score, model, total);
     }
 
     let inliers = select_inliers(estimator, &model, data, &valid, settings.inlier_threshold_m);

@@ -15,9 +15,10 @@
 use std::time::Instant;
 
 use pomona_consensus::ShapeChoice;
+use pomona_core::Detection;
 use pomona_eval::{evaluate, EvalConfig, FrameInput};
-use pomona_pipeline::SyntheticFrames;
 use pomona_pipeline::{FrameSource, Pipeline, StageTimings, TrainOptions};
+use pomona_pipeline::{LabelledFrame, SyntheticFrames};
 use pomona_shapefit::ShapeFitPipeline;
 use pomona_synth::{FruitChoice, FruitKind, NoiseModel, SceneSpec};
 
@@ -118,36 +119,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let lf = test.load(i)?;
         let detections = detector.detect(&lf.frame, &mut timings)?;
         if std::env::var_os("POMONA_DEBUG").is_some() {
-            for d in detections
-                .iter()
-                .filter(|d| d.score > 0.0 || std::env::var_os("POMONA_DEBUG_ALL").is_some())
-            {
-                if let Some(t) = lf
-                    .truth
-                    .fruits
-                    .iter()
-                    .filter_map(|t| t.center_m.map(|c| (t, c)))
-                    .min_by(|a, b| {
-                        (a.1 - d.center_m)
-                            .norm()
-                            .total_cmp(&(b.1 - d.center_m).norm())
-                    })
-                {
-                    let e = d.center_m - t.1;
-                    println!(
-                        "{} truth {} d {:.3} vis {:.2} det score {:.2} d {:.3} err [{:+.3} {:+.3} {:+.3}]",
-                        lf.name,
-                        t.0.id,
-                        t.0.diameter_m.unwrap_or(0.0),
-                        t.0.visibility.unwrap_or(0.0),
-                        d.score,
-                        d.diameter_m.unwrap_or(0.0),
-                        e.x,
-                        e.y,
-                        e.z
-                    );
-                }
-            }
+            print_debug(&lf, &detections);
         }
         frames.push(FrameInput {
             frame: lf.name,
@@ -163,4 +135,37 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         1e3 * timings.total().as_secs_f64() / n_test.max(1) as f64
     );
     Ok(())
+}
+
+/// `POMONA_DEBUG`: each positive detection (every one with `POMONA_DEBUG_ALL`) against its
+/// nearest truth fruit.
+fn print_debug(lf: &LabelledFrame, detections: &[Detection]) {
+    let all = std::env::var_os("POMONA_DEBUG_ALL").is_some();
+    for d in detections.iter().filter(|d| d.score > 0.0 || all) {
+        let nearest = lf
+            .truth
+            .fruits
+            .iter()
+            .filter_map(|t| t.center_m.map(|c| (t, c)))
+            .min_by(|a, b| {
+                (a.1 - d.center_m)
+                    .norm()
+                    .total_cmp(&(b.1 - d.center_m).norm())
+            });
+        if let Some((t, c)) = nearest {
+            let e = d.center_m - c;
+            println!(
+                "{} truth {} d {:.3} vis {:.2} det score {:.2} d {:.3} err [{:+.3} {:+.3} {:+.3}]",
+                lf.name,
+                t.id,
+                t.diameter_m.unwrap_or(0.0),
+                t.visibility.unwrap_or(0.0),
+                d.score,
+                d.diameter_m.unwrap_or(0.0),
+                e.x,
+                e.y,
+                e.z
+            );
+        }
+    }
 }

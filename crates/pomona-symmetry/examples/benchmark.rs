@@ -27,6 +27,7 @@
 
 use std::time::Instant;
 
+use clap::Parser;
 use pomona_core::nalgebra::Point3;
 use pomona_eval::{evaluate, EvalConfig, FrameInput};
 use pomona_pipeline::{
@@ -50,222 +51,209 @@ fn frames(spec: &SceneSpec, seed: u64, range: std::ops::Range<u64>) -> Vec<Label
     .unwrap()
 }
 
-fn arg<'a>(args: &'a [String], name: &str, default: &'a str) -> &'a str {
-    args.iter()
-        .position(|a| a == name)
-        .and_then(|i| args.get(i + 1))
-        .map_or(default, String::as_str)
+/// The benchmark's options (see the module docs); a parameter left out keeps the detector's
+/// default.
+#[derive(Parser, Debug)]
+struct Args {
+    #[arg(long, default_value = "sr4000")]
+    camera: CameraPreset,
+    #[arg(long, default_value = "tof")]
+    noise: NoiseModel,
+    #[arg(long, default_value = "pepper")]
+    fruit: FruitChoice,
+    #[arg(long, default_value_t = 0.5)]
+    green: f64,
+    #[arg(long, default_value_t = 40)]
+    train: u64,
+    #[arg(long, default_value_t = 20)]
+    test: u64,
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    #[arg(long, default_value_t = 1)]
+    splits: u64,
+    #[arg(long, default_value_t = 1)]
+    threads: usize,
+    #[arg(long, default_value_t = 10)]
+    quality: u64,
+    #[arg(long, default_value_t = 5)]
+    folds: usize,
+    #[arg(long, default_value_t = 40)]
+    negatives: usize,
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "symmetry+pruning,fixed+pruning"
+    )]
+    variants: Vec<String>,
+    #[arg(long, default_value_t = 0.0)]
+    cascade_min: f64,
+    /// Distance, angle, θ and φ bins of the cascade's histogram.
+    #[arg(long, value_delimiter = ',', num_args = 4)]
+    cascade_bins: Option<Vec<usize>>,
+    /// Highlight parameter overrides as a JSON object, e.g. `{"t_h": 0}`.
+    #[arg(long, default_value = "{}")]
+    highlight: String,
+    #[arg(long)]
+    stride: Option<f64>,
+    #[arg(long)]
+    min_behind: Option<f64>,
+    #[arg(long)]
+    lattice: Option<usize>,
+    #[arg(long)]
+    coherence: Option<f64>,
+    #[arg(long)]
+    nms: Option<f64>,
+    #[arg(long)]
+    bandwidth: Option<f64>,
+    #[arg(long)]
+    score_points: Option<usize>,
+    #[arg(long)]
+    refinements: Option<usize>,
+    #[arg(long)]
+    weight: Option<f64>,
+    #[arg(long)]
+    azimuth: Option<usize>,
+    #[arg(long)]
+    elevation: Option<usize>,
+    #[arg(long)]
+    coarse_points: Option<usize>,
+    #[arg(long)]
+    coarse_keep: Option<usize>,
+    #[arg(long)]
+    max_distance: Option<f64>,
 }
 
-fn main() {
-    let args: Vec<String> = std::env::args().collect();
-    let camera = match arg(&args, "--camera", "sr4000") {
-        "kinect-v2" => CameraPreset::KinectV2,
-        "d435" => CameraPreset::D435,
-        _ => CameraPreset::Sr4000,
-    };
-    let noise = match arg(&args, "--noise", "tof") {
-        "none" => NoiseModel::None,
-        "low" => NoiseModel::Low,
-        _ => NoiseModel::Tof,
-    };
-    let green: f64 = arg(&args, "--green", "0.5").parse().unwrap();
-    let n_train: u64 = arg(&args, "--train", "40").parse().unwrap();
-    let n_test: u64 = arg(&args, "--test", "20").parse().unwrap();
-    let base_seed: u64 = arg(&args, "--seed", "1").parse().unwrap();
-    let splits: u64 = arg(&args, "--splits", "1").parse().unwrap();
-    let threads: usize = arg(&args, "--threads", "1").parse().unwrap();
-    let quality: u64 = arg(&args, "--quality", "10").parse().unwrap();
-    let folds: usize = arg(&args, "--folds", "5").parse().unwrap();
-    let mut boxes = StageParams::symmetry().boxes;
-    boxes.stride_m = arg(&args, "--stride", &boxes.stride_m.to_string())
-        .parse()
-        .unwrap();
-    boxes.min_behind_m = arg(&args, "--min-behind", &boxes.min_behind_m.to_string())
-        .parse()
-        .unwrap();
-    boxes.pixel_lattice = arg(&args, "--lattice", &boxes.pixel_lattice.to_string())
-        .parse()
-        .unwrap();
-    boxes.max_normal_coherence = arg(
-        &args,
-        "--coherence",
-        &boxes.max_normal_coherence.to_string(),
-    )
-    .parse()
-    .unwrap();
-    let mut merging = StageParams::symmetry().merging;
-    merging.nms_radius_m = arg(&args, "--nms", &merging.nms_radius_m.to_string())
-        .parse()
-        .unwrap();
-    merging.bandwidth_m = arg(&args, "--bandwidth", &merging.bandwidth_m.to_string())
-        .parse()
-        .unwrap();
-    let cascade_min: f64 = arg(&args, "--cascade-min", "0").parse().unwrap();
-    let mut cascade_bins = StageParams::symmetry().cascade.histogram;
-    if let Some(b) = args.iter().position(|a| a == "--cascade-bins") {
-        let v: Vec<usize> = args[b + 1].split(',').map(|x| x.parse().unwrap()).collect();
-        cascade_bins.distance_bins = v[0];
-        cascade_bins.angle_bins = v[1];
-        cascade_bins.first_bins = v[2];
-        cascade_bins.second_bins = v[3];
+/// `value`, when given, replaces `field`.
+fn set<T: Copy>(field: &mut T, value: Option<T>) {
+    if let Some(v) = value {
+        *field = v;
     }
-    let negatives: usize = arg(&args, "--negatives", "40").parse().unwrap();
-    let variants: Vec<String> = arg(&args, "--variants", "symmetry+pruning,fixed+pruning")
-        .split(',')
-        .filter(|v| !v.is_empty())
-        .map(str::to_owned)
-        .collect();
-    let mut sym = StageParams::symmetry().symmetry;
-    sym.score_points = arg(&args, "--score-points", &sym.score_points.to_string())
-        .parse()
-        .unwrap();
-    sym.refinements = arg(&args, "--refinements", &sym.refinements.to_string())
-        .parse()
-        .unwrap();
-    sym.angle_weight_m = arg(&args, "--weight", &sym.angle_weight_m.to_string())
-        .parse()
-        .unwrap();
-    sym.azimuth_steps = arg(&args, "--azimuth", &sym.azimuth_steps.to_string())
-        .parse()
-        .unwrap();
-    sym.elevation_steps = arg(&args, "--elevation", &sym.elevation_steps.to_string())
-        .parse()
-        .unwrap();
-    sym.coarse_points = arg(&args, "--coarse-points", &sym.coarse_points.to_string())
-        .parse()
-        .unwrap();
-    sym.coarse_keep = arg(&args, "--coarse-keep", &sym.coarse_keep.to_string())
-        .parse()
-        .unwrap();
-    sym.max_distance_m = arg(&args, "--max-distance", &sym.max_distance_m.to_string())
-        .parse()
-        .unwrap();
+}
 
-    let fruit = match arg(&args, "--fruit", "pepper") {
-        "mixed" => FruitChoice::Mixed,
-        _ => SceneSpec::default().fruit,
-    };
+impl Args {
+    /// The symmetry detector's defaults with this run's overrides (variants change frame,
+    /// merging, pruning and cascade on top).
+    fn base_params(&self) -> StageParams {
+        let mut p = StageParams::symmetry();
+        set(&mut p.boxes.stride_m, self.stride);
+        set(&mut p.boxes.min_behind_m, self.min_behind);
+        set(&mut p.boxes.pixel_lattice, self.lattice);
+        set(&mut p.boxes.max_normal_coherence, self.coherence);
+        set(&mut p.merging.nms_radius_m, self.nms);
+        set(&mut p.merging.bandwidth_m, self.bandwidth);
+        let sym = &mut p.symmetry;
+        set(&mut sym.score_points, self.score_points);
+        set(&mut sym.refinements, self.refinements);
+        set(&mut sym.angle_weight_m, self.weight);
+        set(&mut sym.azimuth_steps, self.azimuth);
+        set(&mut sym.elevation_steps, self.elevation);
+        set(&mut sym.coarse_points, self.coarse_points);
+        set(&mut sym.coarse_keep, self.coarse_keep);
+        set(&mut sym.max_distance_m, self.max_distance);
+        if let Some(b) = &self.cascade_bins {
+            let h = &mut p.cascade.histogram;
+            (h.distance_bins, h.angle_bins, h.first_bins, h.second_bins) = (b[0], b[1], b[2], b[3]);
+        }
+        p.cascade.min_score = self.cascade_min;
+        p.training.negatives_per_frame = self.negatives;
+        let mut hl = serde_json::to_value(&p.highlight).unwrap();
+        let overrides: serde_json::Value = serde_json::from_str(&self.highlight).unwrap();
+        for (k, v) in overrides
+            .as_object()
+            .expect("--highlight must be a JSON object")
+        {
+            hl[k] = v.clone();
+        }
+        p.highlight = serde_json::from_value(hl).unwrap();
+        p
+    }
+
+    /// `base` turned into `variant`: `symmetry`, `fixed` or `viewer`, with `+pruning` and
+    /// `+cascade`.
+    fn variant_params(base: &StageParams, variant: &str) -> StageParams {
+        let mut p = match variant.split('+').next().unwrap_or_default() {
+            "symmetry" => base.clone(),
+            "fixed" => StageParams {
+                frame: FrameKind::Fixed,
+                ..base.clone()
+            },
+            "viewer" => {
+                let viewer = StageParams::viewer_pose();
+                let mut cascade = viewer.cascade.clone();
+                cascade.min_score = base.cascade.min_score;
+                cascade.histogram = base.cascade.histogram;
+                StageParams {
+                    frame: viewer.frame,
+                    merge: viewer.merge,
+                    refinement: viewer.refinement,
+                    cascade,
+                    ..base.clone()
+                }
+            }
+            other => panic!("unknown variant `{other}` (symmetry, fixed or viewer)"),
+        };
+        p.highlight.enabled = variant.contains("+pruning");
+        p.cascade.enabled = variant.contains("+cascade");
+        p
+    }
+}
+
+/// One variant's figures on one split: AP (VOC 11-point, all-point) and ms per frame.
+type Figures = [f64; 3];
+
+fn main() {
+    let args = Args::parse();
     let spec = SceneSpec {
-        camera: camera.camera(),
-        noise,
-        green_fraction: green,
-        fruit,
+        camera: args.camera.camera(),
+        noise: args.noise,
+        green_fraction: args.green,
+        fruit: args.fruit,
         ..SceneSpec::default()
     };
     println!(
-        "benchmark: camera {} noise {} green {green} train {n_train} test {n_test} seed {base_seed} \
-         splits {splits} detection threads {threads}",
-        camera.name(),
-        noise.name()
+        "benchmark: camera {} noise {} green {} train {} test {} seed {} splits {} detection \
+         threads {}",
+        args.camera.name(),
+        args.noise.name(),
+        args.green,
+        args.train,
+        args.test,
+        args.seed,
+        args.splits,
+        args.threads
     );
-    let mut summary: Vec<(String, Vec<[f64; 3]>)> =
-        variants.iter().map(|v| (v.clone(), Vec::new())).collect();
-    for seed in base_seed..base_seed + splits {
+    let base = args.base_params();
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(args.threads)
+        .build()
+        .unwrap();
+    let mut summary: Vec<Vec<Figures>> = vec![Vec::new(); args.variants.len()];
+    for seed in args.seed..args.seed + args.splits {
         println!("\n#### split with dataset seed {seed}");
         let t0 = Instant::now();
-        let train = frames(&spec, seed, 0..n_train);
-        let test = frames(&spec, seed, n_train..n_train + n_test);
+        let train = frames(&spec, seed, 0..args.train);
+        let test = frames(&spec, seed, args.train..args.train + args.test);
         println!("rendered in {:.1} s", t0.elapsed().as_secs_f64());
-
-        let mut hl = serde_json::to_value(StageParams::symmetry().highlight).unwrap();
-        let overrides: serde_json::Value =
-            serde_json::from_str(arg(&args, "--highlight", "{}")).unwrap();
-        for (k, v) in overrides.as_object().unwrap() {
-            hl[k] = v.clone();
+        highlight_recall(&test, &base.highlight);
+        if args.quality > 0 && seed == args.seed {
+            plane_quality(args.camera, seed, args.quality, base.symmetry);
         }
-        let hl: pomona_symmetry::HighlightParams = serde_json::from_value(hl).unwrap();
-        highlight_recall(&test, &hl);
-        if quality > 0 && seed == base_seed {
-            plane_quality(camera, seed, quality, sym);
-        }
-
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap();
-        for (vi, v) in variants.iter().enumerate() {
-            let pruning = v.contains("+pruning");
-            let cascade = v.contains("+cascade");
-            let mut params = match v.split('+').next().unwrap_or_default() {
-                "viewer" => StageParams::viewer_pose(),
-                "fixed" => {
-                    let mut p = StageParams::symmetry();
-                    p.frame = FrameKind::Fixed;
-                    p
-                }
-                _ => StageParams::symmetry(),
-            };
-            params.highlight.enabled = pruning;
-            params.cascade.enabled = cascade;
-            params.cascade.min_score = cascade_min;
-            params.cascade.histogram = cascade_bins;
-            params.symmetry = sym;
-            params.boxes = boxes;
-            params.merging = merging;
-            params.training.negatives_per_frame = negatives;
-            params.highlight = pomona_symmetry::HighlightParams {
-                enabled: pruning,
-                ..hl.clone()
-            };
-            let pipeline: Box<dyn Pipeline> = if params.merge == MergeKind::MeanShift {
-                Box::new(ViewerPosePipeline::with_params(params.clone()))
-            } else {
-                Box::new(SymmetryPipeline::with_params(params.clone()))
-            };
-            let options = TrainOptions {
+        for (vi, v) in args.variants.iter().enumerate() {
+            let params = Args::variant_params(&base, v);
+            let run = Run {
+                spec: &spec,
                 seed,
-                folds,
-                full_grid: false,
+                folds: args.folds,
+                threads: args.threads,
             };
-            let t = Instant::now();
-            let model = pipeline.train(&train, &options, &|_, _| {}).unwrap();
-            let train_s = t.elapsed().as_secs_f64();
-            let detector = BoxDetector::from_model(pipeline.name(), &model).unwrap();
-            let mut timings = StageTimings::default();
-            let mut inputs = Vec::new();
-            let (mut boxes, mut searched, mut kept) = (0usize, 0usize, 0.0);
-            let t = Instant::now();
-            pool.install(|| {
-                for f in &test {
-                    let r = detector.detect_frame(&f.frame, &mut timings).unwrap();
-                    boxes += r.boxes;
-                    searched += r.searched;
-                    if let PruningState::Applied { kept_fraction, .. } = r.pruning {
-                        kept += kept_fraction;
-                    }
-                    inputs.push(FrameInput {
-                        frame: f.name.clone(),
-                        truth: f.truth.clone(),
-                        detections: r.detections,
-                    });
-                }
-            });
-            let ms = 1e3 * t.elapsed().as_secs_f64() / test.len().max(1) as f64;
-            let report = evaluate(&inputs, &spec.camera, &EvalConfig::default()).unwrap();
-            println!(
-            "\n== {v}: AP@50mm voc11 {:.3} all-point {:.3} | precision {:.3} recall {:.3} at score 0 \
-             | {ms:.1} ms/frame ({threads} thread(s)) | {:.0} boxes/frame ({:.0} searched) | mask keeps {:.0}% | \
-             train {train_s:.1} s, {} SVs",
-            report.ap_voc11.unwrap_or(f64::NAN),
-            report.ap.unwrap_or(f64::NAN),
-            report.precision.unwrap_or(f64::NAN),
-            report.recall.unwrap_or(f64::NAN),
-            boxes as f64 / test.len().max(1) as f64,
-            searched as f64 / test.len().max(1) as f64,
-            100.0 * kept / test.len().max(1) as f64,
-            model.svm.n_support(),
-        );
-            print!("{}", timings.table());
-            summary[vi].1.push([
-                report.ap_voc11.unwrap_or(f64::NAN),
-                report.ap.unwrap_or(f64::NAN),
-                ms,
-            ]);
+            summary[vi].push(pool.install(|| run.variant(v, params, &train, &test)));
         }
     }
-    println!("\n#### mean ± sd over {splits} split(s): AP@50mm VOC11 | all-point AP | ms/frame");
-    for (v, runs) in &summary {
+    println!(
+        "\n#### mean ± sd over {} split(s): AP@50mm VOC11 | all-point AP | ms/frame",
+        args.splits
+    );
+    for (v, runs) in args.variants.iter().zip(&summary) {
         let stat = |k: usize| {
             let n = runs.len().max(1) as f64;
             let m = runs.iter().map(|r| r[k]).sum::<f64>() / n;
@@ -275,6 +263,78 @@ fn main() {
         };
         let ((a, sa), (b, sb), (t, st)) = (stat(0), stat(1), stat(2));
         println!("{v:<18} {a:.3} ± {sa:.3} | {b:.3} ± {sb:.3} | {t:.1} ± {st:.1}");
+    }
+}
+
+/// What every variant of one split shares.
+struct Run<'a> {
+    spec: &'a SceneSpec,
+    seed: u64,
+    folds: usize,
+    threads: usize,
+}
+
+impl Run<'_> {
+    /// Trains variant `v` on `train`, detects on `test` (in the caller's thread pool), prints
+    /// its figures and stage table and returns its [`Figures`].
+    fn variant(
+        &self,
+        v: &str,
+        params: StageParams,
+        train: &[LabelledFrame],
+        test: &[LabelledFrame],
+    ) -> Figures {
+        let pipeline: Box<dyn Pipeline> = if params.merge == MergeKind::MeanShift {
+            Box::new(ViewerPosePipeline::with_params(params))
+        } else {
+            Box::new(SymmetryPipeline::with_params(params))
+        };
+        let options = TrainOptions {
+            seed: self.seed,
+            folds: self.folds,
+            full_grid: false,
+        };
+        let t = Instant::now();
+        let model = pipeline.train(&train, &options, &|_, _| {}).unwrap();
+        let train_s = t.elapsed().as_secs_f64();
+        let detector = BoxDetector::from_model(pipeline.name(), &model).unwrap();
+        let mut timings = StageTimings::default();
+        let mut inputs = Vec::new();
+        let (mut boxes, mut searched, mut kept) = (0usize, 0usize, 0.0);
+        let t = Instant::now();
+        for f in test {
+            let r = detector.detect_frame(&f.frame, &mut timings).unwrap();
+            boxes += r.boxes;
+            searched += r.searched;
+            if let PruningState::Applied { kept_fraction, .. } = r.pruning {
+                kept += kept_fraction;
+            }
+            inputs.push(FrameInput {
+                frame: f.name.clone(),
+                truth: f.truth.clone(),
+                detections: r.detections,
+            });
+        }
+        let per_frame = |x: f64| x / test.len().max(1) as f64;
+        let ms = per_frame(1e3 * t.elapsed().as_secs_f64());
+        let report = evaluate(&inputs, &self.spec.camera, &EvalConfig::default()).unwrap();
+        let nan = |x: Option<f64>| x.unwrap_or(f64::NAN);
+        println!(
+            "\n== {v}: AP@50mm voc11 {:.3} all-point {:.3} | precision {:.3} recall {:.3} at score \
+             0 | {ms:.1} ms/frame ({} thread(s)) | {:.0} boxes/frame ({:.0} searched) | mask keeps \
+             {:.0}% | train {train_s:.1} s, {} SVs",
+            nan(report.ap_voc11),
+            nan(report.ap),
+            nan(report.precision),
+            nan(report.recall),
+            self.threads,
+            per_frame(boxes as f64),
+            per_frame(searched as f64),
+            per_frame(100.0 * kept),
+            model.svm.n_support(),
+        );
+        print!("{}", timings.table());
+        [nan(report.ap_voc11), nan(report.ap), ms]
     }
 }
 
@@ -290,8 +350,10 @@ fn plane_quality(
         noise: NoiseModel::None,
         ..SceneSpec::default()
     };
-    let mut params = StageParams::symmetry();
-    params.symmetry = sym;
+    let params = StageParams {
+        symmetry: sym,
+        ..StageParams::symmetry()
+    };
     let stages = pomona_symmetry::Stages::new(&params).unwrap();
     let search = SymmetryPlaneSearch::new(params.symmetry);
     let sb = SlidingBox::new(params.boxes);

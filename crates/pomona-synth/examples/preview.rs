@@ -5,7 +5,7 @@
 
 use std::path::PathBuf;
 
-use pomona_core::ColorImage;
+use pomona_core::{ColorImage, DepthImage, FrameTruth, InstanceMask};
 use pomona_synth::{
     render, CameraPreset, FruitChoice, FruitKind, LightPreset, NoiseModel, SceneSpec,
 };
@@ -17,23 +17,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .cloned()
         .unwrap_or_else(|| "/tmp/synth".to_string());
     let seed: u64 = args.get(1).map(|s| s.parse()).transpose()?.unwrap_or(1);
-    let fruit = match args.get(2).map(String::as_str) {
-        Some("mixed") => FruitChoice::Mixed,
-        Some(name) => FruitChoice::Only(
-            FruitKind::ALL
-                .into_iter()
-                .find(|k| k.name() == name)
-                .ok_or("unknown fruit")?,
-        ),
-        None => FruitChoice::Only(FruitKind::Pepper),
-    };
-    let noise = match args.get(3).map(String::as_str) {
-        Some(n) => NoiseModel::ALL
-            .into_iter()
-            .find(|m| m.name() == n)
-            .ok_or("unknown noise")?,
-        None => NoiseModel::None,
-    };
+    let fruit: FruitChoice = args
+        .get(2)
+        .map_or(Ok(FruitChoice::Only(FruitKind::Pepper)), |s| s.parse())?;
+    let noise: NoiseModel = args.get(3).map_or(Ok(NoiseModel::None), |s| s.parse())?;
     let light = match args.get(4).map(String::as_str) {
         Some(n) => LightPreset::ALL
             .into_iter()
@@ -41,13 +28,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             .ok_or("unknown light")?,
         None => LightPreset::Day,
     };
-    let camera = match args.get(5).map(String::as_str) {
-        Some(n) => CameraPreset::ALL
-            .into_iter()
-            .find(|m| m.name() == n)
-            .ok_or("unknown camera")?,
-        None => CameraPreset::KinectV2,
-    };
+    let camera: CameraPreset = args
+        .get(5)
+        .map_or(Ok(CameraPreset::KinectV2), |s| s.parse())?;
     let spec = SceneSpec {
         fruit,
         noise,
@@ -63,8 +46,26 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let color = out.frame.color().ok_or("no colour")?;
     pomona_io::write_color_png(&PathBuf::from(format!("{prefix}_color.png")), color)?;
 
-    // Depth: near = bright yellow, far = dark blue, no reading = black.
-    let depth = out.frame.depth();
+    let vis = depth_picture(out.frame.depth());
+    pomona_io::write_color_png(&PathBuf::from(format!("{prefix}_depth.png")), &vis)?;
+
+    let overlay = mask_overlay(color, &out.mask, &out.truth);
+    for f in &out.truth.fruits {
+        eprintln!(
+            "fruit {} {} d={:.3} vis={:.2} z={:.3}",
+            f.id,
+            f.kind,
+            f.diameter_m.unwrap_or(0.0),
+            f.visibility.unwrap_or(0.0),
+            f.center_m.map(|c| c.z).unwrap_or(0.0)
+        );
+    }
+    pomona_io::write_color_png(&PathBuf::from(format!("{prefix}_mask.png")), &overlay)?;
+    Ok(())
+}
+
+/// Depth in false colour: near = bright yellow, far = dark blue, no reading = black.
+fn depth_picture(depth: &DepthImage) -> ColorImage {
     let (lo, hi) = depth.range_m().unwrap_or((0.0, 1.0));
     let mut vis = ColorImage::filled(depth.width(), depth.height(), [0, 0, 0]);
     for v in 0..depth.height() {
@@ -83,13 +84,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             }
         }
     }
-    pomona_io::write_color_png(&PathBuf::from(format!("{prefix}_depth.png")), &vis)?;
+    vis
+}
 
-    // Mask overlay with truth boxes.
+/// `color` tinted by fruit id where the mask has one, with the truth boxes in white.
+fn mask_overlay(color: &ColorImage, mask: &InstanceMask, truth: &FrameTruth) -> ColorImage {
     let mut overlay = color.clone();
-    for v in 0..depth.height() {
-        for u in 0..depth.width() {
-            let id = out.mask.get(u, v).unwrap_or(0);
+    for v in 0..color.height() {
+        for u in 0..color.width() {
+            let id = mask.get(u, v).unwrap_or(0);
             if id > 0 {
                 let c = overlay.get(u, v).unwrap_or([0; 3]);
                 let tint = [
@@ -109,26 +112,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             }
         }
     }
-    for f in &out.truth.fruits {
-        if let Some(b) = f.bbox_px {
-            for u in b.xmin as u32..=b.xmax as u32 {
-                overlay.set(u, b.ymin as u32, [255, 255, 255]);
-                overlay.set(u, b.ymax as u32, [255, 255, 255]);
-            }
-            for v in b.ymin as u32..=b.ymax as u32 {
-                overlay.set(b.xmin as u32, v, [255, 255, 255]);
-                overlay.set(b.xmax as u32, v, [255, 255, 255]);
-            }
+    for b in truth.fruits.iter().filter_map(|f| f.bbox_px) {
+        for u in b.xmin as u32..=b.xmax as u32 {
+            overlay.set(u, b.ymin as u32, [255, 255, 255]);
+            overlay.set(u, b.ymax as u32, [255, 255, 255]);
         }
-        eprintln!(
-            "fruit {} {} d={:.3} vis={:.2} z={:.3}",
-            f.id,
-            f.kind,
-            f.diameter_m.unwrap_or(0.0),
-            f.visibility.unwrap_or(0.0),
-            f.center_m.map(|c| c.z).unwrap_or(0.0)
-        );
+        for v in b.ymin as u32..=b.ymax as u32 {
+            overlay.set(b.xmin as u32, v, [255, 255, 255]);
+            overlay.set(b.xmax as u32, v, [255, 255, 255]);
+        }
     }
-    pomona_io::write_color_png(&PathBuf::from(format!("{prefix}_mask.png")), &overlay)?;
-    Ok(())
+    overlay
 }

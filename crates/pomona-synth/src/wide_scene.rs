@@ -203,23 +203,7 @@ pub(crate) fn sample_world(spec: &SceneSpec, profile: &WorldProfile, rng: &mut S
         exposure,
         white_balance,
         vignetting,
-    } = match profile.lighting {
-        None => {
-            let (light, sun) = w.sample_light(rng, &camera_from_level);
-            let exposure = uniform(rng, WIDE_EXPOSURE.0.ln(), WIDE_EXPOSURE.1.ln()).exp();
-            let white_balance: [f64; 3] =
-                std::array::from_fn(|_| uniform(rng, WIDE_WHITE_BALANCE.0, WIDE_WHITE_BALANCE.1));
-            let vignetting = uniform(rng, WIDE_VIGNETTING.0, WIDE_VIGNETTING.1);
-            FrameLight {
-                light,
-                sun,
-                exposure,
-                white_balance,
-                vignetting,
-            }
-        }
-        Some(preset) => orchard_light(preset, rng, &camera_from_level),
-    };
+    } = w.sample_frame_light(rng, &camera_from_level);
     let draw = WideDraw {
         domain: profile.domain.to_string(),
         leaf_family: family,
@@ -284,6 +268,30 @@ struct WideSampler<'a> {
 }
 
 impl WideSampler<'_> {
+    /// The frame's light: the profile's preset, or (wide worlds) a random sun and sky, exposure,
+    /// white balance and vignetting.
+    fn sample_frame_light(
+        &self,
+        rng: &mut SynthRng,
+        camera_from_level: &Rotation3<f64>,
+    ) -> FrameLight {
+        if let Some(preset) = self.profile.lighting {
+            return orchard_light(preset, rng, camera_from_level);
+        }
+        let (light, sun) = self.sample_light(rng, camera_from_level);
+        let exposure = uniform(rng, WIDE_EXPOSURE.0.ln(), WIDE_EXPOSURE.1.ln()).exp();
+        let white_balance: [f64; 3] =
+            std::array::from_fn(|_| uniform(rng, WIDE_WHITE_BALANCE.0, WIDE_WHITE_BALANCE.1));
+        let vignetting = uniform(rng, WIDE_VIGNETTING.0, WIDE_VIGNETTING.1);
+        FrameLight {
+            light,
+            sun,
+            exposure,
+            white_balance,
+            vignetting,
+        }
+    }
+
     fn point_at(&self, u: f64, v: f64, z: f64) -> Point3<f64> {
         self.spec.camera.back_project(u, v, z)
     }

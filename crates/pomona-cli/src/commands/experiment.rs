@@ -35,7 +35,7 @@ use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
 
 use crate::commands::train::open_frames;
-use crate::detection_run::{detect_frames, thread_pool};
+use crate::detection_run::{detect_frames, thread_pool, RunTotals};
 use crate::matching_args::MatchingArgs;
 use crate::params;
 use crate::progress::progress_bar;
@@ -472,66 +472,18 @@ impl Splits<'_> {
         train_idx: &[usize],
         test_idx: &[usize],
     ) -> Result<(SplitRecord, Vec<FrameInput>, StageTimings)> {
-        let (args, plan, pipeline) = (self.args, self.plan, self.pipeline);
-        let train_set = plan.train.subset(train_idx);
-        let test_set = plan.test.subset(test_idx);
-        let options = TrainOptions {
-            seed: args.seed.wrapping_add(k as u64),
-            folds: args.folds as usize,
-            full_grid: args.full_grid,
-        };
-        let bar = progress_bar(train_set.len(), &format!("split {}: train", k + 1));
-        let progress = |done: usize, total: usize| {
-            bar.set_length(total as u64);
-            bar.set_position(done as u64);
-        };
         let started = Instant::now();
-        let trained =
-            train_calibrated(pipeline, &train_set, &options, &self.calibration, &progress)
-                .with_context(|| format!("training `{}` on split {}", pipeline.name(), k + 1))?;
-        if let (Some(why), true) = (&trained.not_calibrated, self.calibration.folds > 0) {
-            eprintln!("split {}: no confidence calibration: {why}", k + 1);
-        }
-        let model: ModelFile = trained.model;
+        let model = self.train(k, &self.plan.train.subset(train_idx))?;
         let train_s = started.elapsed().as_secs_f64();
-        bar.finish_and_clear();
         let operating_confidence = model.calibration.map(|c| c.operating_confidence);
-        let detector = Detector::builder_for(pipeline)
+        let detector = Detector::builder_for(self.pipeline)
             .model(
                 model,
                 ModelSource::InMemory(format!("the model of split {}", k + 1)),
             )
-            .overrides(args.set.iter().cloned())
+            .overrides(self.args.set.iter().cloned())
             .build()?;
-
-        let bar = progress_bar(test_set.len(), &format!("split {}: detect", k + 1));
-        let (results, totals) = detect_frames(
-            &detector,
-            test_set.len(),
-            |i| {
-                let f = test_set.load(i)?;
-                Ok((f.name, f.frame, f.truth))
-            },
-            |_, _| Ok(()),
-            &|| bar.inc(1),
-        )
-        .all_or_first_error()?;
-        bar.finish_and_clear();
-        let several_test = plan.test_data.len() > 1;
-        let inputs: Vec<FrameInput> = results
-            .into_iter()
-            .zip(test_idx)
-            .map(|((r, mut truth), &i)| {
-                if !args.kind.is_empty() {
-                    truth.fruits.retain(|f| args.kind.contains(&f.kind));
-                }
-                FrameInput {
-                    frame: frame_name(&plan.test, i, several_test),
-                    truth,
-                    detections: r.detections,
-                }
-            })
-            .collect();
+        let (inputs, totals) = self.detect(k, &detector, test_idx)?;
         let split_config = EvalConfig {
             min_confidence: operating_confidence,
             ..self.config
@@ -541,7 +493,7 @@ impl Splits<'_> {
         eprintln!(
             "split {}/{}: trained on {} frames in {:.1} s{}, tested on {}: AP {} (VOC11 {}), P {}, R {}",
             k + 1,
-            plan.splits.len(),
+            self.plan.splits.len(),
             train_idx.len(),
             train_s,
             operating_confidence.map_or(String::new(), |c| format!(" (operating confidence {c:.3})")),
@@ -551,17 +503,15 @@ impl Splits<'_> {
             fmt(report.precision),
             fmt(report.recall)
         );
-        let several_train = plan.train_data.len() > 1;
+        let names = |frames: &DatasetFrames, several: bool, idx: &[usize]| -> Vec<String> {
+            idx.iter()
+                .map(|&i| frame_name(frames, i, several))
+                .collect()
+        };
         let record = SplitRecord {
             split: k as u64,
-            train_frames: train_idx
-                .iter()
-                .map(|&i| frame_name(&plan.train, i, several_train))
-                .collect(),
-            test_frames: test_idx
-                .iter()
-                .map(|&i| frame_name(&plan.test, i, several_test))
-                .collect(),
+            train_frames: names(&self.plan.train, self.plan.train_data.len() > 1, train_idx),
+            test_frames: names(&self.plan.test, self.plan.test_data.len() > 1, test_idx),
             train_ms_per_frame: 1e3 * train_s / train_idx.len().max(1) as f64,
             operating_confidence,
             detect_ms_per_frame: totals.ms_per_frame(),
@@ -574,6 +524,69 @@ impl Splits<'_> {
             report,
         };
         Ok((record, inputs, totals.timings))
+    }
+
+    /// Trains split `k`'s calibrated model on `train_set`.
+    fn train(&self, k: usize, train_set: &DatasetFrames) -> Result<ModelFile> {
+        let options = TrainOptions {
+            seed: self.args.seed.wrapping_add(k as u64),
+            folds: self.args.folds as usize,
+            full_grid: self.args.full_grid,
+        };
+        let bar = progress_bar(train_set.len(), &format!("split {}: train", k + 1));
+        let progress = |done: usize, total: usize| {
+            bar.set_length(total as u64);
+            bar.set_position(done as u64);
+        };
+        let pipeline = self.pipeline;
+        let trained = train_calibrated(pipeline, train_set, &options, &self.calibration, &progress)
+            .with_context(|| format!("training `{}` on split {}", pipeline.name(), k + 1))?;
+        if let (Some(why), true) = (&trained.not_calibrated, self.calibration.folds > 0) {
+            eprintln!("split {}: no confidence calibration: {why}", k + 1);
+        }
+        bar.finish_and_clear();
+        Ok(trained.model)
+    }
+
+    /// Runs split `k`'s detector on the test frames `test_idx`: the scored frames (truth kept
+    /// to `--kind`) and the detection totals.
+    fn detect(
+        &self,
+        k: usize,
+        detector: &Detector,
+        test_idx: &[usize],
+    ) -> Result<(Vec<FrameInput>, RunTotals)> {
+        let test_set = self.plan.test.subset(test_idx);
+        let bar = progress_bar(test_set.len(), &format!("split {}: detect", k + 1));
+        let (results, totals) = detect_frames(
+            detector,
+            test_set.len(),
+            |i| {
+                let f = test_set.load(i)?;
+                Ok((f.name, f.frame, f.truth))
+            },
+            |_, _| Ok(()),
+            &|| bar.inc(1),
+        )
+        .all_or_first_error()?;
+        bar.finish_and_clear();
+        let several_test = self.plan.test_data.len() > 1;
+        let kinds = &self.args.kind;
+        let inputs = results
+            .into_iter()
+            .zip(test_idx)
+            .map(|((r, mut truth), &i)| {
+                if !kinds.is_empty() {
+                    truth.fruits.retain(|f| kinds.contains(&f.kind));
+                }
+                FrameInput {
+                    frame: frame_name(&self.plan.test, i, several_test),
+                    truth,
+                    detections: r.detections,
+                }
+            })
+            .collect();
+        Ok((inputs, totals))
     }
 }
 

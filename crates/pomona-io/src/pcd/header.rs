@@ -238,36 +238,8 @@ impl HeaderParser {
                 let v = parse_list(keyword, line, &values, "not a byte size")?;
                 raw.sizes = Some((line, v));
             }
-            "TYPE" => {
-                let v = values
-                    .iter()
-                    .map(|s| {
-                        let mut c = s.chars();
-                        match (c.next(), c.next()) {
-                            (Some(t @ ('I' | 'U' | 'F')), None) => Ok(t),
-                            _ => Err(PcdError::InvalidHeaderValue {
-                                keyword,
-                                line,
-                                value: clip(s),
-                                reason: "TYPE must be I, U or F",
-                            }),
-                        }
-                    })
-                    .collect::<Result<Vec<_>, _>>()?;
-                raw.types = Some((line, v));
-            }
-            "COUNT" => {
-                let v: Vec<u32> = parse_list(keyword, line, &values, "not a count")?;
-                if let Some(z) = v.iter().position(|&c| c == 0) {
-                    return Err(PcdError::InvalidHeaderValue {
-                        keyword,
-                        line,
-                        value: clip(values[z]),
-                        reason: "COUNT must be at least 1",
-                    });
-                }
-                raw.counts = Some((line, v));
-            }
+            "TYPE" => raw.types = Some((line, parse_types(line, &values)?)),
+            "COUNT" => raw.counts = Some((line, parse_counts(line, &values)?)),
             "WIDTH" => {
                 raw.width = Some(parse_one(keyword, line, &values, "not a 32-bit count")?);
             }
@@ -277,41 +249,10 @@ impl HeaderParser {
             "POINTS" => {
                 raw.points = Some(parse_one(keyword, line, &values, "not a 64-bit count")?);
             }
-            "VIEWPOINT" => {
-                let v: Vec<f64> = parse_list(keyword, line, &values, "not a number")?;
-                let vp: [f64; 7] = v.try_into().map_err(|_| PcdError::InvalidHeaderValue {
-                    keyword,
-                    line,
-                    value: clip(&values.join(" ")),
-                    reason: "expected 7 numbers: tx ty tz qw qx qy qz",
-                })?;
-                if vp.iter().any(|x| !x.is_finite()) {
-                    return Err(PcdError::InvalidHeaderValue {
-                        keyword,
-                        line,
-                        value: clip(&values.join(" ")),
-                        reason: "not finite",
-                    });
-                }
-                raw.viewpoint = Some(vp);
-            }
+            "VIEWPOINT" => raw.viewpoint = Some(parse_viewpoint(line, &values)?),
             _ => {
                 // DATA
-                let word = match values.as_slice() {
-                    [w] => *w,
-                    _ => {
-                        return Err(PcdError::UnknownDataType {
-                            line,
-                            value: clip(&values.join(" ")),
-                        })
-                    }
-                };
-                let encoding =
-                    PcdEncoding::from_keyword(word).ok_or_else(|| PcdError::UnknownDataType {
-                        line,
-                        value: clip(word),
-                    })?;
-                self.done = Some(self.finish(encoding)?);
+                self.done = Some(self.finish(parse_encoding(line, &values)?)?);
                 return Ok(true);
             }
         }
@@ -440,6 +381,69 @@ impl PcdHeader {
     /// The field called `name`, if any.
     pub fn field(&self, name: &str) -> Option<&PcdField> {
         self.fields.iter().find(|f| f.name == name)
+    }
+}
+
+/// The `TYPE` line: one of `I`, `U`, `F` per field.
+fn parse_types(line: usize, values: &[&str]) -> Result<Vec<char>, PcdError> {
+    values
+        .iter()
+        .map(|s| {
+            let mut c = s.chars();
+            match (c.next(), c.next()) {
+                (Some(t @ ('I' | 'U' | 'F')), None) => Ok(t),
+                _ => Err(PcdError::InvalidHeaderValue {
+                    keyword: "TYPE",
+                    line,
+                    value: clip(s),
+                    reason: "TYPE must be I, U or F",
+                }),
+            }
+        })
+        .collect()
+}
+
+/// The `COUNT` line: a positive element count per field.
+fn parse_counts(line: usize, values: &[&str]) -> Result<Vec<u32>, PcdError> {
+    let v: Vec<u32> = parse_list("COUNT", line, values, "not a count")?;
+    if let Some(z) = v.iter().position(|&c| c == 0) {
+        return Err(PcdError::InvalidHeaderValue {
+            keyword: "COUNT",
+            line,
+            value: clip(values[z]),
+            reason: "COUNT must be at least 1",
+        });
+    }
+    Ok(v)
+}
+
+/// The `VIEWPOINT` line: seven finite numbers, translation then quaternion.
+fn parse_viewpoint(line: usize, values: &[&str]) -> Result<[f64; 7], PcdError> {
+    let invalid = |reason| PcdError::InvalidHeaderValue {
+        keyword: "VIEWPOINT",
+        line,
+        value: clip(&values.join(" ")),
+        reason,
+    };
+    let v: Vec<f64> = parse_list("VIEWPOINT", line, values, "not a number")?;
+    let vp: [f64; 7] = v
+        .try_into()
+        .map_err(|_| invalid("expected 7 numbers: tx ty tz qw qx qy qz"))?;
+    if vp.iter().any(|x| !x.is_finite()) {
+        return Err(invalid("not finite"));
+    }
+    Ok(vp)
+}
+
+/// The `DATA` line: exactly one known encoding word.
+fn parse_encoding(line: usize, values: &[&str]) -> Result<PcdEncoding, PcdError> {
+    let unknown = |value: &str| PcdError::UnknownDataType {
+        line,
+        value: clip(value),
+    };
+    match values {
+        [word] => PcdEncoding::from_keyword(word).ok_or_else(|| unknown(word)),
+        _ => Err(unknown(&values.join(" "))),
     }
 }
 

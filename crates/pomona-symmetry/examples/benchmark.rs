@@ -281,7 +281,7 @@ impl Run<'_> {
         &self,
         v: &str,
         params: StageParams,
-        train: &[LabelledFrame],
+        train: &dyn FrameSource,
         test: &[LabelledFrame],
     ) -> Figures {
         let pipeline: Box<dyn Pipeline> = if params.merge == MergeKind::MeanShift {
@@ -295,7 +295,7 @@ impl Run<'_> {
             full_grid: false,
         };
         let t = Instant::now();
-        let model = pipeline.train(&train, &options, &|_, _| {}).unwrap();
+        let model = pipeline.train(train, &options, &|_, _| {}).unwrap();
         let train_s = t.elapsed().as_secs_f64();
         let detector = BoxDetector::from_model(pipeline.name(), &model).unwrap();
         let mut timings = StageTimings::default();

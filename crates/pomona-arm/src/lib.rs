@@ -25,6 +25,7 @@ mod heuristic_planner;
 mod motion_model;
 mod plan_problem;
 mod random_targets;
+mod rotated_stereo;
 mod two_arm_cell;
 
 pub use arm_joints::ArmJoints;
@@ -35,4 +36,5 @@ pub use heuristic_planner::plan_heuristic;
 pub use motion_model::MotionModel;
 pub use plan_problem::{Arm, PickPlan, PlanFile, PlanProblem, Target, TargetList};
 pub use random_targets::random_targets;
+pub use rotated_stereo::RotatedStereo;
 pub use two_arm_cell::TwoArmCell;

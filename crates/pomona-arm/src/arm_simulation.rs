@@ -32,7 +32,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
-use crate::{ArmError, ArmJoints, ArmLimits, CalibrationErrors};
+use crate::{ArmError, ArmJoints, ArmLimits, CalibrationErrors, RotatedStereo};
 
 /// The camera and the two-shot geometry of one arm.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -68,43 +68,28 @@ impl Default for ArmRig {
 }
 
 impl ArmRig {
-    /// Checks the camera, a positive pivot distance and minimum depth, and `0 < β < 45°`.
+    /// The rig as the nominal model knows it: Eqs. 17–18 and triangulation on these shots
+    /// (the left shot is its primary view, the right shot its stereo view, and its hub frame is
+    /// this module's).
+    ///
+    /// # Errors
+    /// As [`RotatedStereo::new`].
+    pub fn stereo(&self) -> Result<RotatedStereo, ArmError> {
+        RotatedStereo::new(self.beta_rad, self.pivot_m, self.camera)
+    }
+
+    /// Checks the rig ([`ArmRig::stereo`]) and a finite positive minimum depth.
     ///
     /// # Errors
     /// [`ArmError::InvalidParameter`] naming the first bad value.
     pub fn validate(&self) -> Result<(), ArmError> {
-        if self.camera.validate().is_err() {
+        self.stereo()?;
+        if !(self.min_depth_m > 0.0 && self.min_depth_m.is_finite()) {
             return Err(ArmError::InvalidParameter {
-                name: "camera",
-                value: self.camera.fx,
-                reason: "sizes must be > 0, focal lengths finite and > 0, principal point finite",
+                name: "min_depth_m",
+                value: self.min_depth_m,
+                reason: "must be finite and > 0",
             });
-        }
-        let checks = [
-            (
-                "pivot_m",
-                self.pivot_m,
-                self.pivot_m > 0.0 && self.pivot_m.is_finite(),
-            ),
-            (
-                "beta_rad",
-                self.beta_rad,
-                self.beta_rad > 0.0 && self.beta_rad < std::f64::consts::FRAC_PI_4,
-            ),
-            (
-                "min_depth_m",
-                self.min_depth_m,
-                self.min_depth_m > 0.0 && self.min_depth_m.is_finite(),
-            ),
-        ];
-        for (name, value, ok) in checks {
-            if !ok {
-                return Err(ArmError::InvalidParameter {
-                    name,
-                    value,
-                    reason: "pivot and minimum depth must be finite and > 0, β in (0, π/4)",
-                });
-            }
         }
         Ok(())
     }

@@ -38,6 +38,19 @@ pub enum ArmError {
         /// The limit.
         max: usize,
     },
+    /// Two pixels do not locate a point in front of both views of the stereo rig.
+    #[error(
+        "stereo ({method}): pixels {primary:?} (primary view) and {stereo:?} (stereo view) do not \
+         locate a point in front of both views"
+    )]
+    NoStereoPoint {
+        /// The method: `paper` (Eq. 18) or `triangulate`.
+        method: &'static str,
+        /// The pixel in the primary view.
+        primary: [f64; 2],
+        /// The pixel in the stereo view.
+        stereo: [f64; 2],
+    },
     /// An arm model file could not be read.
     #[error("{path}: cannot read the arm model: {source}")]
     ModelRead {

@@ -20,7 +20,8 @@
 //! camera mounting, lens distortion). [`JointNetwork`] is the seed's 4-8-3 network mapping the
 //! two image positions straight to encoder readings (Eq. 19), trained on a regular grid
 //! ([`train_joint_network`]) and stored in an [`ArmModelFile`]; [`EndPositionError`] measures
-//! how far the true robot's end lands from the target.
+//! how far the true robot's end lands from the target, beside [`NominalMapping`] (Eq. 18 +
+//! exact kinematics of the nominal model).
 //!
 //! The split into files follows the concepts: joints and limits (geometry of one arm), motion
 //! (time), the cell (two arms), the problem and its plans, the two planners; the simulated robot,
@@ -38,8 +39,10 @@ mod heuristic_planner;
 mod joint_network;
 mod motion_model;
 mod network_training;
+mod nominal_mapping;
 mod plan_problem;
 mod random_targets;
+mod rotated_stereo;
 mod two_arm_cell;
 
 pub use arm_joints::ArmJoints;
@@ -54,6 +57,8 @@ pub use heuristic_planner::plan_heuristic;
 pub use joint_network::{JointNetwork, LinearScaling, NETWORK_INPUTS, NETWORK_OUTPUTS};
 pub use motion_model::MotionModel;
 pub use network_training::{train_joint_network, NetworkTraining, TrainingReport};
+pub use nominal_mapping::NominalMapping;
 pub use plan_problem::{Arm, PickPlan, PlanFile, PlanProblem, Target, TargetList};
 pub use random_targets::random_targets;
+pub use rotated_stereo::RotatedStereo;
 pub use two_arm_cell::TwoArmCell;

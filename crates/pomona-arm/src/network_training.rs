@@ -245,7 +245,9 @@ fn levenberg_marquardt(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{ArmRig, ArmSimulation, CalibrationErrors, CalibrationMagnitudes, EndPositionError};
+    use crate::{
+        ArmRig, ArmSimulation, CalibrationErrors, CalibrationMagnitudes, EndPositionError,
+    };
 
     #[test]
     fn jacobian_matches_finite_differences() {

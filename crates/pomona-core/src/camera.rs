@@ -3,7 +3,7 @@
 //! Split out because every stage — back-projection, projection of detections for overlays, 2D
 //! truth matching, synthetic rendering — needs exactly this and nothing else of a frame.
 
-use nalgebra::{Point2, Point3};
+use nalgebra::{Point2, Point3, Vector2};
 use serde::{Deserialize, Serialize};
 
 use crate::CoreError;
@@ -110,6 +110,19 @@ impl PinholeCamera {
             (v - self.cy) * depth_m / self.fy,
             depth_m,
         )
+    }
+
+    /// The normalised image coordinates `(x/z, y/z)` of the ray through continuous pixel
+    /// coordinates `pixel`: the point on that ray at depth 1 m.
+    ///
+    /// ```
+    /// use pomona_core::{nalgebra::Point2, PinholeCamera};
+    /// let cam = PinholeCamera::new(4, 4, 2.0, 2.0, 1.5, 1.5).unwrap();
+    /// let n = cam.normalised(&Point2::new(3.5, 0.5));
+    /// assert_eq!((n.x, n.y), (1.0, -0.5));
+    /// ```
+    pub fn normalised(&self, pixel: &Point2<f64>) -> Vector2<f64> {
+        Vector2::new((pixel.x - self.cx) / self.fx, (pixel.y - self.cy) / self.fy)
     }
 
     /// Projects a point in the camera frame to continuous pixel coordinates `(u, v)`.

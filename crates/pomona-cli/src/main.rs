@@ -44,6 +44,9 @@ enum Command {
     Demo(commands::demo::DemoArgs),
     /// Plan the picks of seed 004's two-arm robot: which arm picks which fruit, in which order.
     Plan(commands::plan::PlanArgs),
+    /// Seed 004's arm: train and evaluate the network mapping a target's two image positions
+    /// to encoder readings (Eq. 19), beside Eq. 18 + exact kinematics.
+    Arm(commands::arm::ArmArgs),
 }
 
 fn main() -> ExitCode {
@@ -55,6 +58,7 @@ fn main() -> ExitCode {
         Command::Eval(args) => commands::eval::run(args),
         Command::Synth(args) => commands::synth::run(args),
         Command::Plan(args) => commands::plan::run(args),
+        Command::Arm(args) => commands::arm::run(args),
         Command::Train(args) => commands::train::run(args),
         Command::Detect(args) => commands::detect::run(args),
         Command::Experiment(args) => commands::experiment::run(args),

@@ -1,5 +1,6 @@
 //! One module per subcommand.
 
+pub mod arm;
 pub mod cloud;
 pub mod convert;
 pub mod demo;

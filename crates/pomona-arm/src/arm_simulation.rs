@@ -45,7 +45,9 @@ pub struct ArmRig {
     pub pivot_m: f64,
     /// Half the angle between the two shots, radians; default 10°.
     pub beta_rad: f64,
-    /// Nearest depth in front of a shot's camera that counts as seen, metres; default 0.05 m.
+    /// Nearest depth in front of a shot's camera that counts as seen, metres; default 0.3 m
+    /// (a working distance: nearer fruit do not fit whole in the image, and there depth from
+    /// disparity changes fastest, so the seed's robot would not aim from there).
     pub min_depth_m: f64,
 }
 
@@ -62,7 +64,7 @@ impl Default for ArmRig {
             },
             pivot_m: 0.2,
             beta_rad: 10f64.to_radians(),
-            min_depth_m: 0.05,
+            min_depth_m: 0.3,
         }
     }
 }

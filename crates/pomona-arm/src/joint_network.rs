@@ -4,8 +4,11 @@
 //! the model. Learning the mapping directly folds the lens distortion, the camera's mounting and
 //! the encoders' offsets into one step, which is why the seed uses it instead of Eq. 18.
 //!
-//! Inputs `[xL, yL, xR, yR]` (pixels), outputs `[α, θ, r]` (radians, radians, metres).
-//! Trained by [`crate::train_joint_network`].
+//! Inputs `[xL, yL, xR, yR]` (pixels), outputs `[α, θ, 1/r]` (radians, radians, 1/metres):
+//! the extension is learned as its reciprocal, which — like depth from disparity — is nearly an
+//! affine function of the image coordinates; learned directly, r's 1/disparity curve takes most
+//! of the eight units and the end-position error triples (`docs/results.md`). [`JointNetwork::
+//! predict`] returns r itself. Trained by [`crate::train_joint_network`].
 
 use serde::{Deserialize, Serialize};
 
@@ -84,7 +87,7 @@ pub struct JointNetwork {
     pub weights: Vec<f64>,
     /// Scaling of the inputs `[xL, yL, xR, yR]`.
     pub input_scaling: LinearScaling,
-    /// Scaling of the outputs `[α, θ, r]`.
+    /// Scaling of the outputs `[α, θ, 1/r]`.
     pub output_scaling: LinearScaling,
 }
 
@@ -152,14 +155,15 @@ impl JointNetwork {
         forward_with(&self.weights, self.hidden, input, hidden_out)
     }
 
-    /// The encoder readings the network gives for a target seen at `pixels`.
+    /// The encoder readings the network gives for a target seen at `pixels` (r is the
+    /// reciprocal of the third output; not finite when that output is not positive).
     pub fn predict(&self, pixels: &ShotPixels) -> ArmJoints {
         let mut hidden = vec![0.0; self.hidden];
         let y = self.forward(&self.normalised_input(pixels), &mut hidden);
         ArmJoints {
             alpha_rad: self.output_scaling.denormalise(0, y[0]),
             theta_rad: self.output_scaling.denormalise(1, y[1]),
-            r_m: self.output_scaling.denormalise(2, y[2]),
+            r_m: 1.0 / self.output_scaling.denormalise(2, y[2]),
         }
     }
 }
@@ -207,9 +211,9 @@ mod tests {
 
     #[test]
     fn forward_pass_by_hand() {
-        // H = 1: h = tanh(x0 + 0.5), outputs 2h, −h + 1, 3.
+        // H = 1: h = tanh(x0 + 0.5), outputs 2h, −h + 1, 1/r = 4.
         let mut weights = vec![1.0, 0.0, 0.0, 0.0, 0.5];
-        weights.extend([2.0, 0.0, -1.0, 1.0, 0.0, 3.0]);
+        weights.extend([2.0, 0.0, -1.0, 1.0, 0.0, 4.0]);
         let net = JointNetwork {
             hidden: 1,
             weights,
@@ -224,7 +228,7 @@ mod tests {
         let h = 0.75f64.tanh();
         assert!((q.alpha_rad - 2.0 * h).abs() < 1e-15);
         assert!((q.theta_rad - (1.0 - h)).abs() < 1e-15);
-        assert!((q.r_m - 3.0).abs() < 1e-15);
+        assert!((q.r_m - 0.25).abs() < 1e-15);
     }
 
     #[test]

@@ -62,7 +62,8 @@ struct Scaled {
     targets: Vec<[f64; NETWORK_OUTPUTS]>,
 }
 
-/// Trains a network on `samples` (their pixels as inputs, their encoder readings as targets).
+/// Trains a network on `samples` (their pixels as inputs, their encoder readings — r as 1/r —
+/// as targets).
 ///
 /// # Errors
 /// [`ArmError::InvalidParameter`] for no samples, no hidden units, no starts or no iterations.
@@ -86,7 +87,13 @@ pub fn train_joint_network(
     let raw_in: Vec<[f64; 4]> = samples.iter().map(|s| s.pixels.to_array()).collect();
     let raw_out: Vec<[f64; 3]> = samples
         .iter()
-        .map(|s| [s.readings.alpha_rad, s.readings.theta_rad, s.readings.r_m])
+        .map(|s| {
+            [
+                s.readings.alpha_rad,
+                s.readings.theta_rad,
+                1.0 / s.readings.r_m,
+            ]
+        })
         .collect();
     let input_scaling = LinearScaling::fit(NETWORK_INPUTS, raw_in.iter().map(|r| r.as_slice()));
     let output_scaling = LinearScaling::fit(NETWORK_OUTPUTS, raw_out.iter().map(|r| r.as_slice()));
@@ -274,11 +281,11 @@ mod tests {
     fn training_reduces_the_error_on_a_small_grid() {
         let errors = CalibrationErrors::draw(&CalibrationMagnitudes::default(), 11);
         let sim = ArmSimulation::new(ArmRig::default(), errors);
-        let samples = sim.grid_samples([5, 4, 6]).unwrap();
+        let samples = sim.grid_samples([7, 5, 9]).unwrap();
         assert!(samples.len() >= 30, "{} samples", samples.len());
         let training = NetworkTraining {
             restarts: 1,
-            max_iterations: 60,
+            max_iterations: 150,
             ..NetworkTraining::default()
         };
         let (net, report) = train_joint_network(&samples, &training).unwrap();
@@ -288,8 +295,7 @@ mod tests {
         );
         // The network puts the true end near the training targets.
         let errors = EndPositionError::measure(&sim, &samples, |p| Some(net.predict(p))).unwrap();
-        eprintln!("{report:?} {errors:?}");
-        assert!(errors.median < 5.0 && errors.max < 30.0, "{errors:?}");
+        assert!(errors.median < 5.0 && errors.p95 < 15.0, "{errors:?}");
         // Same samples and configuration, same network.
         assert_eq!(train_joint_network(&samples, &training).unwrap().0, net);
         assert!(train_joint_network(&[], &training).is_err());

@@ -51,7 +51,10 @@ fn arm_train_then_eval_reports_errors_beside_equation_18() {
     assert_eq!(report["network"]["count"], 300);
     // Even a small network learns around the calibration errors Eq. 18 does not know.
     assert!(network < eq18, "network {network} mm, Eq. 18 {eq18} mm");
-    assert!(eq18_ideal < 1e-3, "Eq. 18 is exact without errors: {eq18_ideal} mm");
+    assert!(
+        eq18_ideal < 1e-3,
+        "Eq. 18 is exact without errors: {eq18_ideal} mm"
+    );
     assert!(report["network"]["error_mm"]["p95"].as_f64().unwrap() >= network);
 
     // A file that is not a model is named in a one-line error.
@@ -60,5 +63,8 @@ fn arm_train_then_eval_reports_errors_beside_equation_18() {
     let run = pomona(&["arm", "eval", "--model", bad.to_str().unwrap()]);
     assert!(!run.status.success());
     let err = stderr(&run);
-    assert!(err.contains("bad.json") && err.contains("pomona-arm-model"), "{err}");
+    assert!(
+        err.contains("bad.json") && err.contains("pomona-arm-model"),
+        "{err}"
+    );
 }

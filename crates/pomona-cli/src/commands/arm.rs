@@ -51,8 +51,17 @@ pub struct ArmTrainArgs {
     #[arg(long)]
     pub ideal: bool,
     /// Training grid: values of α, θ and r (each ≥ 2), over the joint ranges.
-    #[arg(long, value_delimiter = ',', num_args = 3, default_values_t = [17, 13, 21])]
+    #[arg(long, value_delimiter = ',', default_values_t = [17, 13, 21])]
     pub grid: Vec<usize>,
+    /// Hub-to-camera distance along the link (the seed's f + Z0), metres.
+    #[arg(long, default_value_t = ArmRig::default().pivot_m)]
+    pub pivot_m: f64,
+    /// Half the angle between the two shots, degrees.
+    #[arg(long, default_value_t = ArmRig::default().beta_rad.to_degrees())]
+    pub beta_deg: f64,
+    /// Nearest depth in front of a shot that counts as seen, metres.
+    #[arg(long, default_value_t = ArmRig::default().min_depth_m)]
+    pub min_depth_m: f64,
     /// Hidden units (the seed's 8).
     #[arg(long, default_value_t = 8)]
     pub hidden: usize,
@@ -144,7 +153,13 @@ pub fn train(args: &ArmTrainArgs) -> Result<()> {
         .as_slice()
         .try_into()
         .context("--grid takes three counts: α,θ,r")?;
-    let rig = ArmRig::default();
+    let rig = ArmRig {
+        pivot_m: args.pivot_m,
+        beta_rad: args.beta_deg.to_radians(),
+        min_depth_m: args.min_depth_m,
+        ..ArmRig::default()
+    };
+    rig.validate().context("invalid rig")?;
     let sim = ArmSimulation {
         rig,
         limits: ArmLimits::default(),

@@ -14,6 +14,10 @@
 //! then 2-opt and moves of targets between arms) is what the CLI runs; [`plan_exact`]
 //! (every split of the shared targets × Held–Karp per arm) is the reference for small problems.
 //!
+//! Each arm's camera takes two shots turned by ±β about the hub ([`RotatedStereo`]): fruit
+//! centres are paired between them by the seed's relaxation ([`match_centres`] within the
+//! Eq. 10 windows of [`MatchingWindows`]) and located by Eq. 18 or by triangulation.
+//!
 //! The split into files follows the concepts: joints and limits (geometry of one arm), motion
 //! (time), the cell (two arms), the problem and its plans, and the two planners.
 
@@ -22,10 +26,12 @@ mod arm_limits;
 mod error;
 mod exact_planner;
 mod heuristic_planner;
+mod matching_windows;
 mod motion_model;
 mod plan_problem;
 mod random_targets;
 mod rotated_stereo;
+mod stereo_matching;
 mod two_arm_cell;
 
 pub use arm_joints::ArmJoints;
@@ -33,8 +39,12 @@ pub use arm_limits::ArmLimits;
 pub use error::ArmError;
 pub use exact_planner::{plan_exact, MAX_EXACT_TARGETS};
 pub use heuristic_planner::plan_heuristic;
+pub use matching_windows::{MatchingWindows, WORKING_VOLUME_GRID_PX};
 pub use motion_model::MotionModel;
 pub use plan_problem::{Arm, PickPlan, PlanFile, PlanProblem, Target, TargetList};
 pub use random_targets::random_targets;
 pub use rotated_stereo::RotatedStereo;
+pub use stereo_matching::{
+    match_centres, DisparityMatrix, RelaxationParams, RelaxationStop, StereoMatching, StereoPair,
+};
 pub use two_arm_cell::TwoArmCell;

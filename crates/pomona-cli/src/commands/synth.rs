@@ -75,6 +75,14 @@ pub struct SynthArgs {
     /// Also render every frame from a second, rotated pose into DIR/stereo (pose in DIR/rig.json).
     #[arg(long)]
     pub stereo: bool,
+    /// With --stereo: half the angle between the two views, β, degrees (seed 004 §4.2; the
+    /// stereo view is turned by 2β). Default 4.
+    #[arg(long, value_name = "DEG", requires = "stereo")]
+    pub stereo_beta_deg: Option<f64>,
+    /// With --stereo: distance from the camera back to the pivot of the rotation (the arm's
+    /// hub), metres. Default 0.3.
+    #[arg(long, value_name = "M", requires = "stereo")]
+    pub stereo_pivot_m: Option<f64>,
     /// Worker threads (default: all cores); never changes the output.
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=1024))]
     pub threads: Option<u64>,
@@ -304,13 +312,24 @@ impl SynthArgs {
             ..SceneSpec::default()
         };
         let mut spec = DatasetSpec::new(scene, self.frames, self.seed);
-        spec.stereo = self.stereo.then(StereoRig::default);
+        spec.stereo = self.stereo.then(|| self.stereo_rig());
         spec.threads = self.threads.map(|n| n as usize);
         spec
     }
 }
 
 impl SynthArgs {
+    /// The stereo rig of `--stereo-beta-deg` and `--stereo-pivot-m` (defaults elsewhere).
+    pub fn stereo_rig(&self) -> StereoRig {
+        let defaults = StereoRig::default();
+        StereoRig {
+            beta_rad: self
+                .stereo_beta_deg
+                .map_or(defaults.beta_rad, f64::to_radians),
+            pivot_distance_m: self.stereo_pivot_m.unwrap_or(defaults.pivot_distance_m),
+        }
+    }
+
     /// Refuses wide-only options with `--domain narrow`, and repeated list entries.
     ///
     /// # Errors
@@ -342,6 +361,11 @@ impl SynthArgs {
             if self.frames < 2 {
                 bail!("--approach needs --frames of at least 2");
             }
+        }
+        if self.stereo {
+            self.stereo_rig()
+                .validate()
+                .context("invalid --stereo-beta-deg or --stereo-pivot-m")?;
         }
         self.to_spec()
             .scene
@@ -634,6 +658,26 @@ mod tests {
         ] {
             let err = format!("{:#}", parse(bad).unwrap().check().unwrap_err());
             assert!(err.contains(flag), "{err}");
+        }
+        let rig = parse(&[
+            "--stereo",
+            "--stereo-beta-deg",
+            "6",
+            "--stereo-pivot-m",
+            "0.25",
+        ])
+        .unwrap();
+        rig.check().unwrap();
+        let rig = rig.to_spec().stereo.unwrap();
+        assert!((rig.beta_rad - 6f64.to_radians()).abs() < 1e-15);
+        assert_eq!(rig.pivot_distance_m, 0.25);
+        assert!(
+            parse(&["--stereo-beta-deg", "6"]).is_err(),
+            "needs --stereo"
+        );
+        for bad in [["--stereo-beta-deg", "50"], ["--stereo-pivot-m", "-1"]] {
+            let a = parse(&[&["--stereo"][..], &bad].concat()).unwrap();
+            assert!(format!("{:#}", a.check().unwrap_err()).contains("stereo"));
         }
         assert!(
             is_sequence_dir("seq-0012") && !is_sequence_dir("seq-") && !is_sequence_dir("seqs")

@@ -15,6 +15,10 @@ use pomona_synth::{
     WIDE_DISTANCE_LIMITS_M,
 };
 
+use pomona_arm::TwoArmCell;
+use pomona_core::nalgebra::Vector3;
+use pomona_core::{PinholeCamera, RadialDistortion};
+
 use crate::progress::progress_bar;
 
 /// Arguments of `pomona synth`.
@@ -83,11 +87,24 @@ pub struct SynthArgs {
     /// hub), metres. Default 0.3.
     #[arg(long, value_name = "M", requires = "stereo")]
     pub stereo_pivot_m: Option<f64>,
+    /// With --stereo: 2 adds seed 004's second arm — arm B's two shots in DIR/arm-b/ (its
+    /// second shot in DIR/arm-b/stereo/) and, in every fruit's truth, which arm reaches it with
+    /// which joints (`reach`).
+    #[arg(long, value_name = "N", default_value_t = 1, value_parser = clap::value_parser!(u8).range(1..=2), requires = "stereo")]
+    pub arms: u8,
+    /// Radial lens distortion of the camera, `K1,K2` (normalised coordinates scale by
+    /// 1 + K1 r² + K2 r⁴; e.g. -0.2,0.05 for a wide-angle barrel lens), recorded in camera.json.
+    /// Every view is rendered through it.
+    #[arg(long, value_name = "K1,K2", value_parser = parse_distortion, allow_hyphen_values = true)]
+    pub distortion: Option<(f64, f64)>,
+    /// With --arms 2: arm B's hub is this far right of arm A's (and 0.02 m lower), metres.
+    #[arg(long, value_name = "S", default_value_t = 0.6, requires = "stereo")]
+    pub arm_spacing_m: f64,
     /// Worker threads (default: all cores); never changes the output.
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=1024))]
     pub threads: Option<u64>,
     /// Replace a dataset already in DIR (removes its camera.json, color/, depth/, truth/, mask/,
-    /// stereo/, rig.json, synth.json and approach sequences seq-NNNN/; other files are left
+    /// stereo/, arm-b/, rig.json, synth.json and approach sequences seq-NNNN/; other files are left
     /// alone).
     #[arg(long)]
     pub force: bool,
@@ -175,6 +192,22 @@ pub enum BackgroundArg {
     Sky,
     /// Greenhouse plastic, posts and pipes.
     Greenhouse,
+}
+
+fn parse_distortion(s: &str) -> Result<(f64, f64), String> {
+    let (a, b) = s
+        .split_once(',')
+        .ok_or_else(|| format!("expected K1,K2 (e.g. -0.2,0.05), got `{s}`"))?;
+    let num = |t: &str| {
+        t.trim()
+            .parse::<f64>()
+            .map_err(|e| format!("`{t}` is not a number: {e}"))
+    };
+    let (k1, k2) = (num(a)?, num(b)?);
+    if !(k1.is_finite() && k2.is_finite() && k1.abs() <= 1.0 && k2.abs() <= 1.0) {
+        return Err(format!("need finite |K1|, |K2| <= 1, got {k1},{k2}"));
+    }
+    Ok((k1, k2))
 }
 
 fn parse_distance_band(s: &str) -> Result<(f64, f64), String> {
@@ -299,9 +332,13 @@ impl SynthArgs {
             LightArg::LowSun => LightPreset::LowSun,
             LightArg::Backlight => LightPreset::Backlight,
         };
+        let lens = self.distortion.map(|(k1, k2)| RadialDistortion { k1, k2 });
         let scene = SceneSpec {
             fruit,
-            camera: camera.camera(),
+            camera: PinholeCamera {
+                distortion: lens,
+                ..camera.camera()
+            },
             noise,
             light,
             green_fraction: self.green_fraction,
@@ -313,6 +350,10 @@ impl SynthArgs {
         };
         let mut spec = DatasetSpec::new(scene, self.frames, self.seed);
         spec.stereo = self.stereo.then(|| self.stereo_rig());
+        spec.arms = (self.arms == 2).then(|| TwoArmCell {
+            b_hub_in_a: Vector3::new(self.arm_spacing_m, TwoArmCell::default().b_hub_in_a.y, 0.0),
+            ..TwoArmCell::default()
+        });
         spec.threads = self.threads.map(|n| n as usize);
         spec
     }
@@ -362,6 +403,9 @@ impl SynthArgs {
                 bail!("--approach needs --frames of at least 2");
             }
         }
+        if !(self.arm_spacing_m.is_finite() && self.arm_spacing_m > 0.0) {
+            bail!("--arm-spacing-m must be a positive number of metres");
+        }
         if self.stereo {
             self.stereo_rig()
                 .validate()
@@ -377,7 +421,7 @@ impl SynthArgs {
 
 /// What a generated dataset consists of; `--force` removes exactly these (and `seq-NNNN/`
 /// approach sequences) before writing.
-const DATASET_ENTRIES: [&str; 8] = [
+const DATASET_ENTRIES: [&str; 9] = [
     "camera.json",
     "synth.json",
     "rig.json",
@@ -386,6 +430,7 @@ const DATASET_ENTRIES: [&str; 8] = [
     "truth",
     "mask",
     "stereo",
+    "arm-b",
 ];
 
 /// Whether `name` is an approach sequence's folder (`seq-` and digits).
@@ -675,7 +720,7 @@ mod tests {
             parse(&["--stereo-beta-deg", "6"]).is_err(),
             "needs --stereo"
         );
-        for bad in [["--stereo-beta-deg", "50"], ["--stereo-pivot-m", "-1"]] {
+        for bad in [["--stereo-beta-deg", "50"], ["--stereo-pivot-m", "0"]] {
             let a = parse(&[&["--stereo"][..], &bad].concat()).unwrap();
             assert!(format!("{:#}", a.check().unwrap_err()).contains("stereo"));
         }

@@ -9,6 +9,7 @@ mod run;
 use run::{pomona, stderr, stdout};
 
 use std::path::Path;
+use std::process::Output;
 
 use pomona_arm::RotatedStereo;
 use pomona_core::nalgebra::Point3;
@@ -85,6 +86,18 @@ fn stereo_dataset(root: &Path) -> RotatedStereo {
     rig
 }
 
+/// Runs `pomona stereo --data ds --out det` with `extra` options.
+fn stereo(ds: &Path, det: &Path, extra: &[&str]) -> Output {
+    let base = [
+        "stereo",
+        "--data",
+        ds.to_str().unwrap(),
+        "--out",
+        det.to_str().unwrap(),
+    ];
+    pomona(&[&base[..], extra].concat())
+}
+
 #[test]
 fn stereo_locates_every_fruit_from_the_two_colour_shots() {
     let dir = tempfile::tempdir().unwrap();
@@ -92,19 +105,12 @@ fn stereo_locates_every_fruit_from_the_two_colour_shots() {
     stereo_dataset(&ds);
     for method in ["paper", "triangulate"] {
         let report = dir.path().join(format!("{method}.json"));
-        let out = pomona(&[
-            "stereo",
-            "--data",
-            ds.to_str().unwrap(),
-            "--out",
-            det.to_str().unwrap(),
-            "--method",
-            method,
-            "--reach-m",
-            "0.6,2.0",
-            "--report",
-            report.to_str().unwrap(),
-        ]);
+        let extra = ["--method", method, "--reach-m", "0.6,2.0"];
+        let out = stereo(
+            &ds,
+            &det,
+            &[&extra[..], &["--report", report.to_str().unwrap()]].concat(),
+        );
         assert!(out.status.success(), "{}", stderr(&out));
         assert!(stdout(&out).contains("5 fruit located"), "{}", stdout(&out));
         for frame in 0..2 {
@@ -155,14 +161,7 @@ fn stereo_without_a_rig_names_the_missing_file() {
     let ds = dir.path().join("ds");
     stereo_dataset(&ds);
     std::fs::remove_file(ds.join("rig.json")).unwrap();
-    let det = dir.path().join("det");
-    let out = pomona(&[
-        "stereo",
-        "--data",
-        ds.to_str().unwrap(),
-        "--out",
-        det.to_str().unwrap(),
-    ]);
+    let out = stereo(&ds, &dir.path().join("det"), &[]);
     assert!(!out.status.success());
     assert!(stderr(&out).contains("rig.json"), "{}", stderr(&out));
 }

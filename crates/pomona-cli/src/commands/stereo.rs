@@ -3,7 +3,8 @@
 //!
 //! For every frame of `--data` and its second view `--data/stereo` (as `pomona synth --stereo`
 //! writes them, the rig in `rig.json`), color-contour (through the `pomona::Detector` facade)
-//! finds circles in both colour images; the circles are matched by the seed's relaxation
+//! finds circles in both colour images (depth images, if the dataset has them, are not read: the
+//! detector sees exactly what a 2D camera gives); the circles are matched by the seed's relaxation
 //! ([`pomona_arm::match_centres`], Eq. 10 windows derived from the rig and the working volume
 //! `--reach-m`), and each matched pair is located by Eq. 18 (`--method paper`) or by
 //! triangulation (`--method triangulate`) in the primary camera frame. The detection files have
@@ -20,12 +21,14 @@ use clap::ValueEnum;
 use pomona::{Detection, Detector};
 use pomona_arm::{match_centres, MatchingWindows, RelaxationParams, RotatedStereo, StereoMatching};
 use pomona_core::nalgebra::{Point2, Point3};
+use pomona_core::{DepthImage, RgbdFrame};
 use pomona_io::Dataset;
 use pomona_synth::RigFile;
 use rayon::prelude::*;
 
 use crate::commands::stereo_report::{StereoFrameOutcome, StereoReport};
 use crate::detection_run::{load_detector, min_confidence, thread_pool};
+use crate::number_pair::parse_number_pair;
 
 /// The pipeline whose circles are matched.
 pub const STEREO_PIPELINE: &str = "color-contour";
@@ -95,15 +98,7 @@ impl StereoMethod {
 }
 
 fn parse_reach(s: &str) -> Result<(f64, f64), String> {
-    let (lo, hi) = s
-        .split_once(',')
-        .ok_or_else(|| format!("expected NEAR,FAR in metres (e.g. 0.5,2.0), got `{s}`"))?;
-    let num = |t: &str| {
-        t.trim()
-            .parse::<f64>()
-            .map_err(|e| format!("`{t}` is not a number: {e}"))
-    };
-    let (lo, hi) = (num(lo)?, num(hi)?);
+    let (lo, hi) = parse_number_pair(s, "NEAR,FAR in metres (e.g. 0.5,2.0)")?;
     if !(lo.is_finite() && hi.is_finite() && 0.0 < lo && lo < hi) {
         return Err(format!("need 0 < NEAR < FAR, got {lo},{hi}"));
     }
@@ -191,9 +186,16 @@ fn run_frame(
     method: StereoMethod,
 ) -> Result<FrameRun> {
     let detect = |dataset: &Dataset| -> Result<Vec<Detection>> {
-        let frame = dataset
-            .load_frame(stem)
-            .with_context(|| format!("frame {stem} of {}", dataset.root().display()))?;
+        // The colour view only: depth, if the dataset has any, is not read.
+        let where_ = || format!("frame {stem} of {}", dataset.root().display());
+        let color = dataset.load_color(stem).with_context(where_)?;
+        let camera = *dataset.camera();
+        let frame = RgbdFrame::new(
+            camera,
+            DepthImage::empty(camera.width, camera.height),
+            color,
+        )
+        .with_context(where_)?;
         let found = detector.detect(&frame).with_context(|| {
             format!("detecting in frame {stem} of {}", dataset.root().display())
         })?;

@@ -102,6 +102,20 @@ pub struct CentreError {
     pub by_depth: Vec<DepthBin>,
 }
 
+/// Pixel errors of the correctly matched centres against the truth centres projected through
+/// the rig: what the 3D error is made of.
+#[derive(Debug, Clone, Serialize)]
+pub struct PixelError {
+    /// Correctly matched fruit.
+    pub n: usize,
+    /// Median distance of the primary view's detected centre from the projected truth, pixels.
+    pub primary_centre_median_px: Option<f64>,
+    /// Median signed disparity error (detected − projected truth), pixels.
+    pub disparity_median_px: Option<f64>,
+    /// Median absolute disparity error, pixels.
+    pub disparity_median_abs_px: Option<f64>,
+}
+
 /// The report of `pomona stereo --report`.
 #[derive(Debug, Clone, Serialize)]
 pub struct StereoReport {
@@ -119,6 +133,8 @@ pub struct StereoReport {
     pub exact: ExactScore,
     /// Errors of located centres.
     pub centre_error: CentreError,
+    /// Pixel errors behind them.
+    pub pixel_error: PixelError,
 }
 
 /// The truth circles of a view, by fruit id.
@@ -182,6 +198,8 @@ impl StereoReport {
         let mut errors_by_depth: Vec<(f64, f64)> = Vec::new();
         let mut frames = 0;
         let mut correct_fruit = 0;
+        // (primary centre error, signed disparity error) of correctly matched fruit, pixels.
+        let mut pixel_errors: Vec<(f64, f64)> = Vec::new();
         for outcome in outcomes {
             let load = |d: &Dataset| {
                 d.load_truth(&outcome.stem).with_context(|| {
@@ -223,6 +241,10 @@ impl StereoReport {
                 let first = paired.insert(a.clone());
                 if let (true, Some(truth)) = (first, centre_of.get(a.as_str())) {
                     errors_by_depth.push((truth.z, (located - truth).norm() * 1e3));
+                    if let Some((ta, tb)) = rig.project_pair(truth) {
+                        let disparity = (p.x - s.x) - (ta.x - tb.x);
+                        pixel_errors.push(((p - ta).norm(), disparity));
+                    }
                 }
             }
             correct_fruit += paired.len();
@@ -248,6 +270,9 @@ impl StereoReport {
         matching.recall = (matching.both_detected > 0)
             .then(|| correct_fruit as f64 / matching.both_detected as f64);
         let exact_sorted = sorted(exact_errors);
+        let centre_px = sorted(pixel_errors.iter().map(|e| e.0).collect());
+        let disparity = sorted(pixel_errors.iter().map(|e| e.1).collect());
+        let disparity_abs = sorted(pixel_errors.iter().map(|e| e.1.abs()).collect());
         let all = sorted(errors_by_depth.iter().map(|e| e.1).collect());
         let far = sorted(
             errors_by_depth
@@ -294,6 +319,12 @@ impl StereoReport {
                 median_far_mm: quantile(&far, 0.5),
                 by_depth,
             },
+            pixel_error: PixelError {
+                n: pixel_errors.len(),
+                primary_centre_median_px: quantile(&centre_px, 0.5),
+                disparity_median_px: quantile(&disparity, 0.5),
+                disparity_median_abs_px: quantile(&disparity_abs, 0.5),
+            },
         })
     }
 
@@ -318,6 +349,14 @@ impl StereoReport {
             f(self.centre_error.median_far_mm, 1),
             self.centre_error.n_far,
         );
+        s.push_str(&format!(
+            "pixel errors of {} correct pairs: primary centre median {} px, disparity median {} px \
+             (signed), {} px (absolute)\n\n",
+            self.pixel_error.n,
+            f(self.pixel_error.primary_centre_median_px, 2),
+            f(self.pixel_error.disparity_median_px, 2),
+            f(self.pixel_error.disparity_median_abs_px, 2),
+        ));
         s.push_str("| depth (m) | n | median mm | p90 mm |\n|---|---|---|---|\n");
         for b in &self.centre_error.by_depth {
             let to = b.to_m.map_or_else(|| "∞".to_owned(), |t| format!("{t:.1}"));

@@ -19,6 +19,7 @@ use pomona_arm::TwoArmCell;
 use pomona_core::nalgebra::Vector3;
 use pomona_core::{PinholeCamera, RadialDistortion};
 
+use crate::number_pair::parse_number_pair;
 use crate::progress::progress_bar;
 
 /// Arguments of `pomona synth`.
@@ -195,31 +196,15 @@ pub enum BackgroundArg {
 }
 
 fn parse_distortion(s: &str) -> Result<(f64, f64), String> {
-    let (a, b) = s
-        .split_once(',')
-        .ok_or_else(|| format!("expected K1,K2 (e.g. -0.2,0.05), got `{s}`"))?;
-    let num = |t: &str| {
-        t.trim()
-            .parse::<f64>()
-            .map_err(|e| format!("`{t}` is not a number: {e}"))
-    };
-    let (k1, k2) = (num(a)?, num(b)?);
-    if !(k1.is_finite() && k2.is_finite() && k1.abs() <= 1.0 && k2.abs() <= 1.0) {
-        return Err(format!("need finite |K1|, |K2| <= 1, got {k1},{k2}"));
+    let (k1, k2) = parse_number_pair(s, "K1,K2 (e.g. -0.2,0.05)")?;
+    if !(k1.abs() <= 1.0 && k2.abs() <= 1.0) {
+        return Err(format!("need |K1|, |K2| <= 1, got {k1},{k2}"));
     }
     Ok((k1, k2))
 }
 
 fn parse_distance_band(s: &str) -> Result<(f64, f64), String> {
-    let (lo, hi) = s
-        .split_once(',')
-        .ok_or_else(|| format!("expected MIN,MAX in metres (e.g. 0.3,0.8), got `{s}`"))?;
-    let num = |t: &str| {
-        t.trim()
-            .parse::<f64>()
-            .map_err(|e| format!("`{t}` is not a number: {e}"))
-    };
-    let (lo, hi) = (num(lo)?, num(hi)?);
+    let (lo, hi) = parse_number_pair(s, "MIN,MAX in metres (e.g. 0.3,0.8)")?;
     let (min, max) = WIDE_DISTANCE_LIMITS_M;
     if !(lo.is_finite() && hi.is_finite() && lo >= min && lo <= hi && hi <= max) {
         return Err(format!(

@@ -18,10 +18,10 @@
 //!   true joints are the readings minus the encoder offsets. With no errors the left shot is
 //!   the primary view of `pomona_synth::StereoRig` and the right shot its stereo view (pivot
 //!   `d` behind the camera, the two views at ∓β about the bisector, which is the hub's z axis).
-//! * **Pixels**: normalised coordinates `(X/Z, Y/Z)` in the camera frame, radially distorted,
-//!   then `u = fx·x + cx`, `v = fy·y + cy` with the rig's [`PinholeCamera`] (pixel centres
-//!   are integers). A target is *seen* when it is at least `min_depth_m` in front of both shots
-//!   and falls inside both images.
+//! * **Pixels**: the rig's [`PinholeCamera`] with the lens's distortion (normalised coordinates
+//!   `(X/Z, Y/Z)` in the camera frame, radially distorted, then `u = fx·x + cx`,
+//!   `v = fy·y + cy`; pixel centres are integers). A target is *seen* when it is at least
+//!   `min_depth_m` in front of both shots and falls inside both images.
 //! * **Encoder readings** for a target: the exact inverse kinematics ([`ArmJoints::reaching`])
 //!   of the target plus the encoder offsets; the end of the link for readings `q` is the forward
 //!   kinematics at `q − offsets`.
@@ -37,7 +37,8 @@ use crate::{ArmError, ArmJoints, ArmLimits, CalibrationErrors, RotatedStereo};
 /// The camera and the two-shot geometry of one arm.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct ArmRig {
-    /// Intrinsics of the camera; default 640 × 480 with fx = fy = 320 px (90° horizontal
+    /// Intrinsics of the camera as designed (without distortion: the lens's distortion is one
+    /// of the [`CalibrationErrors`]); default 640 × 480 with fx = fy = 320 px (90° horizontal
     /// field of view: the seed's wide-angle optics).
     pub camera: PinholeCamera,
     /// Distance from the hub (the rotation pivot) to the camera centre along the link, metres
@@ -61,6 +62,7 @@ impl Default for ArmRig {
                 fy: 320.0,
                 cx: 319.5,
                 cy: 239.5,
+                distortion: None,
             },
             pivot_m: 0.2,
             beta_rad: 10f64.to_radians(),
@@ -80,12 +82,20 @@ impl ArmRig {
         RotatedStereo::new(self.beta_rad, self.pivot_m, self.camera)
     }
 
-    /// Checks the rig ([`ArmRig::stereo`]) and a finite positive minimum depth.
+    /// Checks the rig ([`ArmRig::stereo`]), a camera without distortion and a finite positive
+    /// minimum depth.
     ///
     /// # Errors
     /// [`ArmError::InvalidParameter`] naming the first bad value.
     pub fn validate(&self) -> Result<(), ArmError> {
         self.stereo()?;
+        if let Some(d) = self.camera.distortion {
+            return Err(ArmError::InvalidParameter {
+                name: "camera.distortion",
+                value: d.k1,
+                reason: "the rig's camera is the nominal one; give the lens's k1, k2 as calibration errors",
+            });
+        }
         if !(self.min_depth_m > 0.0 && self.min_depth_m.is_finite()) {
             return Err(ArmError::InvalidParameter {
                 name: "min_depth_m",
@@ -209,9 +219,11 @@ impl ArmSimulation {
         if !(p.z >= self.rig.min_depth_m && p.coords.iter().all(|v| v.is_finite())) {
             return None;
         }
-        let (x, y) = self.errors.distort(p.x / p.z, p.y / p.z);
-        let cam = &self.rig.camera;
-        let pixel = Point2::new(cam.fx * x + cam.cx, cam.fy * y + cam.cy);
+        let cam = PinholeCamera {
+            distortion: self.errors.distortion(),
+            ..self.rig.camera
+        };
+        let pixel = cam.project(&p)?;
         cam.contains(&pixel).then_some(pixel)
     }
 

@@ -7,8 +7,8 @@
 //!   ahead of the hub, but its centre is off by a small translation and its axes by a small
 //!   rotation, both in the link frame (the hub frame turned with the arm, see
 //!   [`crate::ArmSimulation`]).
-//! * **Lens distortion**: radial, `x_d = x (1 + k1 ρ² + k2 ρ⁴)` on normalised image coordinates
-//!   with `ρ² = x² + y²`.
+//! * **Lens distortion**: radial ([`RadialDistortion`]), `x_d = x (1 + k1 ρ² + k2 ρ⁴)` on
+//!   normalised image coordinates with `ρ² = x² + y²`.
 //!
 //! [`CalibrationMagnitudes`] holds the sizes (documented defaults); [`CalibrationErrors::draw`]
 //! draws one robot from a seed: each offset gets a random sign and a magnitude uniform in
@@ -16,6 +16,7 @@
 //! lens's and are taken as given.
 
 use nalgebra::{Rotation3, Vector3};
+use pomona_core::RadialDistortion;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
@@ -163,11 +164,12 @@ impl CalibrationErrors {
         Rotation3::new(self.camera_rotation_rad)
     }
 
-    /// Applies the radial distortion to normalised image coordinates `(x, y)`.
-    pub fn distort(&self, x: f64, y: f64) -> (f64, f64) {
-        let rho2 = x * x + y * y;
-        let factor = 1.0 + self.k1 * rho2 + self.k2 * rho2 * rho2;
-        (x * factor, y * factor)
+    /// The lens's radial distortion, `None` when both coefficients are zero.
+    pub fn distortion(&self) -> Option<RadialDistortion> {
+        (self.k1 != 0.0 || self.k2 != 0.0).then_some(RadialDistortion {
+            k1: self.k1,
+            k2: self.k2,
+        })
     }
 }
 
@@ -194,15 +196,18 @@ mod tests {
             .iter()
             .all(|&v| within(v, m.camera_rotation_rad)));
         let none = CalibrationErrors::none();
-        assert_eq!(none.distort(0.3, -0.2), (0.3, -0.2));
+        assert_eq!(none.distortion(), None);
         assert_eq!(none.camera_offset_m, Vector3::zeros());
     }
 
     #[test]
     fn barrel_distortion_pulls_points_inwards_and_bad_sizes_are_rejected() {
         let e = CalibrationErrors::draw(&CalibrationMagnitudes::default(), 1);
-        let (x, y) = e.distort(0.8, 0.0);
-        assert!(x < 0.8 && y == 0.0);
+        let d = e
+            .distortion()
+            .unwrap()
+            .distort(nalgebra::Vector2::new(0.8, 0.0));
+        assert!(d.x < 0.8 && d.y == 0.0);
         let bad = CalibrationMagnitudes {
             r_offset_m: -1.0,
             ..CalibrationMagnitudes::default()

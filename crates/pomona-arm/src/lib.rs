@@ -14,6 +14,10 @@
 //! then 2-opt and moves of targets between arms) is what the CLI runs; [`plan_exact`]
 //! (every split of the shared targets × Held–Karp per arm) is the reference for small problems.
 //!
+//! Each arm's camera takes two shots turned by ±β about the hub ([`RotatedStereo`]): fruit
+//! centres are paired between them by the seed's relaxation ([`match_centres`] within the
+//! Eq. 10 windows of [`MatchingWindows`]) and located by Eq. 18 or by triangulation.
+//!
 //! Seeing and reaching (§4.2): [`ArmSimulation`] is the robot in numbers — the camera on the
 //! arm takes two shots rotated ±β about the hub, a target projects to pixel coordinates in both,
 //! and the encoder readings that reach it carry hidden [`CalibrationErrors`] (encoder offsets,
@@ -37,12 +41,14 @@ mod error;
 mod exact_planner;
 mod heuristic_planner;
 mod joint_network;
+mod matching_windows;
 mod motion_model;
 mod network_training;
 mod nominal_mapping;
 mod plan_problem;
 mod random_targets;
 mod rotated_stereo;
+mod stereo_matching;
 mod two_arm_cell;
 
 pub use arm_joints::ArmJoints;
@@ -55,10 +61,14 @@ pub use error::ArmError;
 pub use exact_planner::{plan_exact, MAX_EXACT_TARGETS};
 pub use heuristic_planner::plan_heuristic;
 pub use joint_network::{JointNetwork, LinearScaling, NETWORK_INPUTS, NETWORK_OUTPUTS};
+pub use matching_windows::{MatchingWindows, WORKING_VOLUME_GRID_PX};
 pub use motion_model::MotionModel;
 pub use network_training::{train_joint_network, NetworkTraining, TrainingReport};
 pub use nominal_mapping::NominalMapping;
 pub use plan_problem::{Arm, PickPlan, PlanFile, PlanProblem, Target, TargetList};
 pub use random_targets::random_targets;
 pub use rotated_stereo::RotatedStereo;
+pub use stereo_matching::{
+    match_centres, DisparityMatrix, RelaxationParams, RelaxationStop, StereoMatching, StereoPair,
+};
 pub use two_arm_cell::TwoArmCell;

@@ -9,6 +9,8 @@ pub mod eval;
 pub mod experiment;
 pub mod info;
 pub mod plan;
+pub mod stereo;
+pub mod stereo_report;
 pub mod synth;
 pub mod track;
 pub mod train;

@@ -14,25 +14,61 @@
 //! then 2-opt and moves of targets between arms) is what the CLI runs; [`plan_exact`]
 //! (every split of the shared targets × Held–Karp per arm) is the reference for small problems.
 //!
+//! Each arm's camera takes two shots turned by ±β about the hub ([`RotatedStereo`]): fruit
+//! centres are paired between them by the seed's relaxation ([`match_centres`] within the
+//! Eq. 10 windows of [`MatchingWindows`]) and located by Eq. 18 or by triangulation.
+//!
+//! Seeing and reaching (§4.2): [`ArmSimulation`] is the robot in numbers — the camera on the
+//! arm takes two shots rotated ±β about the hub, a target projects to pixel coordinates in both,
+//! and the encoder readings that reach it carry hidden [`CalibrationErrors`] (encoder offsets,
+//! camera mounting, lens distortion). [`JointNetwork`] is the seed's 4-8-3 network mapping the
+//! two image positions straight to encoder readings (Eq. 19), trained on a regular grid
+//! ([`train_joint_network`]) and stored in an [`ArmModelFile`]; [`EndPositionError`] measures
+//! how far the true robot's end lands from the target, beside [`NominalMapping`] (Eq. 18 +
+//! exact kinematics of the nominal model).
+//!
 //! The split into files follows the concepts: joints and limits (geometry of one arm), motion
-//! (time), the cell (two arms), the problem and its plans, and the two planners.
+//! (time), the cell (two arms), the problem and its plans, the two planners; the simulated robot,
+//! its calibration errors, the network, its training, its file, and the end-position error.
 
 mod arm_joints;
 mod arm_limits;
+mod arm_model_file;
+mod arm_simulation;
+mod calibration_errors;
+mod end_position_error;
 mod error;
 mod exact_planner;
 mod heuristic_planner;
+mod joint_network;
+mod matching_windows;
 mod motion_model;
+mod network_training;
+mod nominal_mapping;
 mod plan_problem;
 mod random_targets;
+mod rotated_stereo;
+mod stereo_matching;
 mod two_arm_cell;
 
 pub use arm_joints::ArmJoints;
 pub use arm_limits::ArmLimits;
+pub use arm_model_file::{ArmModelFile, ARM_MODEL_FORMAT, ARM_MODEL_VERSION};
+pub use arm_simulation::{ArmRig, ArmSample, ArmSimulation, Shot, ShotPixels};
+pub use calibration_errors::{CalibrationErrors, CalibrationMagnitudes};
+pub use end_position_error::EndPositionError;
 pub use error::ArmError;
 pub use exact_planner::{plan_exact, MAX_EXACT_TARGETS};
 pub use heuristic_planner::plan_heuristic;
+pub use joint_network::{JointNetwork, LinearScaling, NETWORK_INPUTS, NETWORK_OUTPUTS};
+pub use matching_windows::{MatchingWindows, WORKING_VOLUME_GRID_PX};
 pub use motion_model::MotionModel;
+pub use network_training::{train_joint_network, NetworkTraining, TrainingReport};
+pub use nominal_mapping::NominalMapping;
 pub use plan_problem::{Arm, PickPlan, PlanFile, PlanProblem, Target, TargetList};
 pub use random_targets::random_targets;
+pub use rotated_stereo::RotatedStereo;
+pub use stereo_matching::{
+    match_centres, DisparityMatrix, RelaxationParams, RelaxationStop, StereoMatching, StereoPair,
+};
 pub use two_arm_cell::TwoArmCell;

@@ -11,6 +11,7 @@ pub mod detection_run;
 pub mod error_line;
 pub mod exit_status;
 pub mod matching_args;
+pub mod number_pair;
 pub mod overlay;
 pub mod params;
 pub mod progress;

@@ -44,6 +44,13 @@ enum Command {
     Demo(commands::demo::DemoArgs),
     /// Plan the picks of seed 004's two-arm robot: which arm picks which fruit, in which order.
     Plan(commands::plan::PlanArgs),
+    /// Seed 004's arm: train and evaluate the network mapping a target's two image positions
+    /// to encoder readings (Eq. 19), beside Eq. 18 + exact kinematics.
+    Arm(commands::arm::ArmArgs),
+    /// Fruit in 3D from the two colour shots of seed 004's rotating camera (`synth --stereo`):
+    /// color-contour circles in both, matched by the seed's relaxation, located by Eq. 18 or
+    /// triangulation; writes one detection file per frame.
+    Stereo(commands::stereo::StereoArgs),
 }
 
 fn main() -> ExitCode {
@@ -55,6 +62,8 @@ fn main() -> ExitCode {
         Command::Eval(args) => commands::eval::run(args),
         Command::Synth(args) => commands::synth::run(args),
         Command::Plan(args) => commands::plan::run(args),
+        Command::Arm(args) => commands::arm::run(args),
+        Command::Stereo(args) => commands::stereo::run(args),
         Command::Train(args) => commands::train::run(args),
         Command::Detect(args) => commands::detect::run(args),
         Command::Experiment(args) => commands::experiment::run(args),

@@ -3,12 +3,17 @@
 //! Split out because every stage — back-projection, projection of detections for overlays, 2D
 //! truth matching, synthetic rendering — needs exactly this and nothing else of a frame.
 
-use nalgebra::{Point2, Point3};
+use nalgebra::{Point2, Point3, Vector2};
 use serde::{Deserialize, Serialize};
 
-use crate::CoreError;
+use crate::{CoreError, RadialDistortion};
 
-/// Pinhole intrinsics without distortion, in pixels.
+/// Pinhole intrinsics in pixels, with optional radial lens distortion.
+///
+/// Projection applies the distortion to normalised coordinates before the intrinsics;
+/// back-projection ([`PinholeCamera::back_project`], [`PinholeCamera::normalised`]) removes it,
+/// so callers that go through these methods handle distorted images unchanged. Camera files
+/// without `distortion` load as undistorted.
 ///
 /// Invariants (checked by [`PinholeCamera::new`] and on deserialisation through `pomona-io`):
 /// `width`, `height` > 0, `fx`, `fy` finite and > 0, `cx`, `cy` finite.
@@ -26,6 +31,9 @@ pub struct PinholeCamera {
     pub cx: f64,
     /// Principal point y (row), pixels.
     pub cy: f64,
+    /// Radial lens distortion, if the lens has any worth modelling.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub distortion: Option<RadialDistortion>,
 }
 
 impl PinholeCamera {
@@ -56,7 +64,18 @@ impl PinholeCamera {
             fy,
             cx,
             cy,
+            distortion: None,
         };
+        cam.validate()?;
+        Ok(cam)
+    }
+
+    /// The same intrinsics with `distortion`.
+    ///
+    /// # Errors
+    /// [`CoreError::InvalidCameraParameter`] for a non-finite coefficient.
+    pub fn with_distortion(self, distortion: Option<RadialDistortion>) -> Result<Self, CoreError> {
+        let cam = Self { distortion, ..self };
         cam.validate()?;
         Ok(cam)
     }
@@ -83,6 +102,9 @@ impl PinholeCamera {
                 return bad(name, value);
             }
         }
+        if let Some(d) = &self.distortion {
+            d.validate()?;
+        }
         Ok(())
     }
 
@@ -105,11 +127,25 @@ impl PinholeCamera {
     /// assert_eq!((p.x, p.y, p.z), (2.0, 0.0, 2.0));
     /// ```
     pub fn back_project(&self, u: f64, v: f64, depth_m: f64) -> Point3<f64> {
-        Point3::new(
-            (u - self.cx) * depth_m / self.fx,
-            (v - self.cy) * depth_m / self.fy,
-            depth_m,
-        )
+        let n = self.normalised(&Point2::new(u, v));
+        Point3::new(n.x * depth_m, n.y * depth_m, depth_m)
+    }
+
+    /// The normalised image coordinates `(x/z, y/z)` of the ray through continuous pixel
+    /// coordinates `pixel`: the point on that ray at depth 1 m (undistorted).
+    ///
+    /// ```
+    /// use pomona_core::{nalgebra::Point2, PinholeCamera};
+    /// let cam = PinholeCamera::new(4, 4, 2.0, 2.0, 1.5, 1.5).unwrap();
+    /// let n = cam.normalised(&Point2::new(3.5, 0.5));
+    /// assert_eq!((n.x, n.y), (1.0, -0.5));
+    /// ```
+    pub fn normalised(&self, pixel: &Point2<f64>) -> Vector2<f64> {
+        let seen = Vector2::new((pixel.x - self.cx) / self.fx, (pixel.y - self.cy) / self.fy);
+        match &self.distortion {
+            Some(d) => d.undistort(seen),
+            None => seen,
+        }
     }
 
     /// Projects a point in the camera frame to continuous pixel coordinates `(u, v)`.
@@ -121,9 +157,14 @@ impl PinholeCamera {
         if !(p.z > 0.0 && p.x.is_finite() && p.y.is_finite() && p.z.is_finite()) {
             return None;
         }
+        let n = Vector2::new(p.x / p.z, p.y / p.z);
+        let n = match &self.distortion {
+            Some(d) => d.distort(n),
+            None => n,
+        };
         Some(Point2::new(
-            self.fx * p.x / p.z + self.cx,
-            self.fy * p.y / p.z + self.cy,
+            self.fx * n.x + self.cx,
+            self.fy * n.y + self.cy,
         ))
     }
 
@@ -155,6 +196,7 @@ impl PinholeCamera {
             fy: self.fy * factor,
             cx: (self.cx + 0.5) * factor - 0.5,
             cy: (self.cy + 0.5) * factor - 0.5,
+            distortion: self.distortion,
         }
     }
 }
@@ -207,6 +249,39 @@ mod tests {
         assert!(PinholeCamera::new(1, 1, -1.0, 1.0, 0.0, 0.0).is_err());
         assert!(PinholeCamera::new(1, 1, 1.0, f64::INFINITY, 0.0, 0.0).is_err());
         assert!(PinholeCamera::new(1, 1, 1.0, 1.0, f64::NAN, 0.0).is_err());
+    }
+
+    #[test]
+    fn distorted_projection_and_back_projection_invert_each_other() {
+        let cam = kinect()
+            .with_distortion(Some(RadialDistortion {
+                k1: -0.18,
+                k2: 0.04,
+            }))
+            .unwrap();
+        for (u, v, z) in [(0.0, 0.0, 0.4), (511.0, 423.0, 2.5), (100.25, 300.75, 1.0)] {
+            let p = cam.back_project(u, v, z);
+            let px = cam.project(&p).unwrap();
+            assert!((px.x - u).abs() < 1e-6 && (px.y - v).abs() < 1e-6, "{px}");
+        }
+        // Barrel: a corner ray lands nearer the centre than the pinhole puts it.
+        let p = Point3::new(0.5, 0.4, 1.0);
+        let (d, ideal) = (cam.project(&p).unwrap(), kinect().project(&p).unwrap());
+        assert!((d.x - cam.cx).abs() < (ideal.x - cam.cx).abs());
+        // Old camera files (no `distortion`) load undistorted; new ones round-trip.
+        let old = r#"{"width":4,"height":3,"fx":1.0,"fy":1.0,"cx":1.5,"cy":1.0}"#;
+        let read: PinholeCamera = serde_json::from_str(old).unwrap();
+        assert_eq!(read.distortion, None);
+        let json = serde_json::to_string(&cam).unwrap();
+        assert_eq!(serde_json::from_str::<PinholeCamera>(&json).unwrap(), cam);
+        assert!(!serde_json::to_string(&kinect())
+            .unwrap()
+            .contains("distortion"));
+        let bad = RadialDistortion {
+            k1: f64::INFINITY,
+            k2: 0.0,
+        };
+        assert!(kinect().with_distortion(Some(bad)).is_err());
     }
 
     #[test]

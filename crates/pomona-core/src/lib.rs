@@ -27,6 +27,7 @@ mod hsv;
 mod image_circle;
 mod instance_mask;
 mod pixel_box;
+mod radial_distortion;
 mod truth;
 
 pub use camera::PinholeCamera;
@@ -40,6 +41,7 @@ pub use hsv::{circular_mean_hue, hue_difference, rgb_to_hsv};
 pub use image_circle::ImageCircle;
 pub use instance_mask::InstanceMask;
 pub use pixel_box::PixelBox;
+pub use radial_distortion::{RadialDistortion, UNDISTORT_ITERATIONS};
 pub use truth::{FrameTruth, FruitTruth};
 
 /// Re-exported so downstream crates name the same nalgebra version.

@@ -54,6 +54,7 @@ impl CameraPreset {
             fy: f,
             cx: (width as f64 - 1.0) / 2.0,
             cy: (height as f64 - 1.0) / 2.0,
+            distortion: None,
         }
     }
 }

@@ -4,6 +4,7 @@
 //! <out>/camera.json  color/  depth/  truth/  mask/      primary view
 //! <out>/synth.json                                      the parameters that made it
 //! <out>/rig.json  <out>/stereo/{camera.json,color,…}    only with a stereo rig
+//! <out>/arm-b/{camera.json,color,…,stereo/}            only with two arms (arm B's two shots)
 //! ```
 //!
 //! Frame `i` is named `{i:06}` and drawn from its own random stream (see [`crate::frame_rng`]),
@@ -16,7 +17,9 @@ use pomona_io::{write_json, DatasetWriter};
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::{render, render_view, SceneSpec, StereoRig, SynthError};
+use pomona_arm::TwoArmCell;
+
+use crate::{render, render_view, SceneSpec, StereoRig, SynthError, TwoArmViews, ARM_B_DATASET};
 
 /// Depth unit of generated datasets: 0.1 mm, so noise-free depth keeps its precision (the
 /// largest storable depth is 6.55 m, well beyond the scene).
@@ -33,6 +36,10 @@ pub struct DatasetSpec {
     pub seed: u64,
     /// Render a second, rotated view of every frame into `<out>/stereo/`.
     pub stereo: Option<StereoRig>,
+    /// Seed 004's second arm: render arm B's two shots into `<out>/arm-b/` and record in every
+    /// fruit's truth which arm reaches it ([`TwoArmViews`]). Needs `stereo`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub arms: Option<TwoArmCell>,
     /// Depth unit written to `camera.json`.
     pub depth_unit_m: f64,
     /// Worker threads (`None`: rayon's default). Never changes the output.
@@ -48,6 +55,7 @@ impl DatasetSpec {
             frames,
             seed,
             stereo: None,
+            arms: None,
             depth_unit_m: DEPTH_UNIT_M,
             threads: None,
         }
@@ -104,14 +112,48 @@ pub fn generate_dataset(
         }
         None => None,
     };
+    let arm_b = match (&spec.arms, &spec.stereo) {
+        (None, _) => None,
+        (Some(_), None) => {
+            return Err(SynthError::InvalidParameter {
+                name: "arms",
+                reason: "a second arm needs the stereo rig".to_string(),
+            })
+        }
+        (Some(cell), Some(rig)) => {
+            let views = TwoArmViews::new(rig, &camera, *cell)?;
+            let root = out.join(ARM_B_DATASET);
+            let writers = [
+                DatasetWriter::create(&root, &camera, spec.depth_unit_m)?,
+                DatasetWriter::create(root.join("stereo"), &camera, spec.depth_unit_m)?,
+            ];
+            Some((views, writers))
+        }
+    };
     let done = AtomicUsize::new(0);
     let one_frame = |i: u32| -> Result<usize, SynthError> {
         let stem = DatasetSpec::frame_stem(i);
         let scene = spec.scene.sample_frame(spec.seed, i as u64)?;
-        let view = render(&scene, &camera)?;
+        let mut view = render(&scene, &camera)?;
+        let annotate = |view: &mut crate::RenderedFrame, pose: &nalgebra::Isometry3<f64>| {
+            if let Some((arms, _)) = &arm_b {
+                arms.annotate(&mut view.truth, pose);
+            }
+        };
+        annotate(&mut view, &nalgebra::Isometry3::identity());
         write_view(&primary, &stem, &view)?;
         if let Some((pose, writer)) = &stereo {
-            write_view(writer, &stem, &render_view(&scene, &camera, pose, 1)?)?;
+            let mut second = render_view(&scene, &camera, pose, 1)?;
+            annotate(&mut second, pose);
+            write_view(writer, &stem, &second)?;
+        }
+        if let Some((arms, writers)) = &arm_b {
+            let poses = [arms.arm_b_from_scene(), arms.arm_b_stereo_from_scene()];
+            for (k, (pose, writer)) in poses.iter().zip(writers).enumerate() {
+                let mut b_view = render_view(&scene, &camera, pose, 2 + k as u64)?;
+                annotate(&mut b_view, pose);
+                write_view(writer, &stem, &b_view)?;
+            }
         }
         let finished = done.fetch_add(1, Ordering::Relaxed) + 1;
         progress(finished as u32);

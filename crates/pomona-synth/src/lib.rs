@@ -83,6 +83,7 @@ mod scene_spec;
 mod shadow;
 mod stem;
 mod stereo;
+mod two_arm_views;
 mod wide_draw;
 mod wide_scene;
 
@@ -122,6 +123,7 @@ pub use scene::Scene;
 pub use scene_spec::SceneSpec;
 pub use stem::Stem;
 pub use stereo::{RigFile, StereoRig};
+pub use two_arm_views::{TwoArmViews, ARM_B_DATASET};
 pub use wide_draw::{SunDraw, WideDraw};
 pub use wide_scene::{
     WIDE_BEHIND_DEPTH_M, WIDE_BRANCHES, WIDE_BRANCH_LENGTH_M, WIDE_BRANCH_RADIUS_M,

@@ -19,7 +19,7 @@
 //! 4. truth: every fruit with at least one visible pixel, in scene order; mask id `k` is the
 //!    k-th of them (1-based). Fruit wholly hidden or out of view are not listed.
 
-use nalgebra::{Isometry3, Point3, Vector3};
+use nalgebra::{Isometry3, Point2, Point3, Vector3};
 use pomona_core::{
     ColorImage, DepthImage, FrameTruth, FruitTruth, ImageCircle, InstanceMask, PinholeCamera,
     PixelBox, RgbdFrame,
@@ -405,6 +405,17 @@ impl<'a> View<'a> {
         };
         let c = self.camera;
         let w = c.width as usize;
+        if c.distortion.is_some() {
+            // Rays through the distorted pixel model.
+            for v in v0..=v1 {
+                for u in u0..=u1 {
+                    let n = c.normalised(&Point2::new(u as f64, v as f64));
+                    let dir = self.axes[0] * n.x + self.axes[1] * n.y + self.axes[2];
+                    f(v * w + u, &self.origin, &dir);
+                }
+            }
+            return;
+        }
         for v in v0..=v1 {
             let y = (v as f64 - c.cy) / c.fy;
             let row = self.axes[1] * y + self.axes[2];
@@ -430,12 +441,16 @@ impl<'a> View<'a> {
                 if q.z <= 1e-3 {
                     return Some((0, c.width as usize - 1, 0, c.height as usize - 1));
                 }
-                let u = c.fx * q.x / q.z + c.cx;
-                let v = c.fy * q.y / q.z + c.cy;
-                umin = umin.min(u);
-                umax = umax.max(u);
-                vmin = vmin.min(v);
-                vmax = vmax.max(v);
+                let Some(px) = c.project(&q) else {
+                    return Some((0, c.width as usize - 1, 0, c.height as usize - 1));
+                };
+                // Distortion bends the cube's edges: a few pixels of slack keep it conservative.
+                let slack = if c.distortion.is_some() { 3.0 } else { 0.0 };
+                let (u, v) = (px.x, px.y);
+                umin = umin.min(u - slack);
+                umax = umax.max(u + slack);
+                vmin = vmin.min(v - slack);
+                vmax = vmax.max(v + slack);
             }
         }
         let (wmax, hmax) = (c.width as f64 - 1.0, c.height as f64 - 1.0);

@@ -1,5 +1,6 @@
 //! One module per subcommand.
 
+pub mod arm;
 pub mod cloud;
 pub mod convert;
 pub mod demo;
@@ -8,6 +9,8 @@ pub mod eval;
 pub mod experiment;
 pub mod info;
 pub mod plan;
+pub mod stereo;
+pub mod stereo_report;
 pub mod synth;
 pub mod track;
 pub mod train;

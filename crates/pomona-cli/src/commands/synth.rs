@@ -15,6 +15,11 @@ use pomona_synth::{
     WIDE_DISTANCE_LIMITS_M,
 };
 
+use pomona_arm::TwoArmCell;
+use pomona_core::nalgebra::Vector3;
+use pomona_core::{PinholeCamera, RadialDistortion};
+
+use crate::number_pair::parse_number_pair;
 use crate::progress::progress_bar;
 
 /// Arguments of `pomona synth`.
@@ -75,11 +80,32 @@ pub struct SynthArgs {
     /// Also render every frame from a second, rotated pose into DIR/stereo (pose in DIR/rig.json).
     #[arg(long)]
     pub stereo: bool,
+    /// With --stereo: half the angle between the two views, β, degrees (seed 004 §4.2; the
+    /// stereo view is turned by 2β). Default 4.
+    #[arg(long, value_name = "DEG", requires = "stereo")]
+    pub stereo_beta_deg: Option<f64>,
+    /// With --stereo: distance from the camera back to the pivot of the rotation (the arm's
+    /// hub), metres. Default 0.3.
+    #[arg(long, value_name = "M", requires = "stereo")]
+    pub stereo_pivot_m: Option<f64>,
+    /// With --stereo: 2 adds seed 004's second arm — arm B's two shots in DIR/arm-b/ (its
+    /// second shot in DIR/arm-b/stereo/) and, in every fruit's truth, which arm reaches it with
+    /// which joints (`reach`).
+    #[arg(long, value_name = "N", default_value_t = 1, value_parser = clap::value_parser!(u8).range(1..=2), requires = "stereo")]
+    pub arms: u8,
+    /// Radial lens distortion of the camera, `K1,K2` (normalised coordinates scale by
+    /// 1 + K1 r² + K2 r⁴; e.g. -0.2,0.05 for a wide-angle barrel lens), recorded in camera.json.
+    /// Every view is rendered through it.
+    #[arg(long, value_name = "K1,K2", value_parser = parse_distortion, allow_hyphen_values = true)]
+    pub distortion: Option<(f64, f64)>,
+    /// With --arms 2: arm B's hub is this far right of arm A's (and 0.02 m lower), metres.
+    #[arg(long, value_name = "S", default_value_t = 0.6, requires = "stereo")]
+    pub arm_spacing_m: f64,
     /// Worker threads (default: all cores); never changes the output.
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=1024))]
     pub threads: Option<u64>,
     /// Replace a dataset already in DIR (removes its camera.json, color/, depth/, truth/, mask/,
-    /// stereo/, rig.json, synth.json and approach sequences seq-NNNN/; other files are left
+    /// stereo/, arm-b/, rig.json, synth.json and approach sequences seq-NNNN/; other files are left
     /// alone).
     #[arg(long)]
     pub force: bool,
@@ -169,16 +195,16 @@ pub enum BackgroundArg {
     Greenhouse,
 }
 
+fn parse_distortion(s: &str) -> Result<(f64, f64), String> {
+    let (k1, k2) = parse_number_pair(s, "K1,K2 (e.g. -0.2,0.05)")?;
+    if !(k1.abs() <= 1.0 && k2.abs() <= 1.0) {
+        return Err(format!("need |K1|, |K2| <= 1, got {k1},{k2}"));
+    }
+    Ok((k1, k2))
+}
+
 fn parse_distance_band(s: &str) -> Result<(f64, f64), String> {
-    let (lo, hi) = s
-        .split_once(',')
-        .ok_or_else(|| format!("expected MIN,MAX in metres (e.g. 0.3,0.8), got `{s}`"))?;
-    let num = |t: &str| {
-        t.trim()
-            .parse::<f64>()
-            .map_err(|e| format!("`{t}` is not a number: {e}"))
-    };
-    let (lo, hi) = (num(lo)?, num(hi)?);
+    let (lo, hi) = parse_number_pair(s, "MIN,MAX in metres (e.g. 0.3,0.8)")?;
     let (min, max) = WIDE_DISTANCE_LIMITS_M;
     if !(lo.is_finite() && hi.is_finite() && lo >= min && lo <= hi && hi <= max) {
         return Err(format!(
@@ -291,9 +317,13 @@ impl SynthArgs {
             LightArg::LowSun => LightPreset::LowSun,
             LightArg::Backlight => LightPreset::Backlight,
         };
+        let lens = self.distortion.map(|(k1, k2)| RadialDistortion { k1, k2 });
         let scene = SceneSpec {
             fruit,
-            camera: camera.camera(),
+            camera: PinholeCamera {
+                distortion: lens,
+                ..camera.camera()
+            },
             noise,
             light,
             green_fraction: self.green_fraction,
@@ -304,13 +334,28 @@ impl SynthArgs {
             ..SceneSpec::default()
         };
         let mut spec = DatasetSpec::new(scene, self.frames, self.seed);
-        spec.stereo = self.stereo.then(StereoRig::default);
+        spec.stereo = self.stereo.then(|| self.stereo_rig());
+        spec.arms = (self.arms == 2).then(|| TwoArmCell {
+            b_hub_in_a: Vector3::new(self.arm_spacing_m, TwoArmCell::default().b_hub_in_a.y, 0.0),
+            ..TwoArmCell::default()
+        });
         spec.threads = self.threads.map(|n| n as usize);
         spec
     }
 }
 
 impl SynthArgs {
+    /// The stereo rig of `--stereo-beta-deg` and `--stereo-pivot-m` (defaults elsewhere).
+    pub fn stereo_rig(&self) -> StereoRig {
+        let defaults = StereoRig::default();
+        StereoRig {
+            beta_rad: self
+                .stereo_beta_deg
+                .map_or(defaults.beta_rad, f64::to_radians),
+            pivot_distance_m: self.stereo_pivot_m.unwrap_or(defaults.pivot_distance_m),
+        }
+    }
+
     /// Refuses wide-only options with `--domain narrow`, and repeated list entries.
     ///
     /// # Errors
@@ -343,6 +388,14 @@ impl SynthArgs {
                 bail!("--approach needs --frames of at least 2");
             }
         }
+        if !(self.arm_spacing_m.is_finite() && self.arm_spacing_m > 0.0) {
+            bail!("--arm-spacing-m must be a positive number of metres");
+        }
+        if self.stereo {
+            self.stereo_rig()
+                .validate()
+                .context("invalid --stereo-beta-deg or --stereo-pivot-m")?;
+        }
         self.to_spec()
             .scene
             .validate()
@@ -353,7 +406,7 @@ impl SynthArgs {
 
 /// What a generated dataset consists of; `--force` removes exactly these (and `seq-NNNN/`
 /// approach sequences) before writing.
-const DATASET_ENTRIES: [&str; 8] = [
+const DATASET_ENTRIES: [&str; 9] = [
     "camera.json",
     "synth.json",
     "rig.json",
@@ -362,6 +415,7 @@ const DATASET_ENTRIES: [&str; 8] = [
     "truth",
     "mask",
     "stereo",
+    "arm-b",
 ];
 
 /// Whether `name` is an approach sequence's folder (`seq-` and digits).
@@ -634,6 +688,26 @@ mod tests {
         ] {
             let err = format!("{:#}", parse(bad).unwrap().check().unwrap_err());
             assert!(err.contains(flag), "{err}");
+        }
+        let rig = parse(&[
+            "--stereo",
+            "--stereo-beta-deg",
+            "6",
+            "--stereo-pivot-m",
+            "0.25",
+        ])
+        .unwrap();
+        rig.check().unwrap();
+        let rig = rig.to_spec().stereo.unwrap();
+        assert!((rig.beta_rad - 6f64.to_radians()).abs() < 1e-15);
+        assert_eq!(rig.pivot_distance_m, 0.25);
+        assert!(
+            parse(&["--stereo-beta-deg", "6"]).is_err(),
+            "needs --stereo"
+        );
+        for bad in [["--stereo-beta-deg", "50"], ["--stereo-pivot-m", "0"]] {
+            let a = parse(&[&["--stereo"][..], &bad].concat()).unwrap();
+            assert!(format!("{:#}", a.check().unwrap_err()).contains("stereo"));
         }
         assert!(
             is_sequence_dir("seq-0012") && !is_sequence_dir("seq-") && !is_sequence_dir("seqs")

@@ -1,0 +1,346 @@
+//! `pomona stereo`: fruit in 3D from the two colour shots of seed 004's rotating camera
+//! (§4.1–4.2), without any depth image.
+//!
+//! For every frame of `--data` and its second view `--data/stereo` (as `pomona synth --stereo`
+//! writes them, the rig in `rig.json`), color-contour (through the `pomona::Detector` facade)
+//! finds circles in both colour images (depth images, if the dataset has them, are not read: the
+//! detector sees exactly what a 2D camera gives); the circles are matched by the seed's relaxation
+//! ([`pomona_arm::match_centres`], Eq. 10 windows derived from the rig and the working volume
+//! `--reach-m`), and each matched pair is located by Eq. 18 (`--method paper`) or by
+//! triangulation (`--method triangulate`) in the primary camera frame. The detection files have
+//! the format of `pomona detect`, so `pomona eval --data DIR` scores them against the primary
+//! view's truth. A fruit's diameter is its primary circle's radius scaled to the located depth.
+//!
+//! `--report R.json` also measures the matching and the 3D error against the truth of both views
+//! (see `stereo_report.rs`).
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{bail, Context, Result};
+use clap::ValueEnum;
+use pomona::{Detection, Detector};
+use pomona_arm::{match_centres, MatchingWindows, RelaxationParams, RotatedStereo, StereoMatching};
+use pomona_core::nalgebra::{Point2, Point3};
+use pomona_core::{DepthImage, RgbdFrame};
+use pomona_io::Dataset;
+use pomona_synth::RigFile;
+use rayon::prelude::*;
+
+use crate::commands::stereo_report::{StereoFrameOutcome, StereoReport};
+use crate::detection_run::{load_detector, min_confidence, thread_pool};
+use crate::number_pair::parse_number_pair;
+
+/// The pipeline whose circles are matched.
+pub const STEREO_PIPELINE: &str = "color-contour";
+/// The `pipeline` recorded in the detection files.
+pub const STEREO_RECORD_PIPELINE: &str = "color-contour-stereo";
+
+/// Arguments of `pomona stereo`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct StereoArgs {
+    /// Dataset folder with `rig.json` and the second view in `stereo/` (`pomona synth --stereo`).
+    #[arg(long, value_name = "DIR")]
+    pub data: PathBuf,
+    /// Output folder for `<frame>.json` detection files (created if missing).
+    #[arg(long, value_name = "DETDIR")]
+    pub out: PathBuf,
+    /// How a matched pair becomes a 3D point.
+    #[arg(long, value_enum, default_value_t = StereoMethod::Paper)]
+    pub method: StereoMethod,
+    /// color-contour model file (default: the built-in model).
+    #[arg(long, value_name = "M")]
+    pub model: Option<PathBuf>,
+    /// Keep 2D detections whose calibrated confidence is at least C before matching. Default:
+    /// the model's operating confidence; models without calibration keep every detection.
+    #[arg(long, value_name = "C")]
+    pub min_confidence: Option<f64>,
+    /// The working volume, distances from the hub (the pivot) in metres, `NEAR,FAR`, from which
+    /// the disparity windows are derived. Default: pivot + 0.2 to pivot + 2.0 m.
+    #[arg(long, value_name = "NEAR,FAR", value_parser = parse_reach)]
+    pub reach_m: Option<(f64, f64)>,
+    /// Pixels added to every disparity window (detector centre error, lens effects).
+    #[arg(long, value_name = "PX", default_value_t = 4.0)]
+    pub margin_px: f64,
+    /// Also measure matching and 3D error against the truth of both views; write them here.
+    #[arg(long, value_name = "R.json")]
+    pub report: Option<PathBuf>,
+    /// Worker threads (default: all cores); never changes the output.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=1024))]
+    pub threads: Option<u64>,
+}
+
+/// `--method` values.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum StereoMethod {
+    /// The seed's rotated-camera depth, Eq. 18.
+    Paper,
+    /// Calibrated triangulation (midpoint of the two rays).
+    Triangulate,
+}
+
+impl StereoMethod {
+    /// Locates the fruit seen at `primary` and `stereo` with this method.
+    ///
+    /// # Errors
+    /// When the pixels do not locate a point in front of both views.
+    pub fn locate(
+        self,
+        rig: &RotatedStereo,
+        primary: &Point2<f64>,
+        stereo: &Point2<f64>,
+    ) -> Result<Point3<f64>, pomona_arm::ArmError> {
+        match self {
+            Self::Paper => rig.locate_paper(primary, stereo),
+            Self::Triangulate => rig.triangulate(primary, stereo),
+        }
+    }
+}
+
+fn parse_reach(s: &str) -> Result<(f64, f64), String> {
+    let (lo, hi) = parse_number_pair(s, "NEAR,FAR in metres (e.g. 0.5,2.0)")?;
+    if !(lo.is_finite() && hi.is_finite() && 0.0 < lo && lo < hi) {
+        return Err(format!("need 0 < NEAR < FAR, got {lo},{hi}"));
+    }
+    Ok((lo, hi))
+}
+
+/// The rig of a dataset: `rig.json` beside the primary view's camera.
+///
+/// # Errors
+/// A missing or unreadable `rig.json`, or one whose pose is not a rotation about a vertical axis
+/// through a pivot behind the camera (the rig of `pomona synth --stereo`).
+pub fn read_rig(data: &Path, dataset: &Dataset) -> Result<RotatedStereo> {
+    let path = data.join("rig.json");
+    let text = std::fs::read_to_string(&path).with_context(|| {
+        format!(
+            "cannot read {} (make the dataset with `pomona synth --stereo`)",
+            path.display()
+        )
+    })?;
+    let file: RigFile = serde_json::from_str(&text)
+        .with_context(|| format!("{} is not a rig file", path.display()))?;
+    let rig = RotatedStereo::new(file.beta_rad, -file.pivot_m[2], *dataset.camera())
+        .with_context(|| format!("{}: unusable rig", path.display()))?;
+    let expected = rig.stereo_from_camera().to_homogeneous();
+    let mut worst: f64 = 0.0;
+    for (r, row) in file.stereo_from_camera.iter().enumerate() {
+        for (c, v) in row.iter().enumerate() {
+            worst = worst.max((v - expected[(r, c)]).abs());
+        }
+    }
+    if !(worst < 1e-9 && file.pivot_m[0] == 0.0 && file.pivot_m[1] == 0.0) {
+        bail!(
+            "{}: stereo_from_camera is not the rotation by 2·beta_rad about the vertical axis \
+             through pivot_m (differs by {worst:e}); only that rig is supported",
+            path.display()
+        );
+    }
+    Ok(rig)
+}
+
+/// What one frame's stereo run produced: the located detections and what the report needs.
+struct FrameRun {
+    detections: Vec<Detection>,
+    outcome: StereoFrameOutcome,
+}
+
+/// The circles of the kept detections: (centre, radius, detection index).
+fn circles(detections: &[Detection]) -> Vec<(Point2<f64>, f64, usize)> {
+    detections
+        .iter()
+        .enumerate()
+        .filter_map(|(i, d)| Some((d.center_px?, d.radius_px?, i)))
+        .collect()
+}
+
+/// The located detection of a matched pair: primary circle, centre from `method`.
+fn located(
+    rig: &RotatedStereo,
+    center_m: Point3<f64>,
+    primary: &Detection,
+    stereo: &Detection,
+    radius_px: f64,
+) -> Detection {
+    let f = 0.5 * (rig.camera.fx + rig.camera.fy);
+    Detection {
+        center_m,
+        diameter_m: Some(2.0 * center_m.z * radius_px / f),
+        score: 0.5 * (primary.score + stereo.score),
+        confidence: primary
+            .confidence
+            .zip(stereo.confidence)
+            .map(|(a, b)| a.min(b)),
+        ..primary.clone()
+    }
+}
+
+/// Detects, matches and locates the fruit of frame `stem`.
+fn run_frame(
+    stem: &str,
+    views: (&Dataset, &Dataset),
+    detector: &Detector,
+    threshold: Option<f64>,
+    rig: &RotatedStereo,
+    windows: &MatchingWindows,
+    method: StereoMethod,
+) -> Result<FrameRun> {
+    let detect = |dataset: &Dataset| -> Result<Vec<Detection>> {
+        // The colour view only: depth, if the dataset has any, is not read.
+        let where_ = || format!("frame {stem} of {}", dataset.root().display());
+        let color = dataset.load_color(stem).with_context(where_)?;
+        let camera = *dataset.camera();
+        let frame = RgbdFrame::new(
+            camera,
+            DepthImage::empty(camera.width, camera.height),
+            color,
+        )
+        .with_context(where_)?;
+        let found = detector.detect(&frame).with_context(|| {
+            format!("detecting in frame {stem} of {}", dataset.root().display())
+        })?;
+        Ok(found
+            .into_iter()
+            .filter(|d| threshold.is_none_or(|c| d.confidence_at_least(c)))
+            .collect())
+    };
+    let primary = detect(views.0)?;
+    let stereo = detect(views.1)?;
+    let (pc, sc) = (circles(&primary), circles(&stereo));
+    let centres = |c: &[(Point2<f64>, f64, usize)]| c.iter().map(|x| x.0).collect::<Vec<_>>();
+    let matching: StereoMatching = match_centres(
+        &centres(&pc),
+        &centres(&sc),
+        windows,
+        &RelaxationParams::default(),
+    );
+    let mut detections = Vec::new();
+    let mut pairs = Vec::new();
+    for pair in &matching.pairs {
+        let (p, s) = (pc[pair.primary], sc[pair.stereo]);
+        let Ok(center_m) = method.locate(rig, &p.0, &s.0) else {
+            continue;
+        };
+        detections.push(located(rig, center_m, &primary[p.2], &stereo[s.2], p.1));
+        pairs.push((p.0, s.0, center_m));
+    }
+    Ok(FrameRun {
+        detections,
+        outcome: StereoFrameOutcome {
+            stem: stem.to_owned(),
+            primary_centres: centres(&pc),
+            stereo_centres: centres(&sc),
+            pairs,
+        },
+    })
+}
+
+/// Runs `pomona stereo`.
+///
+/// # Errors
+/// A dataset without `rig.json` or `stereo/`, a model that is not color-contour's, unreadable
+/// frames, and unwritable output, each naming the file.
+pub fn run(args: &StereoArgs) -> Result<()> {
+    let dataset = Dataset::open(&args.data)
+        .with_context(|| format!("cannot open dataset {}", args.data.display()))?;
+    let stereo_dir = args.data.join("stereo");
+    let stereo = Dataset::open(&stereo_dir).with_context(|| {
+        format!(
+            "cannot open the second view {} (make the dataset with `pomona synth --stereo`)",
+            stereo_dir.display()
+        )
+    })?;
+    if !(dataset.has_color() && stereo.has_color()) {
+        bail!(
+            "{} and {} must both have colour images",
+            args.data.display(),
+            stereo_dir.display()
+        );
+    }
+    let rig = read_rig(&args.data, &dataset)?;
+    let registry = pomona::pipelines();
+    let pipeline = pomona::find_pipeline(&registry, STEREO_PIPELINE)?;
+    let detector = load_detector(pipeline, args.model.as_deref(), &[])?;
+    let threshold = min_confidence(&detector, args.min_confidence)?;
+    let d = rig.pivot_distance_m;
+    let (near, far) = args.reach_m.unwrap_or((d + 0.2, d + 2.0));
+    let windows = MatchingWindows::for_rig(&rig, near, far, args.margin_px)
+        .context("bad --reach-m or --margin-px")?;
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("cannot create {}", args.out.display()))?;
+    let pool = thread_pool(args.threads.map(|n| n as usize))?;
+    let runs: Vec<FrameRun> = pool.install(|| {
+        dataset
+            .frames()
+            .par_iter()
+            .map(|stem| -> Result<FrameRun> {
+                let run = run_frame(
+                    stem,
+                    (&dataset, &stereo),
+                    &detector,
+                    threshold,
+                    &rig,
+                    &windows,
+                    args.method,
+                )?;
+                let mut record = detector.frame_record(stem, true, &run.detections, None);
+                record.pipeline = STEREO_RECORD_PIPELINE.to_owned();
+                pomona_io::write_json(&args.out.join(format!("{stem}.json")), &record)?;
+                Ok(run)
+            })
+            .collect::<Result<Vec<FrameRun>>>()
+    })?;
+    let located: usize = runs.iter().map(|r| r.detections.len()).sum();
+    println!(
+        "{} frames: {located} fruit located by {} (β = {:.2}°, pivot {:.3} m, disparity window \
+         {:.1}–{:.1} px, |Δv| ≤ {:.1} px) into {}",
+        runs.len(),
+        match args.method {
+            StereoMethod::Paper => "Eq. 18",
+            StereoMethod::Triangulate => "triangulation",
+        },
+        rig.beta_rad.to_degrees(),
+        d,
+        windows.min_disparity_px,
+        windows.max_disparity_px,
+        windows.max_vertical_offset_px,
+        args.out.display()
+    );
+    if let Some(path) = &args.report {
+        let outcomes: Vec<StereoFrameOutcome> = runs.into_iter().map(|r| r.outcome).collect();
+        let report = StereoReport::measure(&rig, args.method, (&dataset, &stereo), &outcomes)?;
+        pomona_io::write_json(path, &report)?;
+        print!("{}", report.to_markdown());
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn reach_parses_and_rejects_bad_bands() {
+        assert_eq!(parse_reach("0.5,2").unwrap(), (0.5, 2.0));
+        for bad in ["0.5", "2,0.5", "0,1", "x,1", "1,inf"] {
+            assert!(parse_reach(bad).is_err(), "{bad}");
+        }
+    }
+
+    #[test]
+    fn located_detections_take_the_depth_scaled_radius() {
+        let camera = pomona_core::PinholeCamera::new(640, 480, 500.0, 500.0, 320.0, 240.0).unwrap();
+        let rig = RotatedStereo::new(0.07, 0.3, camera).unwrap();
+        let mut a = Detection::new(Point3::new(0.0, 0.0, 9.0), 2.0);
+        a.center_px = Some(Point2::new(300.0, 200.0));
+        a.radius_px = Some(20.0);
+        a.confidence = Some(0.9);
+        let mut b = Detection::new(Point3::new(0.0, 0.0, 9.0), 4.0);
+        b.confidence = Some(0.6);
+        let d = located(&rig, Point3::new(0.1, 0.0, 1.0), &a, &b, 20.0);
+        assert_eq!(d.center_m, Point3::new(0.1, 0.0, 1.0));
+        assert!((d.diameter_m.unwrap() - 0.08).abs() < 1e-12);
+        assert_eq!((d.score, d.confidence), (3.0, Some(0.6)));
+        assert_eq!(d.center_px, a.center_px);
+    }
+}

@@ -1,0 +1,406 @@
+//! `pomona stereo --report`: how well the two shots were matched and located, against the truth
+//! of both views (the fruit ids of `pomona synth --stereo` are shared by the views).
+//!
+//! * **Identity of a detection**: the truth fruit whose image circle contains the detected
+//!   centre, the nearest such by centre distance; none when no circle contains it (a false
+//!   detection).
+//! * **Matching**: over matched pairs whose two detections both have an identity, precision is
+//!   the share pairing the same fruit; recall is the number of fruit paired correctly over the
+//!   fruit detected in both views. Pairs involving a false detection are counted apart.
+//! * **Exact projections**: every fruit centre the truth has in both views is projected through
+//!   the rig and located again by the same method: the error shows what the equations
+//!   themselves lose (nothing, up to rounding, on an exact pinhole rig).
+//! * **3D centre error**: of every correctly matched fruit, the distance between the located
+//!   centre and the primary truth centre, by the truth depth (z).
+
+use std::collections::{BTreeMap, HashSet};
+
+use anyhow::{Context, Result};
+use pomona_arm::RotatedStereo;
+use pomona_core::nalgebra::{Point2, Point3};
+use pomona_core::{FrameTruth, ImageCircle, PinholeCamera};
+use pomona_io::Dataset;
+use serde::Serialize;
+
+use crate::commands::stereo::StereoMethod;
+
+/// Edges of the depth bins of the 3D error table, metres.
+pub const DEPTH_BIN_EDGES_M: [f64; 6] = [0.0, 0.5, 0.8, 1.1, 1.4, f64::INFINITY];
+/// The depth from which the headline 3D error is taken (seed 004 target: ≤ 15 mm there).
+pub const FAR_DEPTH_M: f64 = 0.8;
+
+/// What the stereo run found in one frame, for the report.
+#[derive(Debug, Clone)]
+pub struct StereoFrameOutcome {
+    /// Frame stem.
+    pub stem: String,
+    /// Centres of the circles detected in the primary view.
+    pub primary_centres: Vec<Point2<f64>>,
+    /// Centres detected in the stereo view.
+    pub stereo_centres: Vec<Point2<f64>>,
+    /// Matched pairs that were located: primary centre, stereo centre, located point.
+    pub pairs: Vec<(Point2<f64>, Point2<f64>, Point3<f64>)>,
+}
+
+/// Matching scores.
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct MatchingScore {
+    /// Located pairs.
+    pub pairs: usize,
+    /// Pairs whose two detections are both real fruit.
+    pub pairs_of_fruit: usize,
+    /// Of those, pairs of the same fruit.
+    pub correct: usize,
+    /// Fruit detected in both views.
+    pub both_detected: usize,
+    /// `correct / pairs_of_fruit`.
+    pub precision: Option<f64>,
+    /// Distinct fruit paired correctly over `both_detected`.
+    pub recall: Option<f64>,
+}
+
+/// Error of the method on exact projections of the truth centres.
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct ExactScore {
+    /// Fruit centres seen by both views.
+    pub fruit: usize,
+    /// Largest error, micrometres.
+    pub max_error_um: Option<f64>,
+    /// Median error, micrometres.
+    pub median_error_um: Option<f64>,
+    /// Fruit whose exact projections the method could not locate.
+    pub failed: usize,
+}
+
+/// 3D centre error of correctly matched fruit in one depth band.
+#[derive(Debug, Clone, Serialize)]
+pub struct DepthBin {
+    /// Lower edge, metres (inclusive).
+    pub from_m: f64,
+    /// Upper edge, metres (exclusive; `null` for no limit).
+    pub to_m: Option<f64>,
+    /// Fruit in the band.
+    pub n: usize,
+    /// Median error, millimetres.
+    pub median_mm: Option<f64>,
+    /// 90th percentile, millimetres.
+    pub p90_mm: Option<f64>,
+}
+
+/// 3D centre errors.
+#[derive(Debug, Clone, Serialize)]
+pub struct CentreError {
+    /// Correctly matched fruit.
+    pub n: usize,
+    /// Median over all, millimetres.
+    pub median_mm: Option<f64>,
+    /// Fruit at depth ≥ [`FAR_DEPTH_M`].
+    pub n_far: usize,
+    /// Median over those, millimetres.
+    pub median_far_mm: Option<f64>,
+    /// By depth band ([`DEPTH_BIN_EDGES_M`]).
+    pub by_depth: Vec<DepthBin>,
+}
+
+/// Pixel errors of the correctly matched centres against the truth centres projected through
+/// the rig: what the 3D error is made of.
+#[derive(Debug, Clone, Serialize)]
+pub struct PixelError {
+    /// Correctly matched fruit.
+    pub n: usize,
+    /// Median distance of the primary view's detected centre from the projected truth, pixels.
+    pub primary_centre_median_px: Option<f64>,
+    /// Median signed disparity error (detected − projected truth), pixels.
+    pub disparity_median_px: Option<f64>,
+    /// Median absolute disparity error, pixels.
+    pub disparity_median_abs_px: Option<f64>,
+}
+
+/// The report of `pomona stereo --report`.
+#[derive(Debug, Clone, Serialize)]
+pub struct StereoReport {
+    /// `paper` or `triangulate`.
+    pub method: StereoMethod,
+    /// Half-angle between the shots, degrees.
+    pub beta_deg: f64,
+    /// Pivot distance, metres.
+    pub pivot_m: f64,
+    /// Frames with truth in both views.
+    pub frames: usize,
+    /// Matching.
+    pub matching: MatchingScore,
+    /// Exact projections.
+    pub exact: ExactScore,
+    /// Errors of located centres.
+    pub centre_error: CentreError,
+    /// Pixel errors behind them.
+    pub pixel_error: PixelError,
+}
+
+/// The truth circles of a view, by fruit id.
+fn truth_circles(truth: &FrameTruth, camera: &PinholeCamera) -> Vec<(String, ImageCircle)> {
+    truth
+        .fruits
+        .iter()
+        .filter_map(|f| {
+            let sphere = f.center_m.zip(f.diameter_m);
+            let circle = ImageCircle::from_parts(
+                camera,
+                f.center_px,
+                f.radius_px,
+                sphere,
+                f.bbox_px.as_ref(),
+            )?;
+            Some((f.id.clone(), circle))
+        })
+        .collect()
+}
+
+/// The id of the truth circle containing `centre` nearest to it.
+fn identity(circles: &[(String, ImageCircle)], centre: &Point2<f64>) -> Option<String> {
+    circles
+        .iter()
+        .map(|(id, c)| (id, (c.center_px - centre).norm(), c.radius_px))
+        .filter(|(_, dist, r)| dist <= r)
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .map(|(id, _, _)| id.clone())
+}
+
+fn quantile(sorted: &[f64], q: f64) -> Option<f64> {
+    if sorted.is_empty() {
+        return None;
+    }
+    let pos = q * (sorted.len() - 1) as f64;
+    let (lo, hi) = (pos.floor() as usize, pos.ceil() as usize);
+    Some(sorted[lo] + (sorted[hi] - sorted[lo]) * (pos - lo as f64))
+}
+
+fn sorted(mut v: Vec<f64>) -> Vec<f64> {
+    v.sort_by(f64::total_cmp);
+    v
+}
+
+impl StereoReport {
+    /// Scores `outcomes` against the truth of `views` (primary, stereo).
+    ///
+    /// # Errors
+    /// An unreadable truth file (named).
+    pub fn measure(
+        rig: &RotatedStereo,
+        method: StereoMethod,
+        views: (&Dataset, &Dataset),
+        outcomes: &[StereoFrameOutcome],
+    ) -> Result<Self> {
+        let camera = &rig.camera;
+        let mut matching = MatchingScore::default();
+        let mut exact_errors = Vec::new();
+        let mut exact_failed = 0;
+        let mut errors_by_depth: Vec<(f64, f64)> = Vec::new();
+        let mut frames = 0;
+        let mut correct_fruit = 0;
+        // (primary centre error, signed disparity error) of correctly matched fruit, pixels.
+        let mut pixel_errors: Vec<(f64, f64)> = Vec::new();
+        for outcome in outcomes {
+            let load = |d: &Dataset| {
+                d.load_truth(&outcome.stem).with_context(|| {
+                    format!("truth of frame {} in {}", outcome.stem, d.root().display())
+                })
+            };
+            let (Some(tp), Some(ts)) = (load(views.0)?, load(views.1)?) else {
+                continue;
+            };
+            frames += 1;
+            let (cp, cs) = (truth_circles(&tp, camera), truth_circles(&ts, camera));
+            let ids = |circles: &[(String, ImageCircle)], centres: &[Point2<f64>]| {
+                centres
+                    .iter()
+                    .filter_map(|c| identity(circles, c))
+                    .collect::<HashSet<String>>()
+            };
+            let both: HashSet<String> = ids(&cp, &outcome.primary_centres)
+                .intersection(&ids(&cs, &outcome.stereo_centres))
+                .cloned()
+                .collect();
+            matching.both_detected += both.len();
+            let centre_of: BTreeMap<&str, Point3<f64>> = tp
+                .fruits
+                .iter()
+                .filter_map(|f| Some((f.id.as_str(), f.center_m?)))
+                .collect();
+            let mut paired = HashSet::new();
+            for (p, s, located) in &outcome.pairs {
+                matching.pairs += 1;
+                let (Some(a), Some(b)) = (identity(&cp, p), identity(&cs, s)) else {
+                    continue;
+                };
+                matching.pairs_of_fruit += 1;
+                if a != b {
+                    continue;
+                }
+                matching.correct += 1;
+                let first = paired.insert(a.clone());
+                if let (true, Some(truth)) = (first, centre_of.get(a.as_str())) {
+                    errors_by_depth.push((truth.z, (located - truth).norm() * 1e3));
+                    if let Some((ta, tb)) = rig.project_pair(truth) {
+                        let disparity = (p.x - s.x) - (ta.x - tb.x);
+                        pixel_errors.push(((p - ta).norm(), disparity));
+                    }
+                }
+            }
+            correct_fruit += paired.len();
+            let in_stereo: HashSet<&str> = ts.fruits.iter().map(|f| f.id.as_str()).collect();
+            for (id, centre) in &centre_of {
+                if !in_stereo.contains(id) {
+                    continue;
+                }
+                let Some((a, b)) = rig.project_pair(centre) else {
+                    continue;
+                };
+                if !(camera.contains(&a) && camera.contains(&b)) {
+                    continue;
+                }
+                match method.locate(rig, &a, &b) {
+                    Ok(p) => exact_errors.push((p - centre).norm() * 1e6),
+                    Err(_) => exact_failed += 1,
+                }
+            }
+        }
+        matching.precision = (matching.pairs_of_fruit > 0)
+            .then(|| matching.correct as f64 / matching.pairs_of_fruit as f64);
+        matching.recall = (matching.both_detected > 0)
+            .then(|| correct_fruit as f64 / matching.both_detected as f64);
+        let exact_sorted = sorted(exact_errors);
+        let centre_px = sorted(pixel_errors.iter().map(|e| e.0).collect());
+        let disparity = sorted(pixel_errors.iter().map(|e| e.1).collect());
+        let disparity_abs = sorted(pixel_errors.iter().map(|e| e.1.abs()).collect());
+        let all = sorted(errors_by_depth.iter().map(|e| e.1).collect());
+        let far = sorted(
+            errors_by_depth
+                .iter()
+                .filter(|e| e.0 >= FAR_DEPTH_M)
+                .map(|e| e.1)
+                .collect(),
+        );
+        let by_depth = DEPTH_BIN_EDGES_M
+            .windows(2)
+            .map(|w| {
+                let band = sorted(
+                    errors_by_depth
+                        .iter()
+                        .filter(|e| e.0 >= w[0] && e.0 < w[1])
+                        .map(|e| e.1)
+                        .collect(),
+                );
+                DepthBin {
+                    from_m: w[0],
+                    to_m: w[1].is_finite().then_some(w[1]),
+                    n: band.len(),
+                    median_mm: quantile(&band, 0.5),
+                    p90_mm: quantile(&band, 0.9),
+                }
+            })
+            .collect();
+        Ok(Self {
+            method,
+            beta_deg: rig.beta_rad.to_degrees(),
+            pivot_m: rig.pivot_distance_m,
+            frames,
+            matching,
+            exact: ExactScore {
+                fruit: exact_sorted.len() + exact_failed,
+                max_error_um: exact_sorted.last().copied(),
+                median_error_um: quantile(&exact_sorted, 0.5),
+                failed: exact_failed,
+            },
+            centre_error: CentreError {
+                n: all.len(),
+                median_mm: quantile(&all, 0.5),
+                n_far: far.len(),
+                median_far_mm: quantile(&far, 0.5),
+                by_depth,
+            },
+            pixel_error: PixelError {
+                n: pixel_errors.len(),
+                primary_centre_median_px: quantile(&centre_px, 0.5),
+                disparity_median_px: quantile(&disparity, 0.5),
+                disparity_median_abs_px: quantile(&disparity_abs, 0.5),
+            },
+        })
+    }
+
+    /// A short Markdown summary.
+    pub fn to_markdown(&self) -> String {
+        let f = |v: Option<f64>, digits: usize| {
+            v.map_or_else(|| "–".to_owned(), |v| format!("{v:.digits$}"))
+        };
+        let mut s = format!(
+            "| frames | pairs | pairs of fruit | correct | both detected | precision | recall | exact max µm | median mm | median mm (z ≥ {FAR_DEPTH_M} m, n) |\n\
+             |---|---|---|---|---|---|---|---|---|---|\n\
+             | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} ({}) |\n\n",
+            self.frames,
+            self.matching.pairs,
+            self.matching.pairs_of_fruit,
+            self.matching.correct,
+            self.matching.both_detected,
+            f(self.matching.precision, 3),
+            f(self.matching.recall, 3),
+            f(self.exact.max_error_um, 4),
+            f(self.centre_error.median_mm, 1),
+            f(self.centre_error.median_far_mm, 1),
+            self.centre_error.n_far,
+        );
+        s.push_str(&format!(
+            "pixel errors of {} correct pairs: primary centre median {} px, disparity median {} px \
+             (signed), {} px (absolute)\n\n",
+            self.pixel_error.n,
+            f(self.pixel_error.primary_centre_median_px, 2),
+            f(self.pixel_error.disparity_median_px, 2),
+            f(self.pixel_error.disparity_median_abs_px, 2),
+        ));
+        s.push_str("| depth (m) | n | median mm | p90 mm |\n|---|---|---|---|\n");
+        for b in &self.centre_error.by_depth {
+            let to = b.to_m.map_or_else(|| "∞".to_owned(), |t| format!("{t:.1}"));
+            s.push_str(&format!(
+                "| {:.1}–{to} | {} | {} | {} |\n",
+                b.from_m,
+                b.n,
+                f(b.median_mm, 1),
+                f(b.p90_mm, 1)
+            ));
+        }
+        s
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn identity_is_the_nearest_containing_circle() {
+        let circle = |x: f64, r: f64| ImageCircle {
+            center_px: Point2::new(x, 0.0),
+            radius_px: r,
+        };
+        let circles = vec![
+            ("a".to_owned(), circle(0.0, 10.0)),
+            ("b".to_owned(), circle(12.0, 10.0)),
+        ];
+        assert_eq!(
+            identity(&circles, &Point2::new(4.0, 0.0)).as_deref(),
+            Some("a")
+        );
+        assert_eq!(
+            identity(&circles, &Point2::new(8.0, 0.0)).as_deref(),
+            Some("b")
+        );
+        assert_eq!(identity(&circles, &Point2::new(40.0, 0.0)), None);
+    }
+
+    #[test]
+    fn quantiles_interpolate() {
+        assert_eq!(quantile(&[], 0.5), None);
+        assert_eq!(quantile(&[1.0, 2.0, 4.0], 0.5), Some(2.0));
+        assert_eq!(quantile(&[1.0, 3.0], 0.5), Some(2.0));
+    }
+}

@@ -1,0 +1,167 @@
+//! End-to-end tests of `pomona stereo`: a hand-made two-shot dataset (orange discs drawn where
+//! the rig projects known spheres, colour only, no depth) is matched and located, and the
+//! detection files score against the primary truth.
+
+#![allow(clippy::unwrap_used, clippy::expect_used)] // test helpers outside #[test] functions
+
+#[path = "support/run.rs"]
+mod run;
+use run::{pomona, stderr, stdout};
+
+use std::path::Path;
+use std::process::Output;
+
+use pomona_arm::RotatedStereo;
+use pomona_core::nalgebra::Point3;
+use pomona_core::{ColorImage, FrameDetections, FrameTruth, PinholeCamera};
+use pomona_io::DatasetWriter;
+use pomona_synth::StereoRig;
+
+const LEAF: [u8; 3] = [40, 80, 30];
+const ORANGE: [u8; 3] = [235, 120, 15];
+const RADIUS_M: f64 = 0.04;
+
+/// Fruit centres (primary camera frame) of the two frames.
+fn fruit(frame: usize) -> Vec<Point3<f64>> {
+    match frame {
+        0 => vec![
+            Point3::new(-0.15, -0.05, 0.9),
+            Point3::new(0.05, 0.06, 1.0),
+            Point3::new(0.2, -0.08, 1.1),
+        ],
+        _ => vec![Point3::new(-0.05, 0.0, 0.85), Point3::new(0.15, 0.1, 1.2)],
+    }
+}
+
+/// Draws each sphere's image as a filled disc of radius f·R/z.
+fn draw(camera: &PinholeCamera, centres: &[Point3<f64>]) -> ColorImage {
+    let mut image = ColorImage::filled(camera.width, camera.height, LEAF);
+    for c in centres {
+        let px = camera.project(c).unwrap();
+        let r = camera.fx * RADIUS_M / c.z;
+        for v in 0..camera.height {
+            for u in 0..camera.width {
+                let (du, dv) = (f64::from(u) - px.x, f64::from(v) - px.y);
+                if du * du + dv * dv <= r * r {
+                    image.set(u, v, ORANGE);
+                }
+            }
+        }
+    }
+    image
+}
+
+fn truth(centres: &[Point3<f64>]) -> FrameTruth {
+    let fruits: Vec<serde_json::Value> = centres
+        .iter()
+        .enumerate()
+        .map(|(i, c)| {
+            serde_json::json!({"id": format!("f{i}"), "kind": "orange",
+                "center_m": [c.x, c.y, c.z], "diameter_m": 2.0 * RADIUS_M})
+        })
+        .collect();
+    serde_json::from_value(serde_json::json!({"complete": true, "fruits": fruits})).unwrap()
+}
+
+/// Both views of two frames, `rig.json`, truth in each view's frame; colour only.
+fn stereo_dataset(root: &Path) -> RotatedStereo {
+    let camera = PinholeCamera::new(320, 240, 300.0, 300.0, 159.5, 119.5).unwrap();
+    let synth_rig = StereoRig {
+        beta_rad: 6f64.to_radians(),
+        pivot_distance_m: 0.3,
+    };
+    let rig = RotatedStereo::new(synth_rig.beta_rad, synth_rig.pivot_distance_m, camera).unwrap();
+    let primary = DatasetWriter::create(root, &camera, 0.001).unwrap();
+    let stereo = DatasetWriter::create(root.join("stereo"), &camera, 0.001).unwrap();
+    for frame in 0..2 {
+        let stem = format!("{frame:06}");
+        let here = fruit(frame);
+        let there: Vec<Point3<f64>> = here.iter().map(|p| rig.stereo_from_camera() * p).collect();
+        primary.write_color(&stem, &draw(&camera, &here)).unwrap();
+        primary.write_truth(&stem, &truth(&here)).unwrap();
+        stereo.write_color(&stem, &draw(&camera, &there)).unwrap();
+        stereo.write_truth(&stem, &truth(&there)).unwrap();
+    }
+    pomona_io::write_json(&root.join("rig.json"), &synth_rig.to_file()).unwrap();
+    rig
+}
+
+/// Runs `pomona stereo --data ds --out det` with `extra` options.
+fn stereo(ds: &Path, det: &Path, extra: &[&str]) -> Output {
+    let base = [
+        "stereo",
+        "--data",
+        ds.to_str().unwrap(),
+        "--out",
+        det.to_str().unwrap(),
+    ];
+    pomona(&[&base[..], extra].concat())
+}
+
+#[test]
+fn stereo_locates_every_fruit_from_the_two_colour_shots() {
+    let dir = tempfile::tempdir().unwrap();
+    let (ds, det) = (dir.path().join("ds"), dir.path().join("det"));
+    stereo_dataset(&ds);
+    for method in ["paper", "triangulate"] {
+        let report = dir.path().join(format!("{method}.json"));
+        let extra = ["--method", method, "--reach-m", "0.6,2.0"];
+        let out = stereo(
+            &ds,
+            &det,
+            &[&extra[..], &["--report", report.to_str().unwrap()]].concat(),
+        );
+        assert!(out.status.success(), "{}", stderr(&out));
+        assert!(stdout(&out).contains("5 fruit located"), "{}", stdout(&out));
+        for frame in 0..2 {
+            let text = std::fs::read_to_string(det.join(format!("{frame:06}.json"))).unwrap();
+            let found: FrameDetections = serde_json::from_str(&text).unwrap();
+            assert_eq!(found.pipeline, "color-contour-stereo");
+            let truth = fruit(frame);
+            assert_eq!(
+                found.detections.len(),
+                truth.len(),
+                "{method} frame {frame}"
+            );
+            for t in &truth {
+                let nearest = found
+                    .detections
+                    .iter()
+                    .map(|d| (d.center_m - t).norm())
+                    .fold(f64::INFINITY, f64::min);
+                assert!(nearest < 0.03, "{method}: {t} found only {nearest} m away");
+            }
+            for d in &found.detections {
+                let diameter = d.diameter_m.unwrap();
+                assert!((diameter - 2.0 * RADIUS_M).abs() < 0.02, "{diameter}");
+            }
+        }
+        let report: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+        assert_eq!(report["matching"]["correct"], 5, "{report}");
+        assert_eq!(report["matching"]["precision"], 1.0);
+        assert_eq!(report["matching"]["recall"], 1.0);
+        assert!(report["exact"]["max_error_um"].as_f64().unwrap() < 1.0);
+        assert_eq!(report["exact"]["fruit"], 5);
+        // The primary truth scores the files: every fruit found (matched in 3D).
+        let eval = pomona(&[
+            "eval",
+            "--data",
+            ds.to_str().unwrap(),
+            "--detections",
+            det.to_str().unwrap(),
+        ]);
+        assert!(eval.status.success(), "{}", stderr(&eval));
+    }
+}
+
+#[test]
+fn stereo_without_a_rig_names_the_missing_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let ds = dir.path().join("ds");
+    stereo_dataset(&ds);
+    std::fs::remove_file(ds.join("rig.json")).unwrap();
+    let out = stereo(&ds, &dir.path().join("det"), &[]);
+    assert!(!out.status.success());
+    assert!(stderr(&out).contains("rig.json"), "{}", stderr(&out));
+}

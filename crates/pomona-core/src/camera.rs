@@ -127,8 +127,18 @@ impl PinholeCamera {
     /// assert_eq!((p.x, p.y, p.z), (2.0, 0.0, 2.0));
     /// ```
     pub fn back_project(&self, u: f64, v: f64, depth_m: f64) -> Point3<f64> {
-        let n = self.normalised(&Point2::new(u, v));
-        Point3::new(n.x * depth_m, n.y * depth_m, depth_m)
+        match &self.distortion {
+            // Without distortion, the arithmetic every earlier figure was computed with.
+            None => Point3::new(
+                (u - self.cx) * depth_m / self.fx,
+                (v - self.cy) * depth_m / self.fy,
+                depth_m,
+            ),
+            Some(_) => {
+                let n = self.normalised(&Point2::new(u, v));
+                Point3::new(n.x * depth_m, n.y * depth_m, depth_m)
+            }
+        }
     }
 
     /// The normalised image coordinates `(x/z, y/z)` of the ray through continuous pixel
@@ -157,11 +167,14 @@ impl PinholeCamera {
         if !(p.z > 0.0 && p.x.is_finite() && p.y.is_finite() && p.z.is_finite()) {
             return None;
         }
-        let n = Vector2::new(p.x / p.z, p.y / p.z);
-        let n = match &self.distortion {
-            Some(d) => d.distort(n),
-            None => n,
+        let Some(d) = &self.distortion else {
+            // Without distortion, the arithmetic every earlier figure was computed with.
+            return Some(Point2::new(
+                self.fx * p.x / p.z + self.cx,
+                self.fy * p.y / p.z + self.cy,
+            ));
         };
+        let n = d.distort(Vector2::new(p.x / p.z, p.y / p.z));
         Some(Point2::new(
             self.fx * n.x + self.cx,
             self.fy * n.y + self.cy,

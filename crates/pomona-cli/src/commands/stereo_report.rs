@@ -191,15 +191,7 @@ impl StereoReport {
         views: (&Dataset, &Dataset),
         outcomes: &[StereoFrameOutcome],
     ) -> Result<Self> {
-        let camera = &rig.camera;
-        let mut matching = MatchingScore::default();
-        let mut exact_errors = Vec::new();
-        let mut exact_failed = 0;
-        let mut errors_by_depth: Vec<(f64, f64)> = Vec::new();
-        let mut frames = 0;
-        let mut correct_fruit = 0;
-        // (primary centre error, signed disparity error) of correctly matched fruit, pixels.
-        let mut pixel_errors: Vec<(f64, f64)> = Vec::new();
+        let mut tally = Tally::default();
         for outcome in outcomes {
             let load = |d: &Dataset| {
                 d.load_truth(&outcome.stem).with_context(|| {
@@ -209,123 +201,11 @@ impl StereoReport {
             let (Some(tp), Some(ts)) = (load(views.0)?, load(views.1)?) else {
                 continue;
             };
-            frames += 1;
-            let (cp, cs) = (truth_circles(&tp, camera), truth_circles(&ts, camera));
-            let ids = |circles: &[(String, ImageCircle)], centres: &[Point2<f64>]| {
-                centres
-                    .iter()
-                    .filter_map(|c| identity(circles, c))
-                    .collect::<HashSet<String>>()
-            };
-            let both: HashSet<String> = ids(&cp, &outcome.primary_centres)
-                .intersection(&ids(&cs, &outcome.stereo_centres))
-                .cloned()
-                .collect();
-            matching.both_detected += both.len();
-            let centre_of: BTreeMap<&str, Point3<f64>> = tp
-                .fruits
-                .iter()
-                .filter_map(|f| Some((f.id.as_str(), f.center_m?)))
-                .collect();
-            let mut paired = HashSet::new();
-            for (p, s, located) in &outcome.pairs {
-                matching.pairs += 1;
-                let (Some(a), Some(b)) = (identity(&cp, p), identity(&cs, s)) else {
-                    continue;
-                };
-                matching.pairs_of_fruit += 1;
-                if a != b {
-                    continue;
-                }
-                matching.correct += 1;
-                let first = paired.insert(a.clone());
-                if let (true, Some(truth)) = (first, centre_of.get(a.as_str())) {
-                    errors_by_depth.push((truth.z, (located - truth).norm() * 1e3));
-                    if let Some((ta, tb)) = rig.project_pair(truth) {
-                        let disparity = (p.x - s.x) - (ta.x - tb.x);
-                        pixel_errors.push(((p - ta).norm(), disparity));
-                    }
-                }
-            }
-            correct_fruit += paired.len();
-            let in_stereo: HashSet<&str> = ts.fruits.iter().map(|f| f.id.as_str()).collect();
-            for (id, centre) in &centre_of {
-                if !in_stereo.contains(id) {
-                    continue;
-                }
-                let Some((a, b)) = rig.project_pair(centre) else {
-                    continue;
-                };
-                if !(camera.contains(&a) && camera.contains(&b)) {
-                    continue;
-                }
-                match method.locate(rig, &a, &b) {
-                    Ok(p) => exact_errors.push((p - centre).norm() * 1e6),
-                    Err(_) => exact_failed += 1,
-                }
-            }
+            tally.frames += 1;
+            tally.pairs(rig, (&tp, &ts), outcome);
+            tally.exact(rig, method, (&tp, &ts));
         }
-        matching.precision = (matching.pairs_of_fruit > 0)
-            .then(|| matching.correct as f64 / matching.pairs_of_fruit as f64);
-        matching.recall = (matching.both_detected > 0)
-            .then(|| correct_fruit as f64 / matching.both_detected as f64);
-        let exact_sorted = sorted(exact_errors);
-        let centre_px = sorted(pixel_errors.iter().map(|e| e.0).collect());
-        let disparity = sorted(pixel_errors.iter().map(|e| e.1).collect());
-        let disparity_abs = sorted(pixel_errors.iter().map(|e| e.1.abs()).collect());
-        let all = sorted(errors_by_depth.iter().map(|e| e.1).collect());
-        let far = sorted(
-            errors_by_depth
-                .iter()
-                .filter(|e| e.0 >= FAR_DEPTH_M)
-                .map(|e| e.1)
-                .collect(),
-        );
-        let by_depth = DEPTH_BIN_EDGES_M
-            .windows(2)
-            .map(|w| {
-                let band = sorted(
-                    errors_by_depth
-                        .iter()
-                        .filter(|e| e.0 >= w[0] && e.0 < w[1])
-                        .map(|e| e.1)
-                        .collect(),
-                );
-                DepthBin {
-                    from_m: w[0],
-                    to_m: w[1].is_finite().then_some(w[1]),
-                    n: band.len(),
-                    median_mm: quantile(&band, 0.5),
-                    p90_mm: quantile(&band, 0.9),
-                }
-            })
-            .collect();
-        Ok(Self {
-            method,
-            beta_deg: rig.beta_rad.to_degrees(),
-            pivot_m: rig.pivot_distance_m,
-            frames,
-            matching,
-            exact: ExactScore {
-                fruit: exact_sorted.len() + exact_failed,
-                max_error_um: exact_sorted.last().copied(),
-                median_error_um: quantile(&exact_sorted, 0.5),
-                failed: exact_failed,
-            },
-            centre_error: CentreError {
-                n: all.len(),
-                median_mm: quantile(&all, 0.5),
-                n_far: far.len(),
-                median_far_mm: quantile(&far, 0.5),
-                by_depth,
-            },
-            pixel_error: PixelError {
-                n: pixel_errors.len(),
-                primary_centre_median_px: quantile(&centre_px, 0.5),
-                disparity_median_px: quantile(&disparity, 0.5),
-                disparity_median_abs_px: quantile(&disparity_abs, 0.5),
-            },
-        })
+        Ok(tally.report(rig, method))
     }
 
     /// A short Markdown summary.
@@ -370,6 +250,167 @@ impl StereoReport {
         }
         s
     }
+}
+
+/// Running counts of [`StereoReport::measure`] over frames.
+#[derive(Default)]
+struct Tally {
+    frames: usize,
+    matching: MatchingScore,
+    /// Distinct fruit paired correctly.
+    correct_fruit: usize,
+    /// Located error of exact projections, micrometres.
+    exact_errors: Vec<f64>,
+    exact_failed: usize,
+    /// (truth depth m, 3D centre error mm) of correctly matched fruit.
+    errors_by_depth: Vec<(f64, f64)>,
+    /// (primary centre error, signed disparity error) of correctly matched fruit, pixels.
+    pixel_errors: Vec<(f64, f64)>,
+}
+
+impl Tally {
+    /// Scores one frame's matched pairs against the truth of the two views.
+    fn pairs(
+        &mut self,
+        rig: &RotatedStereo,
+        (tp, ts): (&FrameTruth, &FrameTruth),
+        outcome: &StereoFrameOutcome,
+    ) {
+        let camera = &rig.camera;
+        let (cp, cs) = (truth_circles(tp, camera), truth_circles(ts, camera));
+        let ids = |circles: &[(String, ImageCircle)], centres: &[Point2<f64>]| {
+            centres
+                .iter()
+                .filter_map(|c| identity(circles, c))
+                .collect::<HashSet<String>>()
+        };
+        let both: HashSet<String> = ids(&cp, &outcome.primary_centres)
+            .intersection(&ids(&cs, &outcome.stereo_centres))
+            .cloned()
+            .collect();
+        self.matching.both_detected += both.len();
+        let centre_of = truth_centres(tp);
+        let mut paired = HashSet::new();
+        for (p, s, located) in &outcome.pairs {
+            self.matching.pairs += 1;
+            let (Some(a), Some(b)) = (identity(&cp, p), identity(&cs, s)) else {
+                continue;
+            };
+            self.matching.pairs_of_fruit += 1;
+            if a != b {
+                continue;
+            }
+            self.matching.correct += 1;
+            let first = paired.insert(a.clone());
+            if let (true, Some(truth)) = (first, centre_of.get(a.as_str())) {
+                self.errors_by_depth
+                    .push((truth.z, (located - truth).norm() * 1e3));
+                if let Some((ta, tb)) = rig.project_pair(truth) {
+                    let disparity = (p.x - s.x) - (ta.x - tb.x);
+                    self.pixel_errors.push(((p - ta).norm(), disparity));
+                }
+            }
+        }
+        self.correct_fruit += paired.len();
+    }
+
+    /// Locates again every fruit centre both views' truth has, from its exact projections.
+    fn exact(
+        &mut self,
+        rig: &RotatedStereo,
+        method: StereoMethod,
+        (tp, ts): (&FrameTruth, &FrameTruth),
+    ) {
+        let in_stereo: HashSet<&str> = ts.fruits.iter().map(|f| f.id.as_str()).collect();
+        for (id, centre) in &truth_centres(tp) {
+            if !in_stereo.contains(id) {
+                continue;
+            }
+            let Some((a, b)) = rig.project_pair(centre) else {
+                continue;
+            };
+            if !(rig.camera.contains(&a) && rig.camera.contains(&b)) {
+                continue;
+            }
+            match method.locate(rig, &a, &b) {
+                Ok(p) => self.exact_errors.push((p - centre).norm() * 1e6),
+                Err(_) => self.exact_failed += 1,
+            }
+        }
+    }
+
+    /// The report of everything tallied.
+    fn report(self, rig: &RotatedStereo, method: StereoMethod) -> StereoReport {
+        let mut matching = self.matching;
+        matching.precision = (matching.pairs_of_fruit > 0)
+            .then(|| matching.correct as f64 / matching.pairs_of_fruit as f64);
+        matching.recall = (matching.both_detected > 0)
+            .then(|| self.correct_fruit as f64 / matching.both_detected as f64);
+        let exact_sorted = sorted(self.exact_errors);
+        let pixel = &self.pixel_errors;
+        let centre_px = sorted(pixel.iter().map(|e| e.0).collect());
+        let disparity = sorted(pixel.iter().map(|e| e.1).collect());
+        let disparity_abs = sorted(pixel.iter().map(|e| e.1.abs()).collect());
+        let in_band = |from: f64, to: f64| {
+            sorted(
+                self.errors_by_depth
+                    .iter()
+                    .filter(|e| e.0 >= from && e.0 < to)
+                    .map(|e| e.1)
+                    .collect(),
+            )
+        };
+        let all = in_band(f64::NEG_INFINITY, f64::INFINITY);
+        let far = in_band(FAR_DEPTH_M, f64::INFINITY);
+        let by_depth = DEPTH_BIN_EDGES_M
+            .windows(2)
+            .map(|w| {
+                let band = in_band(w[0], w[1]);
+                DepthBin {
+                    from_m: w[0],
+                    to_m: w[1].is_finite().then_some(w[1]),
+                    n: band.len(),
+                    median_mm: quantile(&band, 0.5),
+                    p90_mm: quantile(&band, 0.9),
+                }
+            })
+            .collect();
+        StereoReport {
+            method,
+            beta_deg: rig.beta_rad.to_degrees(),
+            pivot_m: rig.pivot_distance_m,
+            frames: self.frames,
+            matching,
+            exact: ExactScore {
+                fruit: exact_sorted.len() + self.exact_failed,
+                max_error_um: exact_sorted.last().copied(),
+                median_error_um: quantile(&exact_sorted, 0.5),
+                failed: self.exact_failed,
+            },
+            centre_error: CentreError {
+                n: all.len(),
+                median_mm: quantile(&all, 0.5),
+                n_far: far.len(),
+                median_far_mm: quantile(&far, 0.5),
+                by_depth,
+            },
+            pixel_error: PixelError {
+                n: pixel.len(),
+                primary_centre_median_px: quantile(&centre_px, 0.5),
+                disparity_median_px: quantile(&disparity, 0.5),
+                disparity_median_abs_px: quantile(&disparity_abs, 0.5),
+            },
+        }
+    }
+}
+
+/// Centre of every fruit of `truth` that has one, by id.
+fn truth_centres(truth: &FrameTruth) -> BTreeMap<&str, Point3<f64>> {
+    truth
+        .fruits
+        .iter()
+        .filter_map(|f| Some((f.id.as_str(), f.center_m?)))
+        .collect()
 }
 
 #[cfg(test)]

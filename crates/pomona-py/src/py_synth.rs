@@ -4,7 +4,8 @@
 use std::path::PathBuf;
 
 use pomona_synth::{
-    generate_dataset, CameraPreset, DatasetSpec, Domain, FruitChoice, NoiseModel, SceneSpec,
+    generate_dataset, CameraPreset, DatasetSpec, Domain, FruitChoice, LightPreset, NoiseModel,
+    SceneSpec,
 };
 use pyo3::prelude::*;
 
@@ -16,15 +17,18 @@ use crate::py_error::to_py;
 ///
 /// ``fruit``: ``pepper``, ``eggplant``, ``guava``, ``apple``, ``orange`` or ``mixed``;
 /// ``camera``: ``kinect-v2``, ``sr4000``, ``d435`` or ``azure-kinect``; ``domain``: ``wide``
-/// (domain-randomised worlds) or ``narrow`` (the original crop row); ``noise``: a depth-noise
-/// model (``none``, ``low``, ``tof``, ``tof-multipath``, ``stereo``), by default ``none`` for
-/// the narrow domain and the camera's own model for the wide one.
+/// (domain-randomised worlds), ``narrow`` (the original crop row) or ``orchard`` (citrus rows
+/// under the ``light`` preset, with the orchard's backgrounds, as ``pomona synth --domain
+/// orchard``); ``light``: ``day``, ``dim``, ``harsh``, ``low-sun`` or ``backlight`` (narrow and
+/// orchard domains; the wide domain draws its own); ``noise``: a depth-noise model (``none``,
+/// ``low``, ``tof``, ``tof-multipath``, ``stereo``), by default ``none`` for the narrow domain
+/// and the camera's own model otherwise.
 ///
 /// Raises ``PomonaError`` for an unknown name, a folder that already holds a dataset, or an
 /// unwritable file.
 #[pyfunction]
 #[allow(clippy::too_many_arguments)] // one per keyword argument of the Python function
-#[pyo3(signature = (out, frames, seed, *, fruit = "pepper", camera = "kinect-v2", domain = "wide", noise = None))]
+#[pyo3(signature = (out, frames, seed, *, fruit = "pepper", camera = "kinect-v2", domain = "wide", light = "day", noise = None))]
 pub fn synth(
     py: Python<'_>,
     out: PathBuf,
@@ -33,22 +37,18 @@ pub fn synth(
     fruit: &str,
     camera: &str,
     domain: &str,
+    light: &str,
     noise: Option<&str>,
 ) -> PyResult<Dataset> {
     let fruit: FruitChoice = fruit.parse().map_err(to_py)?;
     let preset: CameraPreset = camera.parse().map_err(to_py)?;
-    let domain: Domain = serde_json::from_value(serde_json::Value::from(domain))
-        .map_err(|_| to_py(format!("unknown domain `{domain}`; known: narrow, wide")))?;
-    let noise =
-        match (noise, domain) {
-            (Some(name), _) => name.parse().map_err(to_py)?,
-            (None, Domain::Narrow) => NoiseModel::None,
-            (None, Domain::Wide) => NoiseModel::for_camera(preset),
-            (_, Domain::Orchard) => return Err(to_py(
-                "domain `orchard` (its backgrounds and light presets) is available from the CLI: \
-                 `pomona synth --domain orchard`",
-            )),
-        };
+    let domain: Domain = domain.parse().map_err(to_py)?;
+    let light: LightPreset = light.parse().map_err(to_py)?;
+    let noise = match (noise, domain) {
+        (Some(name), _) => name.parse().map_err(to_py)?,
+        (None, Domain::Narrow) => NoiseModel::None,
+        (None, Domain::Wide | Domain::Orchard) => NoiseModel::for_camera(preset),
+    };
     if frames == 0 {
         return Err(to_py("frames must be at least 1"));
     }
@@ -63,6 +63,8 @@ pub fn synth(
         camera: preset.camera(),
         noise,
         domain,
+        light,
+        backgrounds: domain.default_backgrounds(),
         ..SceneSpec::default()
     };
     let spec = DatasetSpec::new(scene, frames, seed);

@@ -3,6 +3,8 @@ synthetic datasets, and the evaluation report of ``pomona eval``."""
 
 from __future__ import annotations
 
+import subprocess
+
 import numpy as np
 import pytest
 
@@ -51,6 +53,28 @@ def test_synth_is_deterministic_and_guards_its_folder(tmp_path):
         pomona.synth(tmp_path / "c", 1, 3, camera="kinect-v9")
     with pytest.raises(pomona.PomonaError, match="cannot|not|No such"):
         pomona.Dataset(tmp_path / "nowhere")
+
+
+def test_orchard_synth_writes_what_pomona_synth_writes(pomona_bin, tmp_path):
+    got = pomona.synth(
+        tmp_path / "py", 1, 4, fruit="orange", camera="sr4000", domain="orchard", light="dim"
+    )
+    subprocess.run(
+        [pomona_bin, "synth", "--out", tmp_path / "cli", "--frames", "1", "--seed", "4",
+         "--fruit", "orange", "--camera", "sr4000", "--domain", "orchard", "--light", "dim"],
+        check=True, capture_output=True,
+    )
+    cli = pomona.Dataset(tmp_path / "cli")
+    frame = got.frames[0]
+    assert cli.frames == got.frames
+    np.testing.assert_array_equal(got.color(frame), cli.color(frame))
+    np.testing.assert_array_equal(got.depth(frame), cli.depth(frame))
+    assert got.truth(frame) == cli.truth(frame)
+    assert got.truth(frame)["synth"]["light"] == "dim"
+    with pytest.raises(pomona.PomonaError, match="unknown light preset `night`"):
+        pomona.synth(tmp_path / "x", 1, 4, domain="orchard", light="night")
+    with pytest.raises(pomona.PomonaError, match="unknown domain"):
+        pomona.synth(tmp_path / "y", 1, 4, domain="vineyard")
 
 
 def test_evaluate_scores_detection_files_against_truth(oranges, tmp_path):

@@ -4,7 +4,7 @@
 
 use std::str::FromStr;
 
-use crate::{CameraPreset, FruitChoice, FruitKind, NoiseModel};
+use crate::{CameraPreset, Domain, FruitChoice, FruitKind, LightPreset, NoiseModel};
 
 /// The element of `all` whose `name` is `s`, or an error naming `what` and the known names.
 fn by_name<T: Copy>(
@@ -53,6 +53,26 @@ impl FromStr for FruitChoice {
     }
 }
 
+impl FromStr for LightPreset {
+    type Err = String;
+
+    /// # Errors
+    /// An unknown name (the message lists the known ones).
+    fn from_str(s: &str) -> Result<Self, String> {
+        by_name(&Self::ALL, Self::name, s, "light preset")
+    }
+}
+
+impl FromStr for Domain {
+    type Err = String;
+
+    /// # Errors
+    /// An unknown name (the message lists the known ones).
+    fn from_str(s: &str) -> Result<Self, String> {
+        by_name(&Self::ALL, Self::name, s, "domain")
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -65,6 +85,16 @@ mod tests {
         for n in NoiseModel::ALL {
             assert_eq!(n.name().parse::<NoiseModel>(), Ok(n));
         }
+        for l in LightPreset::ALL {
+            assert_eq!(l.name().parse::<LightPreset>(), Ok(l));
+        }
+        for d in Domain::ALL {
+            assert_eq!(d.name().parse::<Domain>(), Ok(d));
+        }
+        assert!("night"
+            .parse::<LightPreset>()
+            .unwrap_err()
+            .contains("low-sun"));
         assert_eq!("mixed".parse::<FruitChoice>(), Ok(FruitChoice::Mixed));
         assert_eq!(
             "guava".parse::<FruitChoice>(),

@@ -15,6 +15,8 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::Background;
+
 /// Scene family (`--domain`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
@@ -38,6 +40,16 @@ impl Domain {
             Domain::Narrow => "narrow",
             Domain::Wide => "wide",
             Domain::Orchard => "orchard",
+        }
+    }
+
+    /// The backgrounds a frame of this domain draws from unless told otherwise: all of
+    /// [`Background::ALL`], except in the orchard (soil, a second row, sky: no greenhouse or
+    /// ground cloth between citrus rows).
+    pub fn default_backgrounds(self) -> Vec<Background> {
+        match self {
+            Domain::Narrow | Domain::Wide => Background::ALL.to_vec(),
+            Domain::Orchard => vec![Background::Soil, Background::SecondRow, Background::Sky],
         }
     }
 }

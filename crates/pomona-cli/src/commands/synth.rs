@@ -238,10 +238,6 @@ fn parse_fraction(s: &str) -> Result<f64, String> {
     }
 }
 
-/// Backgrounds of `--domain orchard` unless `--backgrounds` is given (no greenhouse or cloth).
-pub const ORCHARD_BACKGROUNDS: [Background; 3] =
-    [Background::Soil, Background::SecondRow, Background::Sky];
-
 impl SynthArgs {
     /// The approach-sequence spec these arguments describe, with `--approach`.
     pub fn to_approach_spec(&self) -> Option<ApproachSpec> {
@@ -295,21 +291,20 @@ impl SynthArgs {
                     })
                     .collect()
             });
-        let default_backgrounds = match domain {
-            Domain::Orchard => ORCHARD_BACKGROUNDS.to_vec(),
-            Domain::Narrow | Domain::Wide => defaults.backgrounds,
-        };
-        let backgrounds = self.backgrounds.as_ref().map_or(default_backgrounds, |v| {
-            v.iter()
-                .map(|b| match b {
-                    BackgroundArg::Soil => Background::Soil,
-                    BackgroundArg::Cloth => Background::Cloth,
-                    BackgroundArg::SecondRow => Background::SecondRow,
-                    BackgroundArg::Sky => Background::Sky,
-                    BackgroundArg::Greenhouse => Background::Greenhouse,
-                })
-                .collect()
-        });
+        let backgrounds = self.backgrounds.as_ref().map_or_else(
+            || domain.default_backgrounds(),
+            |v| {
+                v.iter()
+                    .map(|b| match b {
+                        BackgroundArg::Soil => Background::Soil,
+                        BackgroundArg::Cloth => Background::Cloth,
+                        BackgroundArg::SecondRow => Background::SecondRow,
+                        BackgroundArg::Sky => Background::Sky,
+                        BackgroundArg::Greenhouse => Background::Greenhouse,
+                    })
+                    .collect()
+            },
+        );
         let light = match self.light {
             LightArg::Day => LightPreset::Day,
             LightArg::Dim => LightPreset::Dim,
@@ -671,7 +666,7 @@ mod tests {
         let s = a.to_spec().scene;
         assert_eq!(s.domain, Domain::Orchard);
         assert_eq!(s.light, LightPreset::LowSun);
-        assert_eq!(s.backgrounds, ORCHARD_BACKGROUNDS.to_vec());
+        assert_eq!(s.backgrounds, Domain::Orchard.default_backgrounds());
         assert_eq!(s.noise, NoiseModel::TofMultipath);
         assert!(a.to_approach_spec().is_none());
         let a = parse(&["--domain", "orchard", "--approach", "4", "--sway"]).unwrap();

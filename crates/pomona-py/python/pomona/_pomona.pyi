@@ -74,6 +74,7 @@ def synth(
     fruit: str = "pepper",
     camera: str = "kinect-v2",
     domain: str = "wide",
+    light: str = "day",
     noise: Optional[str] = None,
 ) -> Dataset: ...
 def evaluate(

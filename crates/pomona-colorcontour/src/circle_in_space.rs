@@ -28,10 +28,6 @@ fn median(values: &mut [f64]) -> Option<f64> {
     Some(*m)
 }
 
-fn focal(camera: &PinholeCamera) -> f64 {
-    0.5 * (camera.fx + camera.fy)
-}
-
 /// The sphere behind the circle `(center_px, radius_px)` from the depth of the fruit pixels
 /// (`fruit[i]`) within `core_fraction` of the radius; `None` when none has depth. At most about
 /// 400 pixels are read (a regular grid) so large circles cost no more than small ones.
@@ -68,7 +64,7 @@ pub fn sphere_from_depth(
         }
     }
     let mut z_raw: Vec<f64> = samples.iter().map(|s| s.1).collect();
-    let mut radius_m = radius_px * median(&mut z_raw)? / focal(camera);
+    let mut radius_m = radius_px * median(&mut z_raw)? / camera.mean_focal_px();
     let mut front = 0.0;
     for _ in 0..2 {
         let mut fronts: Vec<f64> = samples
@@ -76,7 +72,7 @@ pub fn sphere_from_depth(
             .map(|&(rho, z)| z - radius_m * (1.0 - (1.0 - rho * rho).max(0.0).sqrt()))
             .collect();
         front = median(&mut fronts)?;
-        radius_m = radius_px * (front + radius_m) / focal(camera);
+        radius_m = radius_px * (front + radius_m) / camera.mean_focal_px();
     }
     Some(SphereFromCircle {
         center_m: along_ray(camera, center_px, front, radius_m),
@@ -92,7 +88,7 @@ pub fn sphere_from_size(
     radius_px: f64,
     radius_m: f64,
 ) -> SphereFromCircle {
-    let z = focal(camera) * radius_m / radius_px.max(1e-9);
+    let z = camera.mean_focal_px() * radius_m / radius_px.max(1e-9);
     SphereFromCircle {
         center_m: camera.back_project(center_px.x, center_px.y, z),
         radius_m,

@@ -181,6 +181,12 @@ impl PinholeCamera {
         ))
     }
 
+    /// The mean of the two focal lengths, pixels: the scale between a length across the view
+    /// at depth `z` and its size in the image (`size_px ≈ mean_focal_px · size_m / z`).
+    pub fn mean_focal_px(&self) -> f64 {
+        0.5 * (self.fx + self.fy)
+    }
+
     /// Whether continuous pixel coordinates fall on a pixel of the image (pixel centres are
     /// integers, so the image spans `[-0.5, width - 0.5)`).
     pub fn contains(&self, pixel: &Point2<f64>) -> bool {

@@ -43,7 +43,7 @@ impl ImageCircle {
         if !(radius_m > 0.0 && distance_sq > r_sq) {
             return None;
         }
-        let focal_px = 0.5 * (camera.fx + camera.fy);
+        let focal_px = camera.mean_focal_px();
         Some(Self {
             center_px,
             radius_px: focal_px * radius_m / (distance_sq - r_sq).sqrt(),

@@ -162,7 +162,7 @@ fn located(
     stereo: &Detection,
     radius_px: f64,
 ) -> Detection {
-    let f = 0.5 * (rig.camera.fx + rig.camera.fy);
+    let f = rig.camera.mean_focal_px();
     Detection {
         center_m,
         diameter_m: Some(2.0 * center_m.z * radius_px / f),

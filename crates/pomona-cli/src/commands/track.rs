@@ -157,7 +157,7 @@ pub fn truth_circle(camera: &PinholeCamera, fruit: &FruitTruth) -> Option<(Point
     if d <= r {
         return None;
     }
-    let f = 0.5 * (camera.fx + camera.fy);
+    let f = camera.mean_focal_px();
     Some((camera.project(&c)?, f * r / (d * d - r * r).sqrt()))
 }
 

@@ -75,6 +75,9 @@ pub(crate) struct LoopSettings {
     pub confidence: Option<f64>,
     pub inlier_threshold_m: f64,
     pub refine_threshold_m: Option<f64>,
+    /// Score hypotheses, and refit the winner, on at most this many evenly strided points
+    /// (`None`: all).
+    pub max_scored_points: Option<usize>,
 }
 
 /// The best model found, with its total score and inliers.
@@ -156,6 +159,8 @@ struct Refinement {
     threshold_m: f64,
     /// The consensus loop's inlier threshold, metres.
     inlier_threshold_m: f64,
+    /// Refit on at most this many of the supporting points, an even stride (`None`: all).
+    max_points: Option<usize>,
 }
 
 impl Refinement {
@@ -170,7 +175,13 @@ impl Refinement {
         mut total: f64,
     ) -> (E::Model, f64) {
         for _ in 0..REFINE_ROUNDS {
-            let support = select_inliers(estimator, &model, data, valid, self.threshold_m);
+            let mut support = select_inliers(estimator, &model, data, valid, self.threshold_m);
+            if let Some(m) = self.max_points {
+                let stride = support.len().div_ceil(m.max(1));
+                if stride > 1 {
+                    support = support.into_iter().step_by(stride).collect();
+                }
+            }
             if support.len() < estimator.min_samples() {
                 break;
             }
@@ -221,6 +232,19 @@ where
         });
     }
 
+    // Hypotheses are scored on `scored` (an even stride through the valid points when there
+    // are more than `max_scored_points`); the winner is re-scored on every valid point below.
+    let stride = settings
+        .max_scored_points
+        .map_or(1, |m| valid.len().div_ceil(m.max(1)));
+    let strided: Vec<usize>;
+    let scored: &[usize] = if stride > 1 {
+        strided = valid.iter().copied().step_by(stride).collect();
+        &strided
+    } else {
+        &valid
+    };
+
     let mut picks = Vec::with_capacity(n);
     let mut sample: Vec<&D> = Vec::with_capacity(n);
     let mut best: Option<(E::Model, f64)> = None;
@@ -245,12 +269,12 @@ where
         let bound = best.as_ref().map_or(f64::INFINITY, |(_, s)| *s);
         let thr = settings.inlier_threshold_m;
         if let Some((sum, inliers)) =
-            total_score(estimator, &model, data, &valid, &score, thr, bound)
+            total_score(estimator, &model, data, scored, &score, thr, bound)
         {
             if sum < bound {
                 best = Some((model, sum));
                 if let Some(p) = settings.confidence {
-                    let w = inliers as f64 / valid.len() as f64;
+                    let w = inliers as f64 / scored.len() as f64;
                     required = required.min(required_iterations(p, w, n));
                 }
             }
@@ -259,11 +283,16 @@ where
     let Some((mut model, mut total)) = best else {
         return Ok(None);
     };
+    if stride > 1 {
+        let everything = total_score(estimator, &model, data, &valid, &score, 0.0, f64::INFINITY);
+        total = everything.map_or(f64::INFINITY, |(sum, _)| sum);
+    }
 
     if let Some(refine_threshold_m) = settings.refine_threshold_m {
         let refine = Refinement {
             threshold_m: refine_threshold_m,
             inlier_threshold_m: settings.inlier_threshold_m,
+            max_points: settings.max_scored_points,
         };
         (model, total) = refine.run(estimator, data, &valid, &score, model, total);
     }

@@ -109,6 +109,7 @@ impl Consensus for Ransac {
             confidence: p.early_stop_confidence,
             inlier_threshold_m: thr,
             refine_threshold_m: p.refine_threshold_m,
+            max_scored_points: None,
         };
         let result = run_loop(estimator, data, sampler, &settings, |e| {
             if e < thr {

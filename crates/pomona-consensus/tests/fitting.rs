@@ -84,6 +84,62 @@ fn msac_recovers_noisy_partial_sphere_with_half_outliers() {
     assert!(literal.cost > 0.0125, "{}", literal.cost);
 }
 
+/// Scoring hypotheses on a stride of 200 of the 2000 points finds the same sphere; the reported
+/// cost and inliers are those of the winner over every point.
+#[test]
+fn msac_scoring_a_stride_finds_the_sphere_and_reports_the_full_cost() {
+    let est = SphereEstimatorParams::default().check().unwrap();
+    let full = MsacParams {
+        cost_threshold_m: 0.010,
+        inlier_threshold_m: 0.010,
+        ..cluttered_msac()
+    };
+    let strided = MsacParams {
+        max_scored_points: Some(200),
+        ..full
+    };
+    for seed in 0..5 {
+        let (pts, c, radius) = noisy_cap_with_outliers(seed, DENSE);
+        let fit = |p: MsacParams| {
+            p.check()
+                .unwrap()
+                .fit(&est, &pts, &mut UniformSampler::new(7 + seed))
+                .unwrap()
+                .unwrap()
+        };
+        let (a, b) = (fit(full), fit(strided));
+        for f in [&a, &b] {
+            assert!(
+                (f.model.center - c).norm() < 0.005,
+                "seed {seed}: {:?}",
+                f.model
+            );
+            assert!((f.model.radius_m - radius).abs() < 0.003);
+            assert!(f.accepted);
+        }
+        // The strided fit's cost is the mean truncated residual over all 2000 points.
+        let mean_cost = pts
+            .iter()
+            .map(|p| (p.position - b.model.center).norm() - b.model.radius_m)
+            .map(|e| e.abs().min(0.010))
+            .sum::<f64>()
+            / pts.len() as f64;
+        assert!(
+            (b.cost - mean_cost).abs() < 1e-9,
+            "{} vs {mean_cost}",
+            b.cost
+        );
+        assert_eq!(b.valid_points, pts.len());
+        assert!(b.inliers.len() > 800, "{}", b.inliers.len());
+    }
+    assert!(MsacParams {
+        max_scored_points: Some(0),
+        ..Default::default()
+    }
+    .check()
+    .is_err());
+}
+
 #[test]
 fn msac_quadratic_and_ransac_also_recover_the_sphere() {
     let (pts, c, radius) = noisy_cap_with_outliers(2, SPREAD);

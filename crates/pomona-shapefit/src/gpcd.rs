@@ -80,48 +80,69 @@ pub fn gpcd(
         return out;
     }
     let stride = n.div_ceil(params.max_points.max(2));
-    let idx: Vec<usize> = (0..n).step_by(stride).collect();
+    // The strided subset as plain vectors, normals unwrapped once (not once per pair).
+    let subset: Vec<(Vector3<f64>, Option<Vector3<f64>>)> = (0..n)
+        .step_by(stride)
+        .map(|i| {
+            let normal = normals.get(i).copied().flatten().map(Unit::into_inner);
+            (points[i].coords, normal)
+        })
+        .collect();
 
-    let (angular, rest) = out.split_at_mut(27);
-    let (color, d2) = rest.split_at_mut(9);
+    // Votes are counted in integers, alternating between two copies of each histogram by
+    // the target's parity: consecutive pairs mostly fall into the same bin, and a single
+    // floating-point counter would make every pair wait for the previous pair's update.
+    // Integer counts are exact, so the normalised histograms are what summing 1.0s gives.
+    let mut d2_counts = [[0u32; 30]; 2];
+    let mut angular_counts = [[0u32; 27]; 2];
     let d2_bin_width = params.d2_max_m / 30.0;
-    let mut angular_votes = 0.0;
-    let mut d2_votes = 0.0;
-    for (a, &i) in idx.iter().enumerate() {
-        for &j in &idx[a + 1..] {
-            let d = points[j] - points[i];
+    for (k, (pi, ni)) in subset.iter().enumerate() {
+        for (l, (pj, nj)) in subset[k + 1..].iter().enumerate() {
+            let copy = l & 1;
+            let d = pj - pi;
             let dist = d.norm();
             if dist.is_nan() || dist <= 0.0 {
                 continue;
             }
             let bin = ((dist / d2_bin_width) as usize).min(29);
-            d2[bin] += 2.0; // both orders
-            d2_votes += 2.0;
-            // Angular features for both orders of the pair.
-            for (s, t, along) in [(i, j, d), (j, i, -d)] {
-                let (Some(u), Some(nt)) = (
-                    normals.get(s).copied().flatten(),
-                    normals.get(t).copied().flatten(),
-                ) else {
-                    continue;
-                };
-                if let Some(b) = angular_bin(&u, &nt, &along, dist) {
-                    angular[b] += 1.0;
-                    angular_votes += 1.0;
-                }
+            d2_counts[copy][bin] += 1; // both orders: two votes each, see below
+            let (Some(u), Some(nt)) = (ni, nj) else {
+                continue;
+            };
+            // Both orders of the pair from four products (see `PairProducts`).
+            let products = PairProducts {
+                a: u.dot(&d),
+                b: u.dot(nt),
+                c: d.dot(nt),
+                e: d.dot(&u.cross(nt)),
+                dist,
+            };
+            for b in [products.forward_bin(), products.reverse_bin()]
+                .into_iter()
+                .flatten()
+            {
+                angular_counts[copy][b] += 1;
             }
         }
     }
-    for x in angular.iter_mut() {
-        *x /= f64::max(angular_votes, 1.0);
-    }
-    for x in d2.iter_mut() {
-        *x /= f64::max(d2_votes, 1.0);
-    }
+    let (angular, rest) = out.split_at_mut(27);
+    let (color, d2) = rest.split_at_mut(9);
+    normalise(angular, &angular_counts);
+    normalise(d2, &d2_counts);
     if !colors.is_empty() {
         color.copy_from_slice(&color_moments(colors, params.hue_statistics));
     }
     out
+}
+
+/// `out[b]` = the share of all votes in bin `b`, summed over the copies of a histogram (all
+/// zero without votes).
+fn normalise<const N: usize>(out: &mut [f64], copies: &[[u32; N]; 2]) {
+    let counts: [u64; N] = std::array::from_fn(|b| copies.iter().map(|c| u64::from(c[b])).sum());
+    let total = counts.iter().sum::<u64>().max(1) as f64;
+    for (x, &c) in out.iter_mut().zip(&counts) {
+        *x = c as f64 / total;
+    }
 }
 
 /// The nine colour values of the descriptor: HSV mean, then the covariance terms hh, hs, hv,
@@ -152,51 +173,63 @@ fn color_moments(colors: &[[u8; 3]], hue: HueStatistics) -> [f64; 9] {
     out
 }
 
-/// Bin of one ordered pair in the 27-bin angular histogram: source normal `u`, target normal
-/// `nt`, `along` = target − source, `dist = |along|`; `None` when `along` is parallel to `u`.
+/// The products one unordered pair of oriented points needs for both ordered pairs' bins in
+/// the 27-bin angular histogram: with source `p_i`, normal `u`, target `p_j`, normal `nt` and
+/// `d = p_j − p_i`: `a = u·d`, `b = u·nt`, `c = d·nt`, `e = d·(u × nt)`, `dist = |d|`.
 ///
-/// With `v = along × u / |along × u|`, `w = u × v` and the direction `along / dist`, the features
-/// are `f1 = (1 + v·nt)/2`, `f2 = (1 + u·along/dist)/2`, `f3 = (π/2 + atan2(w·nt, u·nt))/π`, each
-/// cut into thirds. Every cut is a sign test, so the bins are found without normalising `v`
-/// or calling `atan2` (the same bins up to rounding at a cut; see
-/// `angular_bins_match_the_formulas`):
-/// `f < 1/3 ⇔ x < −1/3` for `f = (1 + x)/2`, and `f3`'s thirds are `atan2 < −π/6`,
-/// `−π/6 ≤ atan2 < π/6`, `atan2 ≥ π/6`.
-fn angular_bin(
-    u: &Unit<Vector3<f64>>,
-    nt: &Unit<Vector3<f64>>,
-    along: &Vector3<f64>,
+/// With `v = d × u / |d × u|`, `w = u × v` and the direction `d / dist`, the features are
+/// `f1 = (1 + v·nt)/2`, `f2 = (1 + u·d/dist)/2`, `f3 = (π/2 + atan2(w·nt, u·nt))/π`, each cut
+/// into thirds. In the products: `|d × u|² = dist² − a²`, `(d × u)·nt = e` and
+/// `(u × (d × u))·nt = c − a·b` (since `u × (d × u) = d − a·u` for a unit `u`). The reverse
+/// order swaps the normals and negates `d`, which maps `(a, b, c, e)` to `(−c, b, −a, e)`: one
+/// cross product serves both orders. Every cut is a sign test, so the bins are found without
+/// normalising `v` or calling `atan2` (the same bins up to rounding at a cut; see
+/// `angular_bins_match_the_formulas`): `f < 1/3 ⇔ x < −1/3` for `f = (1 + x)/2`, and `f3`'s
+/// thirds are `atan2 < −π/6`, `−π/6 ≤ atan2 < π/6`, `atan2 ≥ π/6`.
+#[derive(Debug, Clone, Copy)]
+struct PairProducts {
+    a: f64,
+    b: f64,
+    c: f64,
+    e: f64,
     dist: f64,
-) -> Option<usize> {
-    let v = along.cross(u); // |v| = dist · sin(angle), v/|v| is the frame's v
-    let v_norm2 = v.norm_squared();
-    if v_norm2 < 1e-24 * dist * dist {
+}
+
+impl PairProducts {
+    /// Bin of the order source → target; `None` when `d` is parallel to `u`.
+    fn forward_bin(&self) -> Option<usize> {
+        bin(self.a, self.b, self.c, self.e, self.dist)
+    }
+
+    /// Bin of the order target → source; `None` when `d` is parallel to `nt`.
+    fn reverse_bin(&self) -> Option<usize> {
+        bin(-self.c, self.b, -self.a, self.e, self.dist)
+    }
+}
+
+/// The bin of one ordered pair from its products (see [`PairProducts`]). Every cut compares
+/// squares, so no square root is taken: `3x < −s ⇔ x < 0 ∧ 9x² > s²` and `3x < s ⇔ x < 0 ∨
+/// 9x² < s²` for `s > 0`.
+fn bin(a: f64, b: f64, c: f64, e: f64, dist: f64) -> Option<usize> {
+    let dist2 = dist * dist;
+    let v_norm2 = dist2 - a * a; // |d × u|²
+    if v_norm2 < 1e-24 * dist2 {
         return None;
     }
-    // Third of x/scale in [−1, 1] (scale > 0).
-    let third = |x: f64, scale: f64| {
-        if 3.0 * x < -scale {
-            0
-        } else if 3.0 * x < scale {
-            1
-        } else {
-            2
-        }
+    // Third of x/s in [−1, 1] (s > 0) from x and s², without branches (the cuts are
+    // unpredictable, and this runs for every pair of points).
+    let third = |x: f64, s2: f64| {
+        let x2 = 9.0 * x * x;
+        let negative = x < 0.0;
+        usize::from(!(negative && x2 > s2)) + usize::from(!(negative || x2 < s2))
     };
-    let v_norm = v_norm2.sqrt();
-    let q1 = third(v.dot(nt), v_norm);
-    let q2 = third(u.dot(along), dist);
-    // u × v is the frame's w scaled by |v|, so scale u·nt alike; atan2's thirds are then
-    // sign and slope tests.
-    let (x, y) = (u.dot(nt) * v_norm, u.cross(&v).dot(nt));
-    const TAN_30: f64 = 0.577_350_269_189_625_8;
-    let q3 = if x > 0.0 && y.abs() < x * TAN_30 {
-        1
-    } else if y < 0.0 {
-        0
-    } else {
-        2
-    };
+    let q1 = third(e, v_norm2);
+    let q2 = third(a, dist2);
+    // u × (d × u) is the frame's w scaled by |v|; with x = (u·nt)|v| and y = c − a·b, atan2's
+    // thirds are x > 0 ∧ |y| < x tan 30° (middle), else the sign of y; squared: y² < x²/3.
+    let y = c - a * b;
+    let middle = b > 0.0 && 3.0 * y * y < b * b * v_norm2;
+    let q3 = usize::from(middle) + 2 * usize::from(!middle && y >= 0.0);
     Some(q1 + 3 * q2 + 9 * q3)
 }
 
@@ -338,13 +371,34 @@ mod tests {
             let u = Unit::new_normalize(Vector3::new(next(), next(), next()));
             let nt = Unit::new_normalize(Vector3::new(next(), next(), next()));
             let along = Vector3::new(next(), next(), next()) * 0.05;
-            let b = angular_bin(&u, &nt, &along, along.norm()).unwrap();
-            assert_eq!(b, bin_by_formula(&u, &nt, &along));
-            seen[b] = true;
+            let products = PairProducts {
+                a: u.dot(&along),
+                b: u.dot(&nt),
+                c: along.dot(&nt),
+                e: along.dot(&u.cross(&nt)),
+                dist: along.norm(),
+            };
+            let forward = products.forward_bin().unwrap();
+            assert_eq!(forward, bin_by_formula(&u, &nt, &along));
+            let reverse = products.reverse_bin().unwrap();
+            assert_eq!(reverse, bin_by_formula(&nt, &u, &-along));
+            seen[forward] = true;
+            seen[reverse] = true;
         }
         assert!(seen.iter().all(|&s| s), "every bin is exercised");
         let u = Vector3::z_axis();
-        assert_eq!(angular_bin(&u, &u, &Vector3::new(0.0, 0.0, 0.1), 0.1), None);
+        let along = Vector3::new(0.0, 0.0, 0.1);
+        let parallel = PairProducts {
+            a: u.dot(&along),
+            b: 1.0,
+            c: along.dot(&u),
+            e: 0.0,
+            dist: 0.1,
+        };
+        assert_eq!(
+            (parallel.forward_bin(), parallel.reverse_bin()),
+            (None, None)
+        );
     }
 
     #[test]

@@ -323,25 +323,28 @@ fn builtin_model(
 mod tests {
     use super::*;
 
-    /// The built-in shape-fit model was saved before `coaxial_merge` existed; its parameters
-    /// can still be overridden (the defaults are filled in first), and a typo is still an error.
+    /// A model saved before `coaxial_merge` existed (the built-in shape-fit model with the key
+    /// removed, as older files are): its parameters can still be overridden (the defaults are
+    /// filled in first), and a typo is still an error.
     #[test]
     fn parameters_newer_than_the_model_can_be_overridden() -> Result<(), Box<dyn std::error::Error>>
     {
         let text = registry::pipeline("shape-fit")?
             .default_model()
             .unwrap_or_default();
-        let model: serde_json::Value = serde_json::from_str(text)?;
-        assert!(
-            model["stage_params"]["params"]
-                .get("coaxial_merge")
-                .is_none(),
-            "the test needs a built-in model saved without the key"
-        );
+        let mut json: serde_json::Value = serde_json::from_str(text)?;
+        let params = json["stage_params"]["params"]
+            .as_object_mut()
+            .ok_or("the built-in model has no stage parameters")?;
+        assert!(params.remove("coaxial_merge").is_some());
+        let older = ModelFile::from_json(&json.to_string(), Path::new("older.json"), "shape-fit")?;
+        let source = || ModelSource::InMemory("older model".into());
         Detector::builder("shape-fit")?
+            .model(older.clone(), source())
             .set("params.coaxial_merge.max_gap_radii", 0.5)
             .build()?;
         let typo = Detector::builder("shape-fit")?
+            .model(older, source())
             .set("params.coaxial_merge.max_gap_radius", 0.5)
             .build();
         assert!(matches!(typo, Err(Error::UnknownParameter { .. })));

@@ -1,14 +1,20 @@
-//! Trains the model embedded in the binary as color-contour's default: synthetic oranges
-//! (`wide` domain: randomised leaves, backgrounds, light, distances 0.3–1.6 m, ripe, green,
-//! blushed and yellow fruit), 24 Kinect v2 and 16 D435 frames, fixed seeds, with a confidence
+//! Trains the model embedded in the binary as color-contour's default: synthetic oranges,
+//! fixed seeds — 40 `wide` frames (randomised leaves, backgrounds, light, distances 0.3–1.6 m,
+//! ripe, green, blushed and yellow fruit; 24 Kinect v2, 16 D435) — with a confidence
 //! calibration and operating threshold fitted on 3 held-out folds
 //! (`pomona_pipeline::train_calibrated`). Then prints the colour classifier's pixel precision,
-//! recall and F1 on held-out orange frames: 16 `wide` D435 frames and 8 `narrow` Kinect v2 frames
-//! per lighting preset. Rerun after changing the pipeline:
+//! recall and F1 on held-out orange frames: 16 `wide` D435 frames, 8 `narrow` Kinect v2 frames
+//! per lighting preset and 6 `orchard` frames per preset. Rerun after changing the pipeline:
 //!
 //! ```sh
 //! cargo run --release -p pomona-colorcontour --example train_color_contour_default -- crates/pomona-colorcontour/models
 //! ```
+//!
+//! With `--orchard` after the folder, 30 `orchard` frames are added to the training set (citrus
+//! trees, touching clusters, orange to yellow-green fruit; 6 Kinect v2 frames under each of the
+//! five light presets). That model finds more oranges in dim, harsh and backlit orchards but
+//! places its circles less precisely, which costs the stereo matching and the tracker; it is
+//! not the built-in one (docs/results.md, "Training on orchard light").
 
 use pomona_colorcontour::{pixel_counts, ColorContourPipeline, ColorContourStageParams, HSigmaLut};
 use pomona_pipeline::{
@@ -18,12 +24,23 @@ use pomona_synth::{
     CameraPreset, Domain, FruitChoice, FruitKind, LightPreset, NoiseModel, SceneSpec,
 };
 
-/// Training frames per camera; seeds 1400–1401 are reserved for this model, 1410–1413 for the
-/// held-out pixel scores.
+/// `wide` training frames per camera; seeds 1400–1401 and 1420–1424 (orchard, with `--orchard`)
+/// are reserved for this model, 1410–1413 and 1430–1434 for the held-out pixel scores.
 const CAMERAS: [(CameraPreset, usize, u64); 2] = [
     (CameraPreset::KinectV2, 24, 1400),
     (CameraPreset::D435, 16, 1401),
 ];
+/// The light presets of the `orchard` frames, each with its training and held-out seed.
+const ORCHARD_LIGHTS: [(LightPreset, u64, u64); 5] = [
+    (LightPreset::Day, 1420, 1430),
+    (LightPreset::Dim, 1421, 1431),
+    (LightPreset::Harsh, 1422, 1432),
+    (LightPreset::LowSun, 1423, 1433),
+    (LightPreset::Backlight, 1424, 1434),
+];
+/// `orchard` frames per light preset, for the held-out pixel scores and (with `--orchard`)
+/// training.
+const ORCHARD_FRAMES: usize = 6;
 const TRAIN_SEED: u64 = 1;
 
 fn oranges(
@@ -43,6 +60,7 @@ fn oranges(
             },
             light,
             domain,
+            backgrounds: domain.default_backgrounds(),
             ..SceneSpec::default()
         },
         seed,
@@ -52,17 +70,40 @@ fn oranges(
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let mut args = std::env::args().skip(1);
     let dir = std::path::PathBuf::from(
-        std::env::args()
-            .nth(1)
+        args.next()
             .unwrap_or_else(|| "crates/pomona-colorcontour/models".into()),
     );
+    let with_orchard = match args.next().as_deref() {
+        None => false,
+        Some("--orchard") => true,
+        Some(other) => return Err(format!(
+            "unexpected argument `{other}`; usage: train_color_contour_default [DIR] [--orchard]"
+        )
+        .into()),
+    };
+    let orchard = |light, seed| {
+        oranges(
+            Domain::Orchard,
+            CameraPreset::KinectV2,
+            light,
+            seed,
+            ORCHARD_FRAMES,
+        )
+    };
     let rendered = ChainedFrames(
         CAMERAS
             .iter()
             .map(|&(camera, count, seed)| {
                 oranges(Domain::Wide, camera, LightPreset::Day, seed, count)
             })
+            .chain(
+                ORCHARD_LIGHTS
+                    .iter()
+                    .filter(|_| with_orchard)
+                    .map(|&(light, seed, _)| orchard(light, seed)),
+            )
             .collect(),
     );
     let frames = rendered.load_all()?;
@@ -100,7 +141,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let stage: ColorContourStageParams = serde_json::from_value(model.stage_params.clone())?;
     let lut = HSigmaLut::compile(&stage.mlp);
     let threshold = pomona_colorcontour::quantise_probability(stage.params.color_threshold);
-    let held_out = [
+    let mut held_out = vec![
         (
             "wide d435",
             oranges(Domain::Wide, CameraPreset::D435, LightPreset::Day, 1410, 16),
@@ -136,10 +177,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             ),
         ),
     ];
+    for &(light, _, seed) in &ORCHARD_LIGHTS {
+        held_out.push(("orchard", orchard(light, seed)));
+    }
     for (name, set) in &held_out {
         let counts = pixel_counts(set as &dyn FrameSource, &lut, threshold)?;
         let (p, r, f1) = counts.precision_recall_f1();
-        println!("pixel colour, held-out {name}: precision {p:.3} recall {r:.3} F1 {f1:.3}");
+        let light = set.spec.light;
+        println!(
+            "pixel colour, held-out {name} ({light:?}): precision {p:.3} recall {r:.3} F1 {f1:.3}"
+        );
     }
     Ok(())
 }

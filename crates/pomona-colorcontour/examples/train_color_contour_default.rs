@@ -78,10 +78,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let with_orchard = match args.next().as_deref() {
         None => false,
         Some("--orchard") => true,
-        Some(other) => return Err(format!(
+        Some(other) => {
+            return Err(format!(
             "unexpected argument `{other}`; usage: train_color_contour_default [DIR] [--orchard]"
         )
-        .into()),
+            .into())
+        }
     };
     let orchard = |light, seed| {
         oranges(

@@ -35,6 +35,7 @@ mod contour_circles;
 mod edge_scan;
 mod hsigma;
 mod hsigma_lut;
+mod mask_closing;
 mod mlp;
 mod params;
 mod pipeline;
@@ -55,6 +56,7 @@ pub use edge_scan::{
 };
 pub use hsigma::{hsigma, hsigma_integers, hsigma_of_integers};
 pub use hsigma_lut::{quantise_probability, HSigmaLut};
+pub use mask_closing::close_mask;
 pub use mlp::{HSigmaSample, Mlp, MlpParams};
 pub use params::ColorContourParams;
 pub use pipeline::{

@@ -25,6 +25,12 @@ pub struct ColorContourParams {
     pub learn_color_threshold: bool,
     /// Mask components smaller than this many pixels have no contour worth fitting.
     pub min_component_px: usize,
+    /// Morphological closing of the fruit mask before the contours, square half-width in
+    /// pixels (not in the paper, see [`crate::close_mask`]; default 2, chosen over 0–4 on the
+    /// orchard light presets and the `wide` D435 set, docs/results.md; 0 = off, which is what
+    /// model files from before it mean).
+    #[serde(default)]
+    pub mask_closing_px: usize,
     /// The adaptive edge fitting (Eq. 8).
     pub edge_fit: EdgeFitParams,
     /// Circles need at least this support (arc spanned over circumference) to be reported.
@@ -51,6 +57,7 @@ impl Default for ColorContourParams {
             color_threshold: 0.5,
             learn_color_threshold: true,
             min_component_px: 40,
+            mask_closing_px: 2,
             edge_fit: EdgeFitParams::default(),
             min_support: 0.15,
             max_overlap: 0.4,

@@ -192,6 +192,7 @@ pub struct ColorContourDetector {
     color: ColorClassStage,
     smoothing_half_window: usize,
     min_component_px: usize,
+    mask_closing_px: usize,
     edge_fit: EdgeFitStage,
     fruit: FruitStage,
 }
@@ -224,6 +225,7 @@ impl ColorContourDetector {
             color: ColorClassStage { lut, threshold },
             smoothing_half_window: p.edge_fit.smoothing_half_window,
             min_component_px: p.min_component_px,
+            mask_closing_px: p.mask_closing_px,
             edge_fit: EdgeFitStage { params: p.edge_fit },
             fruit: FruitStage { params: p.clone() },
         })
@@ -242,6 +244,7 @@ impl Detector for ColorContourDetector {
     ) -> Result<Vec<Detection>, PipelineError> {
         let fruit = run_stage(&self.color, frame, timings)?;
         let contour_stage = ContourStage {
+            closing_px: self.mask_closing_px,
             min_component_px: self.min_component_px,
             smoothing_half_window: self.smoothing_half_window,
             width: frame.camera().width as usize,

@@ -6,9 +6,9 @@ use pomona_core::{Detection, PixelBox, RgbdFrame};
 use pomona_pipeline::{PipelineError, Stage};
 
 use crate::{
-    contour_circles, prune_overlapping, smooth_mask, sphere_from_depth, sphere_from_size,
-    trace_contours, ColorContourParams, Contour, ContourCircle, EdgeFitParams, HSigmaLut,
-    PIPELINE_NAME,
+    close_mask, contour_circles, prune_overlapping, smooth_mask, sphere_from_depth,
+    sphere_from_size, trace_contours, ColorContourParams, Contour, ContourCircle, EdgeFitParams,
+    HSigmaLut, PIPELINE_NAME,
 };
 
 /// Per pixel: the lookup table's value at or above the threshold (§3.1).
@@ -35,8 +35,11 @@ impl Stage<&RgbdFrame, Vec<bool>> for ColorClassStage {
     }
 }
 
-/// 5×5 Gaussian, threshold, outer borders of the components, smoothed (see [`crate::Contour`]).
+/// Optional closing ([`crate::close_mask`]), 5×5 Gaussian, threshold, outer borders of the
+/// components, smoothed (see [`crate::Contour`]).
 pub struct ContourStage {
+    /// Half-width of the closing square, pixels (0: no closing).
+    pub closing_px: usize,
     /// Smallest component traced, pixels.
     pub min_component_px: usize,
     /// Moving-average half-width applied to each contour.
@@ -53,7 +56,7 @@ impl Stage<&[bool], Vec<Contour>> for ContourStage {
     fn run(&self, mask: &[bool]) -> Result<Vec<Contour>, PipelineError> {
         let w = self.width.max(1);
         let h = mask.len() / w;
-        let smooth = smooth_mask(mask, w, h);
+        let smooth = smooth_mask(&close_mask(mask, w, h, self.closing_px), w, h);
         Ok(trace_contours(&smooth, w, h, self.min_component_px)
             .iter()
             .map(|c| c.smoothed(self.smoothing_half_window))

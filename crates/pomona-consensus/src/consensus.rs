@@ -176,11 +176,8 @@ impl Refinement {
     ) -> (E::Model, f64) {
         for _ in 0..REFINE_ROUNDS {
             let mut support = select_inliers(estimator, &model, data, valid, self.threshold_m);
-            if let Some(m) = self.max_points {
-                let stride = support.len().div_ceil(m.max(1));
-                if stride > 1 {
-                    support = support.into_iter().step_by(stride).collect();
-                }
+            if let Some(fewer) = evenly_strided(&support, self.max_points) {
+                support = fewer;
             }
             if support.len() < estimator.min_samples() {
                 break;
@@ -206,6 +203,13 @@ impl Refinement {
         }
         (model, total)
     }
+}
+
+/// At most `max` of `indices`, an even stride through them (deterministic); `None` when all of
+/// them are to be used (`max` unset or not exceeded).
+fn evenly_strided(indices: &[usize], max: Option<usize>) -> Option<Vec<usize>> {
+    let stride = indices.len().div_ceil(max?.max(1));
+    (stride > 1).then(|| indices.iter().copied().step_by(stride).collect())
 }
 
 /// Hypothesise-and-verify with per-residual `score` (non-negative, `NaN`-safe).
@@ -234,16 +238,8 @@ where
 
     // Hypotheses are scored on `scored` (an even stride through the valid points when there
     // are more than `max_scored_points`); the winner is re-scored on every valid point below.
-    let stride = settings
-        .max_scored_points
-        .map_or(1, |m| valid.len().div_ceil(m.max(1)));
-    let strided: Vec<usize>;
-    let scored: &[usize] = if stride > 1 {
-        strided = valid.iter().copied().step_by(stride).collect();
-        &strided
-    } else {
-        &valid
-    };
+    let strided = evenly_strided(&valid, settings.max_scored_points);
+    let scored = strided.as_deref().unwrap_or(&valid);
 
     let mut picks = Vec::with_capacity(n);
     let mut sample: Vec<&D> = Vec::with_capacity(n);
@@ -283,7 +279,7 @@ where
     let Some((mut model, mut total)) = best else {
         return Ok(None);
     };
-    if stride > 1 {
+    if strided.is_some() {
         let everything = total_score(estimator, &model, data, &valid, &score, 0.0, f64::INFINITY);
         total = everything.map_or(f64::INFINITY, |(sum, _)| sum);
     }

@@ -55,6 +55,7 @@ pub struct TopicSummary {
 #[derive(Debug, Clone)]
 struct Stamped {
     stamp_ns: u64,
+    frame_id: String,
     payload: Vec<u8>,
 }
 
@@ -196,7 +197,11 @@ impl Recording {
                     } else {
                         &mut depth
                     };
-                    list.push(Stamped { stamp_ns, payload });
+                    list.push(Stamped {
+                        stamp_ns,
+                        frame_id: header.frame_id,
+                        payload,
+                    });
                 }
             }
         }
@@ -318,6 +323,13 @@ impl Recording {
             .iter()
             .map(|f| self.color[f.color].stamp_ns)
             .collect()
+    }
+
+    /// The colour stamp and frame id of synchronised frame `index` (`None` past the end), without
+    /// decoding its pixels.
+    pub fn frame_header(&self, index: usize) -> Option<(u64, &str)> {
+        let message = &self.color[self.frames.get(index)?.color];
+        Some((message.stamp_ns, &message.frame_id))
     }
 
     /// The frame stems ([`frame_stem`]) of the synchronised frames, in time order.

@@ -61,6 +61,10 @@ fn frames_come_back_with_stamps_camera_and_pixels() {
             let got = rec.load_frame(i).unwrap();
             assert_eq!(got.stamp_ns, T0 + i as u64 * FRAME_NS);
             assert_eq!(got.frame_id, "camera_color_optical_frame");
+            assert_eq!(
+                rec.frame_header(i),
+                Some((got.stamp_ns, "camera_color_optical_frame"))
+            );
             assert_eq!(got.frame.camera(), want.camera());
             assert_eq!(got.frame.color(), want.color());
             // 16UC1 rounds to millimetres; the frames' depths are whole millimetres.

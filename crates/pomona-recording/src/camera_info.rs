@@ -93,10 +93,11 @@ impl CameraInfo {
     /// [`CdrError`] for a truncated or malformed payload.
     pub fn read(payload: &[u8]) -> Result<Self, CdrError> {
         let mut r = CdrReader::new(payload)?;
+        let (header, height, width) = Header::read_sized(&mut r)?;
         Ok(Self {
-            header: Header::read(&mut r)?,
-            height: r.u32("height")?,
-            width: r.u32("width")?,
+            header,
+            height,
+            width,
             distortion_model: r.string("distortion_model")?,
             d: r.f64_sequence("d")?,
             k: r.f64_array("k")?,
@@ -117,9 +118,7 @@ impl CameraInfo {
     /// The CDR payload.
     pub fn to_cdr(&self) -> Vec<u8> {
         let mut w = CdrWriter::new();
-        self.header.write(&mut w);
-        w.u32(self.height);
-        w.u32(self.width);
+        self.header.write_sized(&mut w, self.height, self.width);
         w.string(&self.distortion_model);
         w.f64_sequence(&self.d);
         w.f64_array(&self.k);

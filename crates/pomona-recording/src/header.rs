@@ -53,6 +53,21 @@ impl Header {
         w.u32(self.stamp_nanosec);
         w.string(&self.frame_id);
     }
+
+    /// Reads how `Image` and `CameraInfo` both begin: the header, then `height` and `width`.
+    ///
+    /// # Errors
+    /// As [`Header::read`].
+    pub fn read_sized(r: &mut CdrReader<'_>) -> Result<(Self, u32, u32), CdrError> {
+        Ok((Self::read(r)?, r.u32("height")?, r.u32("width")?))
+    }
+
+    /// Appends the header, `height` and `width` (see [`Header::read_sized`]).
+    pub fn write_sized(&self, w: &mut CdrWriter, height: u32, width: u32) {
+        self.write(w);
+        w.u32(height);
+        w.u32(width);
+    }
 }
 
 #[cfg(test)]

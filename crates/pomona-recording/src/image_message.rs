@@ -81,10 +81,11 @@ impl Image {
     /// [`CdrError`] for a truncated or malformed payload.
     pub fn read(payload: &[u8]) -> Result<Self, CdrError> {
         let mut r = CdrReader::new(payload)?;
+        let (header, height, width) = Header::read_sized(&mut r)?;
         Ok(Self {
-            header: Header::read(&mut r)?,
-            height: r.u32("height")?,
-            width: r.u32("width")?,
+            header,
+            height,
+            width,
             encoding: r.string("encoding")?,
             is_bigendian: r.u8("is_bigendian")?,
             step: r.u32("step")?,
@@ -106,18 +107,14 @@ impl Image {
     /// As [`Image::read`].
     pub fn read_encoding(payload: &[u8]) -> Result<(Header, String), CdrError> {
         let mut r = CdrReader::new(payload)?;
-        let header = Header::read(&mut r)?;
-        r.u32("height")?;
-        r.u32("width")?;
+        let (header, _, _) = Header::read_sized(&mut r)?;
         Ok((header, r.string("encoding")?))
     }
 
     /// The CDR payload.
     pub fn to_cdr(&self) -> Vec<u8> {
         let mut w = CdrWriter::new();
-        self.header.write(&mut w);
-        w.u32(self.height);
-        w.u32(self.width);
+        self.header.write_sized(&mut w, self.height, self.width);
         w.string(&self.encoding);
         w.u8(self.is_bigendian);
         w.u32(self.step);

@@ -19,15 +19,11 @@ use crate::{
     CameraInfo, Header, Image, RecordingError, RecordingTopics, CAMERA_INFO_SCHEMA, IMAGE_SCHEMA,
 };
 
-/// The `ros2msg` schema text of `sensor_msgs/msg/Image` with its dependencies.
-const IMAGE_DEFINITION: &str = "std_msgs/Header header
-uint32 height
-uint32 width
-string encoding
-uint8 is_bigendian
-uint32 step
-uint8[] data
-================================================================================
+/// The `ros2msg` definitions of `std_msgs/Header` and `builtin_interfaces/Time`, which both
+/// messages depend on (a macro, so `concat!` can join them into constants).
+macro_rules! header_definitions {
+    () => {
+        "================================================================================
 MSG: std_msgs/Header
 builtin_interfaces/Time stamp
 string frame_id
@@ -35,10 +31,26 @@ string frame_id
 MSG: builtin_interfaces/Time
 int32 sec
 uint32 nanosec
-";
+"
+    };
+}
+
+/// The `ros2msg` schema text of `sensor_msgs/msg/Image` with its dependencies.
+const IMAGE_DEFINITION: &str = concat!(
+    "std_msgs/Header header
+uint32 height
+uint32 width
+string encoding
+uint8 is_bigendian
+uint32 step
+uint8[] data
+",
+    header_definitions!()
+);
 
 /// The `ros2msg` schema text of `sensor_msgs/msg/CameraInfo` with its dependencies.
-const CAMERA_INFO_DEFINITION: &str = "std_msgs/Header header
+const CAMERA_INFO_DEFINITION: &str = concat!(
+    "std_msgs/Header header
 uint32 height
 uint32 width
 string distortion_model
@@ -49,22 +61,17 @@ float64[12] p
 uint32 binning_x
 uint32 binning_y
 sensor_msgs/RegionOfInterest roi
-================================================================================
-MSG: std_msgs/Header
-builtin_interfaces/Time stamp
-string frame_id
-================================================================================
-MSG: builtin_interfaces/Time
-int32 sec
-uint32 nanosec
-================================================================================
+",
+    header_definitions!(),
+    "================================================================================
 MSG: sensor_msgs/RegionOfInterest
 uint32 x_offset
 uint32 y_offset
 uint32 height
 uint32 width
 bool do_rectify
-";
+"
+);
 
 /// How a frame's images are encoded in the recording.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]

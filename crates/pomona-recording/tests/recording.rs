@@ -184,25 +184,34 @@ fn truncated_and_corrupt_files_name_the_file() {
     assert!(matches!(e, RecordingError::Io { .. }) && e.to_string().contains("absent.mcap"));
 }
 
+/// The messages of `frame(0)` stamped `T0`: camera info, `rgb8` colour, `16UC1` depth.
+fn messages() -> (CameraInfo, Image, Image) {
+    let f = frame(0);
+    let header = Header::at(T0, "cam");
+    (
+        CameraInfo::from_camera(header.clone(), f.camera()),
+        Image::from_color(header.clone(), f.color().unwrap(), false),
+        Image::from_depth_16uc1(header, f.depth()).unwrap(),
+    )
+}
+
+/// Writes one frame's messages, as given, on the default topics.
+fn write_messages(path: &Path, (info, color, depth): &(CameraInfo, Image, Image)) {
+    let topics = RecordingTopics::default();
+    let mut w = RecordingWriter::create(path).unwrap();
+    w.write_camera_info(&topics.camera_info, info).unwrap();
+    w.write_image(&topics.color, color).unwrap();
+    w.write_image(&topics.depth, depth).unwrap();
+    w.finish().unwrap();
+}
+
 #[test]
 fn bad_encoding_names_topic_stamp_and_encoding() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("yuv.mcap");
-    let topics = RecordingTopics::default();
-    let f = frame(0);
-    let mut w = RecordingWriter::create(&path).unwrap();
-    let header = Header::at(T0, "cam");
-    w.write_camera_info(
-        &topics.camera_info,
-        &CameraInfo::from_camera(header.clone(), f.camera()),
-    )
-    .unwrap();
-    let mut color = Image::from_color(header.clone(), f.color().unwrap(), false);
-    color.encoding = "yuv422".into();
-    w.write_image(&topics.color, &color).unwrap();
-    let depth = Image::from_depth_16uc1(header, f.depth()).unwrap();
-    w.write_image(&topics.depth, &depth).unwrap();
-    w.finish().unwrap();
+    let mut parts = messages();
+    parts.1.encoding = "yuv422".into();
+    write_messages(&path, &parts);
     let rec = Recording::open(&path).unwrap();
     let e = rec.load_frame(0).unwrap_err().to_string();
     for needle in [
@@ -219,21 +228,9 @@ fn bad_encoding_names_topic_stamp_and_encoding() {
 fn unsupported_distortion_is_reported_on_opening() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("fisheye.mcap");
-    let topics = RecordingTopics::default();
-    let f = frame(0);
-    let mut w = RecordingWriter::create(&path).unwrap();
-    let header = Header::at(T0, "cam");
-    let mut info = CameraInfo::from_camera(header.clone(), f.camera());
-    info.distortion_model = "equidistant".into();
-    w.write_camera_info(&topics.camera_info, &info).unwrap();
-    w.write_image(
-        &topics.color,
-        &Image::from_color(header.clone(), f.color().unwrap(), false),
-    )
-    .unwrap();
-    w.write_image(&topics.depth, &Image::from_depth_32fc1(header, f.depth()))
-        .unwrap();
-    w.finish().unwrap();
+    let mut parts = messages();
+    parts.0.distortion_model = "equidistant".into();
+    write_messages(&path, &parts);
     let e = Recording::open(&path).unwrap_err().to_string();
     assert!(
         e.contains("fisheye.mcap") && e.contains("equidistant"),

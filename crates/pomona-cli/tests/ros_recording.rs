@@ -257,6 +257,11 @@ fn missing_topics_and_bad_files_are_named() {
         det.join(format!("{T0:019}.json")).exists(),
         "the good frame is written"
     );
+    let failures = std::fs::read_to_string(det.join("failures.json")).unwrap();
+    assert!(
+        failures.contains(&format!("{:019}", T0 + FRAME_NS)) && failures.contains("odd.mcap"),
+        "{failures}"
+    );
 
     let out = pomona(&[
         "detect",

@@ -169,6 +169,19 @@ fn missing_topics_and_bad_files_are_named() {
     record(&data, &mcap, FrameEncodings::default());
     let out_dir = dir.path().join("out");
 
+    // detect reads exactly one of a dataset and a recording.
+    for extra in [vec![], vec!["--data", s(&data), "--recording", s(&mcap)]] {
+        let mut args = vec!["detect", "--pipeline", "shape-fit", "--out", s(&out_dir)];
+        args.extend(extra);
+        let out = pomona(&args);
+        assert!(!out.status.success());
+        let err = stderr(&out);
+        assert!(
+            err.contains("--data") && err.contains("--recording"),
+            "{err}"
+        );
+    }
+
     let out = pomona(&[
         "extract",
         s(&mcap),

@@ -32,6 +32,7 @@ use pomona::{Detection, ModelSource, Pipeline, StageTimings};
 
 /// Arguments of `pomona detect`.
 #[derive(Debug, Clone, clap::Args)]
+#[command(group(clap::ArgGroup::new("input").required(true).args(["data", "recording"])))]
 pub struct DetectArgs {
     /// Pipeline (detection method), e.g. `shape-fit`.
     #[arg(long, value_name = "NAME")]
@@ -40,12 +41,12 @@ pub struct DetectArgs {
     #[arg(long, value_name = "MODEL")]
     pub model: Option<PathBuf>,
     /// Dataset folder; every frame is processed, with or without truth.
-    #[arg(long, value_name = "DIR", required_unless_present = "recording")]
+    #[arg(long, value_name = "DIR")]
     pub data: Option<PathBuf>,
     /// A ROS 2 MCAP recording instead of a dataset: every synchronised colour/depth frame is
     /// processed, its file named by the colour stamp (19-digit ns) and holding `stamp_ns` and
     /// `frame_id`. Topics and tolerance as for `pomona extract`.
-    #[arg(long, value_name = "FILE", conflicts_with = "data")]
+    #[arg(long, value_name = "FILE")]
     pub recording: Option<PathBuf>,
     /// Topics and synchronisation of `--recording`.
     #[command(flatten)]

@@ -176,6 +176,8 @@ mod tests {
             operating_confidence: None,
             min_confidence: min,
             model_id: model_id.map(str::to_owned),
+            stamp_ns: None,
+            frame_id: None,
         }
     }
 

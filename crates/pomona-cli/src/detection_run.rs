@@ -138,7 +138,8 @@ pub struct FrameFailure {
 }
 
 impl FrameFailure {
-    /// The file at fault, when the error names one (a dataset file that would not load).
+    /// The file at fault, when the error names one (a dataset file that would not load, or the
+    /// recording a frame could not be decoded from).
     pub fn file(&self) -> Option<&Path> {
         self.error.chain().find_map(|cause| {
             cause
@@ -148,6 +149,11 @@ impl FrameFailure {
                     _ => None,
                 })
                 .map(pomona_io::DatasetError::path)
+                .or_else(|| {
+                    cause
+                        .downcast_ref::<pomona_recording::RecordingError>()
+                        .map(pomona_recording::RecordingError::path)
+                })
         })
     }
 }

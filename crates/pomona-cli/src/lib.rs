@@ -6,6 +6,7 @@
 //! the `run_with` functions, without shipping a test pipeline in the binary.
 
 pub mod commands;
+pub mod detect_input;
 pub mod detection_folder;
 pub mod detection_run;
 pub mod error_line;
@@ -16,4 +17,5 @@ pub mod overlay;
 pub mod params;
 pub mod progress;
 pub mod recording;
+pub mod robot_recording;
 pub mod shard;

@@ -32,8 +32,11 @@ enum Command {
     Synth(commands::synth::SynthArgs),
     /// Train a detector (a pipeline) on labelled datasets and write its model file.
     Train(commands::train::TrainArgs),
-    /// Find fruit in every frame of a dataset; writes one detection file per frame.
+    /// Find fruit in every frame of a dataset or a ROS 2 recording; writes one detection file
+    /// per frame.
     Detect(commands::detect::DetectArgs),
+    /// Write a ROS 2 MCAP recording's synchronised colour/depth frames as a dataset folder.
+    Extract(commands::extract::ExtractArgs),
     /// Repeated random train/test splits of one dataset: train, detect, evaluate; mean ± sd.
     Experiment(commands::experiment::ExperimentArgs),
     /// Follow the target fruit through approach sequences (`synth --approach`) with the
@@ -66,6 +69,7 @@ fn main() -> ExitCode {
         Command::Stereo(args) => commands::stereo::run(args),
         Command::Train(args) => commands::train::run(args),
         Command::Detect(args) => commands::detect::run(args),
+        Command::Extract(args) => commands::extract::run(args),
         Command::Experiment(args) => commands::experiment::run(args),
         Command::Demo(args) => commands::demo::run(args),
         Command::Track(args) => commands::track::run(args).map(|_| ()),

@@ -265,7 +265,9 @@ fn detect_args(
     detect::DetectArgs {
         pipeline: pipeline.into(),
         model: model.map(Path::to_path_buf),
-        data: data.to_path_buf(),
+        data: Some(data.to_path_buf()),
+        recording: None,
+        topics: Default::default(),
         out: out.to_path_buf(),
         timings: true,
         threads: None,

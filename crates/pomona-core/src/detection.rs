@@ -141,6 +141,14 @@ pub struct FrameDetections {
     /// parameter overrides), so `pomona detect --resume` never mixes two models' output.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub model_id: Option<String>,
+    /// The colour image's header stamp, nanoseconds since the epoch, when the frame came from a
+    /// robot recording (`pomona detect --recording`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stamp_ns: Option<u64>,
+    /// The colour image's coordinate frame (ROS `frame_id`), when the frame came from a robot
+    /// recording.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub frame_id: Option<String>,
 }
 
 /// A detection as read from a file: the current fields plus the older `axis`.
@@ -164,6 +172,10 @@ struct FrameDetectionsFile {
     min_confidence: Option<f64>,
     #[serde(default)]
     model_id: Option<String>,
+    #[serde(default)]
+    stamp_ns: Option<u64>,
+    #[serde(default)]
+    frame_id: Option<String>,
 }
 
 impl From<FrameDetectionsFile> for FrameDetections {
@@ -196,6 +208,8 @@ impl From<FrameDetectionsFile> for FrameDetections {
             operating_confidence: file.operating_confidence,
             min_confidence: file.min_confidence,
             model_id: file.model_id,
+            stamp_ns: file.stamp_ns,
+            frame_id: file.frame_id,
         }
     }
 }
@@ -226,11 +240,26 @@ mod tests {
             operating_confidence: Some(0.5),
             min_confidence: None,
             model_id: Some("0123456789abcdef".into()),
+            stamp_ns: None,
+            frame_id: None,
         };
         let json = serde_json::to_string(&d).unwrap();
         assert!(json.contains(r#""center_m":[0.1,-0.2,0.7]"#));
         assert!(!json.contains("symmetry_plane_normal") && !json.contains(r#""axis""#));
         assert_eq!(serde_json::from_str::<FrameDetections>(&json).unwrap(), d);
+        // Recording fields are written only when present, so dataset files stay as they were.
+        assert!(!json.contains("stamp_ns") && !json.contains("frame_id"));
+        let recorded = FrameDetections {
+            stamp_ns: Some(1_700_000_000_000_000_000),
+            frame_id: Some("camera_color_optical_frame".into()),
+            ..d
+        };
+        let json = serde_json::to_string(&recorded).unwrap();
+        assert!(json.contains(r#""stamp_ns":1700000000000000000"#), "{json}");
+        assert_eq!(
+            serde_json::from_str::<FrameDetections>(&json).unwrap(),
+            recorded
+        );
     }
 
     /// An old file of `pipeline` with one detection whose `axis` is `[0, 2, 0]`.

@@ -68,6 +68,8 @@ impl Detector {
             operating_confidence: model.operating_confidence,
             min_confidence,
             model_id: Some(model.id.clone()),
+            stamp_ns: None,
+            frame_id: None,
         }
     }
 }

@@ -226,6 +226,8 @@ fn run_pipeline(demo: &DemoData, pipeline: &dyn Pipeline, out: &Path) -> Result<
                 operating_confidence: result.model.operating_confidence,
                 min_confidence: None,
                 model_id: Some(result.model.id.clone()),
+                stamp_ns: None,
+                frame_id: None,
             };
             pomona_io::write_json(&det_dir.join(format!("{}.json", stems[i])), &record)?;
             Ok(())

@@ -1,5 +1,6 @@
 //! `pomona detect`: run a trained detector (any registered pipeline) over every frame of a
-//! dataset and write one detection file per frame (`<out>/<frame>.json`, docs/formats.md).
+//! dataset (or of a ROS 2 MCAP recording, `--recording`) and write one detection file per frame
+//! (`<out>/<frame>.json`, docs/formats.md).
 //!
 //! The model comes from `--model` or, without it, the pipeline's built-in model. Frames are
 //! loaded lazily and processed in parallel; `--timings` prints the per-stage cost table.
@@ -16,23 +17,22 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use anyhow::{Context, Result};
-use pomona::{Detection, ModelSource, Pipeline, StageTimings};
-use pomona_io::Dataset;
-
+use crate::detect_input::DetectInput;
 use crate::detection_folder::{prepare, write_failures, FailedFrame, RunIdentity};
-use crate::detection_run::{
-    check_inputs, detect_frames, load_detector, min_confidence, thread_pool,
-};
+use crate::detection_run::{detect_frames, load_detector, min_confidence, thread_pool};
 use crate::error_line::error_line;
 use crate::exit_status::FramesFailed;
 use crate::overlay::{shown, view_of, write_overlay};
 use crate::progress::progress_bar;
 use crate::recording::{self, RunDescription};
+use crate::robot_recording::RecordingArgs;
 use crate::shard::Shard;
+use anyhow::{bail, Context, Result};
+use pomona::{Detection, ModelSource, Pipeline, StageTimings};
 
 /// Arguments of `pomona detect`.
 #[derive(Debug, Clone, clap::Args)]
+#[command(group(clap::ArgGroup::new("input").required(true).args(["data", "recording"])))]
 pub struct DetectArgs {
     /// Pipeline (detection method), e.g. `shape-fit`.
     #[arg(long, value_name = "NAME")]
@@ -42,7 +42,15 @@ pub struct DetectArgs {
     pub model: Option<PathBuf>,
     /// Dataset folder; every frame is processed, with or without truth.
     #[arg(long, value_name = "DIR")]
-    pub data: PathBuf,
+    pub data: Option<PathBuf>,
+    /// A ROS 2 MCAP recording instead of a dataset: every synchronised colour/depth frame is
+    /// processed, its file named by the colour stamp (19-digit ns) and holding `stamp_ns` and
+    /// `frame_id`. Topics and tolerance as for `pomona extract`.
+    #[arg(long, value_name = "FILE")]
+    pub recording: Option<PathBuf>,
+    /// Topics and synchronisation of `--recording`.
+    #[command(flatten)]
+    pub topics: RecordingArgs,
     /// Output folder for `<frame>.json` detection files (created if missing).
     #[arg(long, value_name = "DETDIR")]
     pub out: PathBuf,
@@ -139,34 +147,44 @@ pub fn run(args: &DetectArgs) -> Result<()> {
 /// failures and unwritable output, each naming the file or frame.
 pub fn run_with(pipelines: &[Box<dyn Pipeline>], args: &DetectArgs) -> Result<DetectSummary> {
     let pipeline = pomona::find_pipeline(pipelines, &args.pipeline)?;
-    let dataset = Dataset::open(&args.data)
-        .with_context(|| format!("cannot open dataset {}", args.data.display()))?;
-    check_inputs(pipeline, &dataset)?;
+    let input = DetectInput::open(
+        args.data.as_deref(),
+        args.recording.as_deref(),
+        &args.topics,
+    )?;
+    let dataset = input.dataset();
+    if dataset.is_none() && (args.overlay.is_some() || args.rrd.is_some()) {
+        bail!(
+            "--overlay and --rrd need a dataset folder; write the recording as one with \
+             `pomona extract FILE --out DATASET` and run on --data DATASET"
+        );
+    }
+    input.check(pipeline)?;
     let detector = load_detector(pipeline, args.model.as_deref(), &args.set)?;
     let min_confidence = min_confidence(&detector, args.min_confidence)?;
-    let model = detector.model_for_color(dataset.has_color()).clone();
+    let model = detector.model_for_color(input.has_color()).clone();
     let name = pipeline.name();
     let identity = RunIdentity {
         pipeline: name,
         model_id: &model.id,
         min_confidence,
     };
-    let (frames, resumed) = frames_to_run(args, &dataset, &identity)?;
+    let (frames, resumed) = frames_to_run(args, &input, &identity)?;
+    let description = RunDescription {
+        pipeline: name,
+        model_id: &model.id,
+        min_confidence,
+    };
     let writer = FrameWriter {
         args,
-        dataset: &dataset,
+        input: &input,
         detector: &detector,
         min_confidence,
         name,
-        recording: recording::open(
-            args.rrd.as_deref(),
-            &dataset,
-            &RunDescription {
-                pipeline: name,
-                model_id: &model.id,
-                min_confidence,
-            },
-        )?,
+        recording: match dataset {
+            Some(dataset) => recording::open(args.rrd.as_deref(), dataset, &description)?,
+            None => None,
+        },
     };
     if let Some(dir) = &args.overlay {
         std::fs::create_dir_all(dir)
@@ -182,8 +200,8 @@ pub fn run_with(pipelines: &[Box<dyn Pipeline>], args: &DetectArgs) -> Result<De
             frames.len(),
             |i| {
                 let stem = &frames[i];
-                let frame = dataset.load_frame(stem)?;
-                Ok((format!("{}/{stem}", args.data.display()), frame, ()))
+                let frame = input.load_frame(stem)?;
+                Ok((format!("{}/{stem}", input.path().display()), frame, ()))
             },
             |i, result| writer.write(&frames[i], &result.detections),
             &|| bar.inc(1),
@@ -227,9 +245,17 @@ pub fn run_with(pipelines: &[Box<dyn Pipeline>], args: &DetectArgs) -> Result<De
         timings: batch.totals.timings,
         model: model.source.clone(),
     };
-    warn_foreign_files(&args.out, dataset.frames());
+    warn_foreign_files(&args.out, input.frames());
     let thresholds = (min_confidence, model.operating_confidence);
-    print_summary(args, name, &summary, &found, thresholds, wall);
+    print_summary(
+        args,
+        &input.path(),
+        name,
+        &summary,
+        &found,
+        thresholds,
+        wall,
+    );
     if let Some(report) = report {
         return Err(FramesFailed {
             failed: failures.len(),
@@ -249,16 +275,12 @@ pub fn run_with(pipelines: &[Box<dyn Pipeline>], args: &DetectArgs) -> Result<De
 /// An output folder holding detections made differently, or one that cannot be read.
 fn frames_to_run(
     args: &DetectArgs,
-    dataset: &Dataset,
+    input: &DetectInput,
     identity: &RunIdentity<'_>,
 ) -> Result<(Vec<String>, usize)> {
     let mine: Vec<String> = match args.shard {
-        Some(shard) => shard
-            .select(dataset.frames())
-            .into_iter()
-            .cloned()
-            .collect(),
-        None => dataset.frames().to_vec(),
+        Some(shard) => shard.select(input.frames()).into_iter().cloned().collect(),
+        None => input.frames().to_vec(),
     };
     let already = prepare(&args.out, &mine, identity)?;
     let total = mine.len();
@@ -274,7 +296,7 @@ fn frames_to_run(
 /// overlay. Shared by the worker threads.
 struct FrameWriter<'a> {
     args: &'a DetectArgs,
-    dataset: &'a Dataset,
+    input: &'a DetectInput,
     detector: &'a pomona::Detector,
     min_confidence: Option<f64>,
     name: &'static str,
@@ -283,11 +305,16 @@ struct FrameWriter<'a> {
 
 impl FrameWriter<'_> {
     fn write(&self, stem: &str, detections: &[Detection]) -> Result<()> {
-        let (args, dataset) = (self.args, self.dataset);
-        let record =
+        let (args, input) = (self.args, self.input);
+        let mut record =
             self.detector
-                .frame_record(stem, dataset.has_color(), detections, self.min_confidence);
+                .frame_record(stem, input.has_color(), detections, self.min_confidence);
+        input.annotate(stem, &mut record)?;
         pomona_io::write_json(&args.out.join(format!("{stem}.json")), &record)?;
+        // Recordings and overlays need a dataset's files (checked before the run).
+        let Some(dataset) = input.dataset() else {
+            return Ok(());
+        };
         if let Some(recording) = &self.recording {
             let kept = |d: &Detection| self.min_confidence.is_none_or(|c| d.confidence_at_least(c));
             recording.record_frame(dataset, stem, detections, &kept)?;
@@ -318,6 +345,7 @@ impl FrameWriter<'_> {
 /// The run's closing lines: what was made and kept, where it went, and the stage timings.
 fn print_summary(
     args: &DetectArgs,
+    input: &Path,
     name: &str,
     summary: &DetectSummary,
     found: &[&[Detection]],
@@ -353,7 +381,7 @@ fn print_summary(
          {}{resumed_note} in {wall_s:.1} s; detection files in {}",
         summary.model,
         summary.frames,
-        args.data.display(),
+        input.display(),
         args.out.display()
     );
     if let Some(rrd) = &args.rrd {

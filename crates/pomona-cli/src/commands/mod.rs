@@ -7,6 +7,7 @@ pub mod demo;
 pub mod detect;
 pub mod eval;
 pub mod experiment;
+pub mod extract;
 pub mod info;
 pub mod plan;
 pub mod stereo;

@@ -1,0 +1,351 @@
+//! `sensor_msgs/Image`: one raw image (colour or depth) as the ROS driver publishes it, and its
+//! conversion to Pomona's [`ColorImage`] and [`DepthImage`].
+//!
+//! Supported encodings: colour `rgb8` and `bgr8`; depth `16UC1` (millimetres, 0 = no depth, as
+//! the RealSense and Kinect drivers publish) and `32FC1` (metres; NaN, 0 and negatives = no
+//! depth). `step` and the data length are checked against width and height before any pixel is
+//! read; `is_bigendian` is honoured for the multi-byte depth encodings.
+
+use pomona_core::{ColorImage, DepthImage};
+use serde::{Deserialize, Serialize};
+
+use crate::cdr::{CdrError, CdrReader, CdrWriter};
+use crate::Header;
+
+/// The ROS schema name of [`Image`].
+pub const IMAGE_SCHEMA: &str = "sensor_msgs/msg/Image";
+
+/// Millimetres per metre: the unit of `16UC1` depth.
+pub const DEPTH_16UC1_UNIT_M: f64 = 0.001;
+
+/// `sensor_msgs/msg/Image`.
+#[derive(Debug, Clone, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub struct Image {
+    /// Stamp and frame.
+    pub header: Header,
+    /// Rows.
+    pub height: u32,
+    /// Columns.
+    pub width: u32,
+    /// Pixel encoding (`rgb8`, `bgr8`, `16UC1`, `32FC1`, ...).
+    pub encoding: String,
+    /// 1 when multi-byte values are big-endian.
+    pub is_bigendian: u8,
+    /// Bytes per row (at least `width` × bytes per pixel).
+    pub step: u32,
+    /// Row-major pixel data, `step × height` bytes.
+    pub data: Vec<u8>,
+}
+
+/// Why an image's pixels could not be converted (the caller adds file, topic and stamp).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ImageError {
+    /// The encoding is none of the supported ones for this role.
+    #[error("encoding `{encoding}` is not a supported {role} encoding ({supported})")]
+    Encoding {
+        /// The image's encoding.
+        encoding: String,
+        /// "colour" or "depth".
+        role: &'static str,
+        /// The supported encodings.
+        supported: &'static str,
+    },
+    /// Width, height, step and data length disagree.
+    #[error(
+        "{width}×{height} {encoding} image has step {step} and {len} data bytes \
+         (needs step ≥ {min_step} and step × height bytes)"
+    )]
+    Size {
+        /// Columns.
+        width: u32,
+        /// Rows.
+        height: u32,
+        /// Encoding.
+        encoding: String,
+        /// Bytes per row.
+        step: u32,
+        /// Smallest valid step.
+        min_step: u64,
+        /// Data length.
+        len: usize,
+    },
+    /// The pixels do not make a valid Pomona image.
+    #[error("{0}")]
+    Core(#[from] pomona_core::CoreError),
+}
+
+impl Image {
+    /// Reads an image message.
+    ///
+    /// # Errors
+    /// [`CdrError`] for a truncated or malformed payload.
+    pub fn read(payload: &[u8]) -> Result<Self, CdrError> {
+        let mut r = CdrReader::new(payload)?;
+        let (header, height, width) = Header::read_sized(&mut r)?;
+        Ok(Self {
+            header,
+            height,
+            width,
+            encoding: r.string("encoding")?,
+            is_bigendian: r.u8("is_bigendian")?,
+            step: r.u32("step")?,
+            data: r.byte_sequence("data")?.to_vec(),
+        })
+    }
+
+    /// Reads only the header of an image message (for synchronisation, without copying pixels).
+    ///
+    /// # Errors
+    /// As [`Image::read`].
+    pub fn read_header(payload: &[u8]) -> Result<Header, CdrError> {
+        Header::read(&mut CdrReader::new(payload)?)
+    }
+
+    /// Reads the header and the encoding of an image message, without its pixels.
+    ///
+    /// # Errors
+    /// As [`Image::read`].
+    pub fn read_encoding(payload: &[u8]) -> Result<(Header, String), CdrError> {
+        let mut r = CdrReader::new(payload)?;
+        let (header, _, _) = Header::read_sized(&mut r)?;
+        Ok((header, r.string("encoding")?))
+    }
+
+    /// The CDR payload.
+    pub fn to_cdr(&self) -> Vec<u8> {
+        let mut w = CdrWriter::new();
+        self.header.write_sized(&mut w, self.height, self.width);
+        w.string(&self.encoding);
+        w.u8(self.is_bigendian);
+        w.u32(self.step);
+        w.byte_sequence(&self.data);
+        w.into_bytes()
+    }
+
+    /// An `rgb8` image (or `bgr8` when `bgr`) of `color`.
+    pub fn from_color(header: Header, color: &ColorImage, bgr: bool) -> Self {
+        let mut data = color.as_rgb().to_vec();
+        if bgr {
+            data.chunks_exact_mut(3).for_each(|p| p.swap(0, 2));
+        }
+        Self {
+            header,
+            height: color.height(),
+            width: color.width(),
+            encoding: if bgr { "bgr8" } else { "rgb8" }.to_owned(),
+            is_bigendian: 0,
+            step: color.width() * 3,
+            data,
+        }
+    }
+
+    /// A little-endian `16UC1` image of `depth` in millimetres (no reading and depths beyond
+    /// 65.535 m become 0).
+    ///
+    /// # Errors
+    /// Never for a valid depth image (the unit is fixed); kept fallible for the core conversion.
+    pub fn from_depth_16uc1(header: Header, depth: &DepthImage) -> Result<Self, ImageError> {
+        let raw = depth.to_u16(DEPTH_16UC1_UNIT_M)?;
+        Ok(Self {
+            header,
+            height: depth.height(),
+            width: depth.width(),
+            encoding: "16UC1".to_owned(),
+            is_bigendian: 0,
+            step: depth.width() * 2,
+            data: raw.iter().flat_map(|v| v.to_le_bytes()).collect(),
+        })
+    }
+
+    /// A little-endian `32FC1` image of `depth` in metres (NaN = no reading).
+    pub fn from_depth_32fc1(header: Header, depth: &DepthImage) -> Self {
+        Self {
+            header,
+            height: depth.height(),
+            width: depth.width(),
+            encoding: "32FC1".to_owned(),
+            is_bigendian: 0,
+            step: depth.width() * 4,
+            data: depth
+                .as_slice()
+                .iter()
+                .flat_map(|v| v.to_le_bytes())
+                .collect(),
+        }
+    }
+
+    /// The pixel rows without their padding, after checking `step` and the data length.
+    fn rows(&self, bytes_per_pixel: u64) -> Result<impl Iterator<Item = &[u8]>, ImageError> {
+        let min_step = u64::from(self.width) * bytes_per_pixel;
+        let step = u64::from(self.step);
+        let fits = step >= min_step
+            && step
+                .checked_mul(u64::from(self.height))
+                .is_some_and(|n| n == self.data.len() as u64);
+        if !fits || self.width == 0 || self.height == 0 {
+            return Err(ImageError::Size {
+                width: self.width,
+                height: self.height,
+                encoding: self.encoding.clone(),
+                step: self.step,
+                min_step,
+                len: self.data.len(),
+            });
+        }
+        let row_len = min_step as usize;
+        Ok(self
+            .data
+            .chunks_exact(self.step as usize)
+            .map(move |row| &row[..row_len]))
+    }
+
+    /// The colour pixels.
+    ///
+    /// # Errors
+    /// [`ImageError::Encoding`] for an encoding other than `rgb8`/`bgr8`; [`ImageError::Size`]
+    /// when step, size and data disagree.
+    pub fn to_color(&self) -> Result<ColorImage, ImageError> {
+        let bgr = match self.encoding.as_str() {
+            "rgb8" => false,
+            "bgr8" => true,
+            _ => {
+                return Err(ImageError::Encoding {
+                    encoding: self.encoding.clone(),
+                    role: "colour",
+                    supported: "rgb8, bgr8",
+                })
+            }
+        };
+        let mut rgb = Vec::with_capacity(self.width as usize * self.height as usize * 3);
+        self.rows(3)?.for_each(|row| rgb.extend_from_slice(row));
+        if bgr {
+            rgb.chunks_exact_mut(3).for_each(|p| p.swap(0, 2));
+        }
+        Ok(ColorImage::from_rgb(self.width, self.height, rgb)?)
+    }
+
+    /// The depth in metres.
+    ///
+    /// # Errors
+    /// [`ImageError::Encoding`] for an encoding other than `16UC1`/`32FC1`;
+    /// [`ImageError::Size`] when step, size and data disagree.
+    pub fn to_depth(&self) -> Result<DepthImage, ImageError> {
+        let big = self.is_bigendian != 0;
+        match self.encoding.as_str() {
+            "16UC1" => {
+                let mut raw = Vec::with_capacity(self.width as usize * self.height as usize);
+                for row in self.rows(2)? {
+                    raw.extend(row.chunks_exact(2).map(|b| {
+                        let b = [b[0], b[1]];
+                        if big {
+                            u16::from_be_bytes(b)
+                        } else {
+                            u16::from_le_bytes(b)
+                        }
+                    }));
+                }
+                Ok(DepthImage::from_u16(
+                    self.width,
+                    self.height,
+                    &raw,
+                    DEPTH_16UC1_UNIT_M,
+                )?)
+            }
+            "32FC1" => {
+                let mut depth_m = Vec::with_capacity(self.width as usize * self.height as usize);
+                for row in self.rows(4)? {
+                    depth_m.extend(row.chunks_exact(4).map(|b| {
+                        let b = [b[0], b[1], b[2], b[3]];
+                        if big {
+                            f32::from_be_bytes(b)
+                        } else {
+                            f32::from_le_bytes(b)
+                        }
+                    }));
+                }
+                Ok(DepthImage::from_meters(self.width, self.height, depth_m)?)
+            }
+            _ => Err(ImageError::Encoding {
+                encoding: self.encoding.clone(),
+                role: "depth",
+                supported: "16UC1 (millimetres), 32FC1 (metres)",
+            }),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn header() -> Header {
+        Header::at(5, "cam")
+    }
+
+    #[test]
+    fn colour_round_trips_through_rgb8_and_bgr8() {
+        let mut color = ColorImage::filled(3, 2, [10, 20, 30]);
+        color.set(2, 1, [200, 100, 0]);
+        for bgr in [false, true] {
+            let msg = Image::from_color(header(), &color, bgr);
+            let back = Image::read(&msg.to_cdr()).unwrap();
+            assert_eq!(back, msg);
+            assert_eq!(back.to_color().unwrap(), color);
+        }
+    }
+
+    #[test]
+    fn padded_rows_and_big_endian_depth_are_read() {
+        // 2×2 16UC1, big-endian, each row padded to 6 bytes.
+        let msg = Image {
+            header: header(),
+            height: 2,
+            width: 2,
+            encoding: "16UC1".into(),
+            is_bigendian: 1,
+            step: 6,
+            data: vec![0x03, 0xE8, 0, 0, 9, 9, 0x07, 0xD0, 0x00, 0x01, 9, 9],
+        };
+        let d = msg.to_depth().unwrap();
+        assert_eq!(d.as_slice()[0], 1.0);
+        assert!(d.as_slice()[1].is_nan());
+        assert_eq!(d.as_slice()[2], 2.0);
+        assert_eq!(d.as_slice()[3], 0.001);
+    }
+
+    #[test]
+    fn depth_32fc1_maps_nan_and_zero_to_no_depth() {
+        let depth = DepthImage::from_meters(3, 1, vec![1.25, f32::NAN, 0.5]).unwrap();
+        let msg = Image::from_depth_32fc1(header(), &depth);
+        let mut data = msg.data.clone();
+        data[4..8].copy_from_slice(&0f32.to_le_bytes());
+        let zeroed = Image {
+            data,
+            ..msg.clone()
+        };
+        for m in [msg, zeroed] {
+            let back = m.to_depth().unwrap();
+            assert_eq!(back.as_slice()[0], 1.25);
+            assert!(back.as_slice()[1].is_nan());
+        }
+    }
+
+    #[test]
+    fn sizes_and_encodings_are_checked() {
+        let color = ColorImage::filled(4, 4, [1, 2, 3]);
+        let mut msg = Image::from_color(header(), &color, false);
+        msg.data.pop();
+        assert!(matches!(
+            msg.to_color(),
+            Err(ImageError::Size { len: 47, .. })
+        ));
+        let mut msg = Image::from_color(header(), &color, false);
+        msg.step = 8;
+        assert!(matches!(msg.to_color(), Err(ImageError::Size { .. })));
+        let mut msg = Image::from_color(header(), &color, false);
+        msg.encoding = "yuv422".into();
+        let e = msg.to_color().unwrap_err().to_string();
+        assert!(e.contains("yuv422") && e.contains("rgb8"), "{e}");
+        assert!(msg.to_depth().unwrap_err().to_string().contains("16UC1"));
+    }
+}

@@ -69,6 +69,36 @@ fn oranges(
     }
 }
 
+/// `orchard` frames of oranges under `light` (Kinect v2), the domain's own backgrounds.
+fn orchard(light: LightPreset, seed: u64) -> SyntheticFrames {
+    oranges(
+        Domain::Orchard,
+        CameraPreset::KinectV2,
+        light,
+        seed,
+        ORCHARD_FRAMES,
+    )
+}
+
+/// The held-out sets of the pixel scores: `wide` D435, `narrow` Kinect v2 per light preset,
+/// `orchard` per light preset.
+fn held_out_sets() -> Vec<(&'static str, SyntheticFrames)> {
+    let narrow = |light, seed| oranges(Domain::Narrow, CameraPreset::KinectV2, light, seed, 8);
+    let mut sets = vec![
+        (
+            "wide d435",
+            oranges(Domain::Wide, CameraPreset::D435, LightPreset::Day, 1410, 16),
+        ),
+        ("narrow day", narrow(LightPreset::Day, 1411)),
+        ("narrow dim", narrow(LightPreset::Dim, 1412)),
+        ("narrow harsh", narrow(LightPreset::Harsh, 1413)),
+    ];
+    for &(light, _, seed) in &ORCHARD_LIGHTS {
+        sets.push(("orchard", orchard(light, seed)));
+    }
+    sets
+}
+
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);
     let dir = std::path::PathBuf::from(
@@ -84,15 +114,6 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         )
             .into())
         }
-    };
-    let orchard = |light, seed| {
-        oranges(
-            Domain::Orchard,
-            CameraPreset::KinectV2,
-            light,
-            seed,
-            ORCHARD_FRAMES,
-        )
     };
     let rendered = ChainedFrames(
         CAMERAS
@@ -143,45 +164,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let stage: ColorContourStageParams = serde_json::from_value(model.stage_params.clone())?;
     let lut = HSigmaLut::compile(&stage.mlp);
     let threshold = pomona_colorcontour::quantise_probability(stage.params.color_threshold);
-    let mut held_out = vec![
-        (
-            "wide d435",
-            oranges(Domain::Wide, CameraPreset::D435, LightPreset::Day, 1410, 16),
-        ),
-        (
-            "narrow day",
-            oranges(
-                Domain::Narrow,
-                CameraPreset::KinectV2,
-                LightPreset::Day,
-                1411,
-                8,
-            ),
-        ),
-        (
-            "narrow dim",
-            oranges(
-                Domain::Narrow,
-                CameraPreset::KinectV2,
-                LightPreset::Dim,
-                1412,
-                8,
-            ),
-        ),
-        (
-            "narrow harsh",
-            oranges(
-                Domain::Narrow,
-                CameraPreset::KinectV2,
-                LightPreset::Harsh,
-                1413,
-                8,
-            ),
-        ),
-    ];
-    for &(light, _, seed) in &ORCHARD_LIGHTS {
-        held_out.push(("orchard", orchard(light, seed)));
-    }
+    let held_out = held_out_sets();
     for (name, set) in &held_out {
         let counts = pixel_counts(set as &dyn FrameSource, &lut, threshold)?;
         let (p, r, f1) = counts.precision_recall_f1();

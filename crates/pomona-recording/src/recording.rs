@@ -132,118 +132,19 @@ impl Recording {
             path: path.clone(),
             source,
         })?;
-        let mcap_error = |source| RecordingError::Mcap {
-            path: path.clone(),
-            source,
-        };
-        let mut stream = mcap::read::RawMessageStream::new(&bytes).map_err(mcap_error)?;
-        let topics = &options.topics;
-        let mut summary: BTreeMap<String, (String, u64)> = BTreeMap::new();
-        let (mut color, mut depth, mut info) = (Vec::new(), Vec::new(), Vec::new());
-        while let Some(message) = stream.next() {
-            let message = message.map_err(mcap_error)?;
-            let channel_id = message.header.channel_id;
-            let Some(channel) = stream.get_channel(channel_id) else {
-                return Err(mcap_error(mcap::McapError::UnknownChannel(
-                    message.header.sequence,
-                    channel_id,
-                )));
-            };
-            let schema = channel.schema.as_ref().map_or("", |s| s.name.as_str());
-            let entry = summary
-                .entry(channel.topic.clone())
-                .or_insert_with(|| (schema.to_owned(), 0));
-            entry.1 += 1;
-            let role = if channel.topic == topics.color {
-                Role::Color
-            } else if channel.topic == topics.depth {
-                Role::Depth
-            } else if channel.topic == topics.camera_info {
-                Role::Info
-            } else {
-                continue;
-            };
-            let expected = match role {
-                Role::Info => CAMERA_INFO_SCHEMA,
-                Role::Color | Role::Depth => IMAGE_SCHEMA,
-            };
-            if schema != expected || channel.message_encoding != "cdr" {
-                return Err(RecordingError::WrongSchema {
-                    path,
-                    topic: channel.topic.clone(),
-                    schema: schema.to_owned(),
-                    encoding: channel.message_encoding.clone(),
-                    expected,
-                });
-            }
-            let cdr_error = |source| RecordingError::Cdr {
-                path: path.clone(),
-                topic: channel.topic.clone(),
-                log_time_ns: message.header.log_time,
-                source,
-            };
-            let payload = message.data.into_owned();
-            match role {
-                Role::Info => {
-                    let camera_info = CameraInfo::read(&payload).map_err(cdr_error)?;
-                    let stamp_ns = stamp(&path, &channel.topic, &camera_info.header)?;
-                    info.push((stamp_ns, camera_info));
-                }
-                Role::Color | Role::Depth => {
-                    let header = Image::read_header(&payload).map_err(cdr_error)?;
-                    let stamp_ns = stamp(&path, &channel.topic, &header)?;
-                    let list = if role == Role::Color {
-                        &mut color
-                    } else {
-                        &mut depth
-                    };
-                    list.push(Stamped {
-                        stamp_ns,
-                        frame_id: header.frame_id,
-                        payload,
-                    });
-                }
-            }
-        }
+        let messages = TopicMessages::read(&path, &bytes, &options.topics)?;
         drop(bytes);
-        let topics_found: Vec<TopicSummary> = summary
-            .into_iter()
-            .map(|(topic, (schema, messages))| TopicSummary {
-                topic,
-                schema,
-                messages,
-            })
-            .collect();
-        for (role, topic, flag, empty) in [
-            ("colour", &topics.color, "--color-topic", color.is_empty()),
-            ("depth", &topics.depth, "--depth-topic", depth.is_empty()),
-            (
-                "camera info",
-                &topics.camera_info,
-                "--info-topic",
-                info.is_empty(),
-            ),
-        ] {
-            if empty {
-                return Err(RecordingError::MissingTopic {
-                    path,
-                    role,
-                    topic: topic.clone(),
-                    flag,
-                    available: list_topics(&topics_found),
-                });
-            }
-        }
+        messages.require_all(&path, &options.topics)?;
         let mut recording = Self {
             path,
             options: options.clone(),
-            color,
-            depth,
-            info,
+            color: messages.color,
+            depth: messages.depth,
+            info: messages.info,
             frames: Vec::new(),
             unmatched_color_ns: Vec::new(),
             duplicate_color: 0,
-            topics: topics_found,
+            topics: messages.topics,
         };
         recording.synchronise();
         recording.check_cameras()?;
@@ -454,6 +355,151 @@ impl Recording {
             }
         }
         Ok(true)
+    }
+}
+
+/// The messages of the colour, depth and camera-info topics in file order (image payloads kept
+/// undecoded, headers read), and what every topic of the file holds.
+struct TopicMessages {
+    color: Vec<Stamped>,
+    depth: Vec<Stamped>,
+    info: Vec<(u64, CameraInfo)>,
+    topics: Vec<TopicSummary>,
+}
+
+impl TopicMessages {
+    /// One pass over the file's messages.
+    fn read(path: &Path, bytes: &[u8], topics: &RecordingTopics) -> Result<Self, RecordingError> {
+        let mcap_error = |source| RecordingError::Mcap {
+            path: path.to_owned(),
+            source,
+        };
+        let mut stream = mcap::read::RawMessageStream::new(bytes).map_err(mcap_error)?;
+        let mut summary: BTreeMap<String, (String, u64)> = BTreeMap::new();
+        let (mut color, mut depth, mut info) = (Vec::new(), Vec::new(), Vec::new());
+        while let Some(message) = stream.next() {
+            let message = message.map_err(mcap_error)?;
+            let channel_id = message.header.channel_id;
+            let Some(channel) = stream.get_channel(channel_id) else {
+                return Err(mcap_error(mcap::McapError::UnknownChannel(
+                    message.header.sequence,
+                    channel_id,
+                )));
+            };
+            let schema = channel.schema.as_ref().map_or("", |s| s.name.as_str());
+            let entry = summary
+                .entry(channel.topic.clone())
+                .or_insert_with(|| (schema.to_owned(), 0));
+            entry.1 += 1;
+            let Some(role) = Role::of(&channel.topic, topics) else {
+                continue;
+            };
+            let expected = match role {
+                Role::Info => CAMERA_INFO_SCHEMA,
+                Role::Color | Role::Depth => IMAGE_SCHEMA,
+            };
+            if schema != expected || channel.message_encoding != "cdr" {
+                return Err(RecordingError::WrongSchema {
+                    path: path.to_owned(),
+                    topic: channel.topic.clone(),
+                    schema: schema.to_owned(),
+                    encoding: channel.message_encoding.clone(),
+                    expected,
+                });
+            }
+            let cdr_error = |source| RecordingError::Cdr {
+                path: path.to_owned(),
+                topic: channel.topic.clone(),
+                log_time_ns: message.header.log_time,
+                source,
+            };
+            let payload = message.data.into_owned();
+            match role {
+                Role::Info => {
+                    let camera_info = CameraInfo::read(&payload).map_err(cdr_error)?;
+                    let stamp_ns = stamp(path, &channel.topic, &camera_info.header)?;
+                    info.push((stamp_ns, camera_info));
+                }
+                Role::Color | Role::Depth => {
+                    let header = Image::read_header(&payload).map_err(cdr_error)?;
+                    let stamp_ns = stamp(path, &channel.topic, &header)?;
+                    let list = if role == Role::Color {
+                        &mut color
+                    } else {
+                        &mut depth
+                    };
+                    list.push(Stamped {
+                        stamp_ns,
+                        frame_id: header.frame_id,
+                        payload,
+                    });
+                }
+            }
+        }
+        let topics = summary
+            .into_iter()
+            .map(|(topic, (schema, messages))| TopicSummary {
+                topic,
+                schema,
+                messages,
+            })
+            .collect();
+        Ok(Self {
+            color,
+            depth,
+            info,
+            topics,
+        })
+    }
+
+    /// [`RecordingError::MissingTopic`] (listing the file's topics) for the first of the three
+    /// requested topics without messages.
+    fn require_all(&self, path: &Path, topics: &RecordingTopics) -> Result<(), RecordingError> {
+        let requested = [
+            (
+                "colour",
+                &topics.color,
+                "--color-topic",
+                self.color.is_empty(),
+            ),
+            (
+                "depth",
+                &topics.depth,
+                "--depth-topic",
+                self.depth.is_empty(),
+            ),
+            (
+                "camera info",
+                &topics.camera_info,
+                "--info-topic",
+                self.info.is_empty(),
+            ),
+        ];
+        match requested.into_iter().find(|r| r.3) {
+            Some((role, topic, flag, _)) => Err(RecordingError::MissingTopic {
+                path: path.to_owned(),
+                role,
+                topic: topic.clone(),
+                flag,
+                available: list_topics(&self.topics),
+            }),
+            None => Ok(()),
+        }
+    }
+}
+
+impl Role {
+    /// The role of `topic` among the requested ones, `None` for any other topic.
+    fn of(topic: &str, topics: &RecordingTopics) -> Option<Self> {
+        if topic == topics.color {
+            Some(Self::Color)
+        } else if topic == topics.depth {
+            Some(Self::Depth)
+        } else if topic == topics.camera_info {
+            Some(Self::Info)
+        } else {
+            None
+        }
     }
 }
 

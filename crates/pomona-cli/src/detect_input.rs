@@ -42,6 +42,13 @@ impl DetectInput {
     ) -> Result<Self> {
         match (data, recording) {
             (Some(data), None) => {
+                if *topics != RecordingArgs::default() {
+                    bail!(
+                        "--color-topic, --depth-topic, --info-topic and --sync-tolerance-ms \
+                         apply to --recording FILE, not to the dataset folder {}",
+                        data.display()
+                    );
+                }
                 Ok(Self::Dataset(Dataset::open(data).with_context(|| {
                     format!("cannot open dataset {}", data.display())
                 })?))

@@ -11,7 +11,7 @@ use pomona_recording::{
 };
 
 /// Topic and synchronisation flags of the commands that read recordings.
-#[derive(Debug, Clone, clap::Args)]
+#[derive(Debug, Clone, PartialEq, clap::Args)]
 pub struct RecordingArgs {
     /// Colour topic (`sensor_msgs/msg/Image`, rgb8 or bgr8).
     #[arg(long, value_name = "TOPIC", default_value = DEFAULT_COLOR_TOPIC)]

@@ -181,6 +181,23 @@ fn missing_topics_and_bad_files_are_named() {
             "{err}"
         );
     }
+    // Topic flags with a dataset folder are an error, not silently ignored.
+    let out = pomona(&[
+        "detect",
+        "--pipeline",
+        "shape-fit",
+        "--data",
+        s(&data),
+        "--out",
+        s(&out_dir),
+        "--depth-topic",
+        "/other",
+    ]);
+    let err = stderr(&out);
+    assert!(
+        !out.status.success() && err.contains("--recording") && err.contains(s(&data)),
+        "{err}"
+    );
 
     let out = pomona(&[
         "extract",

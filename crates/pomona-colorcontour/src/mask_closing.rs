@@ -30,48 +30,70 @@ fn pass(
     radius: usize,
     keep: impl Fn(usize, usize) -> bool + Copy,
 ) -> Vec<bool> {
-    let rows = run_lines(mask, width, height, radius, keep, Direction::Rows);
-    run_lines(&rows, width, height, radius, keep, Direction::Columns)
+    let rows = run_rows(mask, width, radius, keep);
+    run_columns(&rows, width, height, radius, keep)
 }
 
-#[derive(Clone, Copy)]
-enum Direction {
-    Rows,
-    Columns,
+/// Pixels of the window `[k − radius, k + radius]` inside `0..length`.
+fn window_len(k: usize, radius: usize, length: usize) -> usize {
+    (k + radius).min(length - 1) + 1 - k.saturating_sub(radius)
 }
 
-/// The running-window pass along every row (or column).
-fn run_lines(
+/// The running-window pass along every row.
+fn run_rows(
+    mask: &[bool],
+    width: usize,
+    radius: usize,
+    keep: impl Fn(usize, usize) -> bool,
+) -> Vec<bool> {
+    let mut out = vec![false; mask.len()];
+    for (row, out_row) in mask.chunks_exact(width).zip(out.chunks_exact_mut(width)) {
+        // Count the set pixels of the window incrementally.
+        let mut count = row[..radius.min(width)].iter().filter(|&&m| m).count();
+        for k in 0..width {
+            if k + radius < width && row[k + radius] {
+                count += 1;
+            }
+            if k > radius && row[k - radius - 1] {
+                count -= 1;
+            }
+            out_row[k] = keep(count, window_len(k, radius, width));
+        }
+    }
+    out
+}
+
+/// The running-window pass along every column, swept row by row with one count per column
+/// (memory is read in order, not with a stride of one row per step).
+fn run_columns(
     mask: &[bool],
     width: usize,
     height: usize,
     radius: usize,
     keep: impl Fn(usize, usize) -> bool,
-    direction: Direction,
 ) -> Vec<bool> {
-    let (lines, length) = match direction {
-        Direction::Rows => (height, width),
-        Direction::Columns => (width, height),
-    };
-    let index = |line: usize, k: usize| match direction {
-        Direction::Rows => line * width + k,
-        Direction::Columns => k * width + line,
-    };
+    let row = |y: usize| &mask[y * width..(y + 1) * width];
+    let mut counts = vec![0usize; width];
+    for y in 0..radius.min(height) {
+        for (c, &m) in counts.iter_mut().zip(row(y)) {
+            *c += usize::from(m);
+        }
+    }
     let mut out = vec![false; mask.len()];
-    for line in 0..lines {
-        // Window [k − radius, k + radius] ∩ [0, length): count set pixels incrementally.
-        let mut count = (0..radius.min(length))
-            .filter(|&k| mask[index(line, k)])
-            .count();
-        for k in 0..length {
-            if k + radius < length && mask[index(line, k + radius)] {
-                count += 1;
+    for (y, out_row) in out.chunks_exact_mut(width).enumerate() {
+        if y + radius < height {
+            for (c, &m) in counts.iter_mut().zip(row(y + radius)) {
+                *c += usize::from(m);
             }
-            if k > radius && mask[index(line, k - radius - 1)] {
-                count -= 1;
+        }
+        if y > radius {
+            for (c, &m) in counts.iter_mut().zip(row(y - radius - 1)) {
+                *c -= usize::from(m);
             }
-            let window = (k + radius).min(length - 1) + 1 - k.saturating_sub(radius);
-            out[index(line, k)] = keep(count, window);
+        }
+        let window = window_len(y, radius, height);
+        for (o, &c) in out_row.iter_mut().zip(&counts) {
+            *o = keep(c, window);
         }
     }
     out

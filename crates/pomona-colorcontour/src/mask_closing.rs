@@ -9,16 +9,18 @@
 //! grow with `r`. Pixels outside the image are ignored by either pass (a fruit cut by the image
 //! border keeps its border pixels).
 
-/// The mask closed by a `(2 radius_px + 1)²` square; `mask` unchanged for `radius_px == 0` or a
-/// mask whose length is not `width · height`.
-pub fn close_mask(mask: &[bool], width: usize, height: usize, radius_px: usize) -> Vec<bool> {
+use std::borrow::Cow;
+
+/// The mask closed by a `(2 radius_px + 1)²` square; `mask` itself, not a copy, for
+/// `radius_px == 0` (the paper's path) or a mask whose length is not `width · height`.
+pub fn close_mask(mask: &[bool], width: usize, height: usize, radius_px: usize) -> Cow<'_, [bool]> {
     if radius_px == 0 || width == 0 || height == 0 || mask.len() != width * height {
-        return mask.to_vec();
+        return Cow::Borrowed(mask);
     }
     let dilated = pass(mask, width, height, radius_px, |count, _| count > 0);
-    pass(&dilated, width, height, radius_px, |count, window| {
+    Cow::Owned(pass(&dilated, width, height, radius_px, |count, window| {
         count == window
-    })
+    }))
 }
 
 /// One separable square pass: along rows, then along columns, a pixel becomes
@@ -122,7 +124,7 @@ mod tests {
             let (mask, w, h) = cut_disc(gap);
             let closed = close_mask(&mask, w, h, radius);
             assert!(
-                mask.iter().zip(&closed).all(|(&m, &c)| !m || c),
+                mask.iter().zip(closed.iter()).all(|(&m, &c)| !m || c),
                 "closing is extensive"
             );
             // The centre pixel lies in the gap.

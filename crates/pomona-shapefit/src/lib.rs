@@ -21,6 +21,7 @@
 
 mod candidate;
 mod color_model;
+mod depth_proposals;
 mod gpcd;
 mod params;
 mod pipeline;
@@ -31,6 +32,7 @@ pub mod stages;
 
 pub use candidate::Candidate;
 pub use color_model::{ColorBayes, ColorBayesParams, ColorHistograms, ColorLut};
+pub use depth_proposals::DepthProposalParams;
 pub use gpcd::{gpcd, GpcdParams, HueStatistics, GPCD_LEN};
 pub use params::{CoaxialMergeParams, LabelRule, ShapeFitParams};
 pub use pipeline::{ShapeFitDetector, ShapeFitPipeline, ShapeFitStageParams, PIPELINE_NAME};

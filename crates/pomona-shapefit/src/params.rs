@@ -10,7 +10,8 @@ use pomona_learn::{ClassWeights, CvMetric};
 use serde::{Deserialize, Serialize};
 
 use crate::{
-    ColorBayesParams, GpcdParams, RadiusCalibration, RegionGrowingParams, SizePrior, SizePriorMode,
+    ColorBayesParams, DepthProposalParams, GpcdParams, RadiusCalibration, RegionGrowingParams,
+    SizePrior, SizePriorMode,
 };
 
 /// Parameters of every stage.
@@ -71,6 +72,10 @@ pub struct ShapeFitParams {
     /// `fixed`) keeps the fitted spheres.
     #[serde(default)]
     pub radius_calibration: Option<RadiusCalibration>,
+    /// Depth-only clusters proposed beside the colour mask's (not in the paper; see
+    /// [`DepthProposalParams`]). Absent in older model files: off.
+    #[serde(default = "DepthProposalParams::off")]
+    pub depth_proposals: DepthProposalParams,
 }
 
 impl Default for ShapeFitParams {
@@ -93,6 +98,7 @@ impl Default for ShapeFitParams {
             reference_kinds: reference_kinds(),
             learnt_size_prior: None,
             radius_calibration: None,
+            depth_proposals: DepthProposalParams::default(),
         }
     }
 }

@@ -149,8 +149,8 @@ pub fn grow_regions(
     clusters
 }
 
-/// Median depth of the pixels of `cluster` (all finite).
-fn median_depth(depth_m: &[f32], cluster: &[usize]) -> f64 {
+/// Median depth of the pixels of `cluster` (all finite); `NaN` for an empty cluster.
+pub(crate) fn median_depth(depth_m: &[f32], cluster: &[usize]) -> f64 {
     let mut z: Vec<f32> = cluster.iter().map(|&i| depth_m[i]).collect();
     let mid = z.len() / 2;
     if z.is_empty() {

@@ -1,5 +1,6 @@
 //! The five stages of the detector, each behind [`pomona_pipeline::Stage`] so it can be timed,
-//! benchmarked or replaced alone: colour mask → region growing → MSAC shapes → GPCD → SVM.
+//! benchmarked or replaced alone: colour mask → region growing (plus our depth proposals) → MSAC
+//! shapes → GPCD → SVM.
 
 use pomona_consensus::nalgebra::Point3;
 use pomona_consensus::{OrientedPoint, ShapeExtractionParams, WindowNormals};
@@ -8,7 +9,9 @@ use pomona_learn::SvmClassifier;
 use pomona_pipeline::{PipelineError, Stage};
 use rayon::prelude::*;
 
-use crate::{gpcd, grow_regions, Candidate, ColorLut, GpcdParams, RegionGrowingParams};
+use crate::{
+    gpcd, grow_regions, Candidate, ColorLut, DepthProposalParams, GpcdParams, RegionGrowingParams,
+};
 
 /// Colour posterior ≥ threshold and depth within range (Eq. 2, then the masked depth image).
 /// Without a colour model (depth-only data) only the depth range is applied.
@@ -68,6 +71,42 @@ impl<'a> Stage<(&'a RgbdFrame, &'a [bool]), Vec<Vec<usize>>> for RegionGrowingSt
             keep,
             &self.params,
         ))
+    }
+}
+
+/// Depth-only clusters for fruit the colour mask misses (not in the paper; see
+/// [`DepthProposalParams`]): region growing on every pixel in depth range, keeping the clusters
+/// the proposal tests pass. Its input is the colour mask, to leave what it covers to the colour
+/// path.
+pub struct DepthProposalStage {
+    /// The proposal tests.
+    pub params: DepthProposalParams,
+    /// The depth range alone (a mask stage without a colour model).
+    pub in_range: ColorMaskStage,
+    /// Region growing, as for the colour mask's clusters.
+    pub regions: RegionGrowingStage,
+    /// Smallest and largest radius any shape may fit, metres: the sizes of the smallest and the
+    /// largest fruit.
+    pub radius_range_m: (f64, f64),
+}
+
+impl<'a> Stage<(&'a RgbdFrame, &'a [bool]), Vec<Vec<usize>>> for DepthProposalStage {
+    fn name(&self) -> &'static str {
+        "depth-proposals"
+    }
+
+    fn run(
+        &self,
+        (frame, color_mask): (&'a RgbdFrame, &'a [bool]),
+    ) -> Result<Vec<Vec<usize>>, PipelineError> {
+        let in_range = self.in_range.run(frame)?;
+        let mut clusters = self.regions.run((frame, in_range.as_slice()))?;
+        let (fx, depth) = (frame.camera().fx, frame.depth().as_slice());
+        clusters.retain(|c| {
+            self.params
+                .proposes(c, color_mask, depth, fx, self.radius_range_m)
+        });
+        Ok(clusters)
     }
 }
 

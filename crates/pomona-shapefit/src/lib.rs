@@ -23,6 +23,7 @@ mod candidate;
 mod color_model;
 mod depth_proposals;
 mod gpcd;
+mod negative_selection;
 mod params;
 mod pipeline;
 mod radius_calibration;
@@ -34,6 +35,7 @@ pub use candidate::Candidate;
 pub use color_model::{ColorBayes, ColorBayesParams, ColorHistograms, ColorLut};
 pub use depth_proposals::DepthProposalParams;
 pub use gpcd::{gpcd, GpcdParams, HueStatistics, GPCD_LEN};
+pub use negative_selection::MINING_MIN_SCORE;
 pub use params::{CoaxialMergeParams, LabelRule, ShapeFitParams};
 pub use pipeline::{ShapeFitDetector, ShapeFitPipeline, ShapeFitStageParams, PIPELINE_NAME};
 /// Re-exported from pomona-core, where the one RGB → HSV conversion lives.

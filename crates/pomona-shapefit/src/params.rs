@@ -44,6 +44,13 @@ pub struct ShapeFitParams {
     pub cv_metric: CvMetric,
     /// Training keeps at most this many negative candidates per positive (seeded choice).
     pub max_negatives_per_positive: f64,
+    /// Rounds of hard-negative mining in training (not in the paper; see
+    /// `crate::negative_selection`). Default 1; absent in older model files, trained without.
+    #[serde(default)]
+    pub hard_negative_rounds: usize,
+    /// Negatives a mining round adds, at most, per positive (default 2).
+    #[serde(default = "hard_negatives_per_positive")]
+    pub hard_negatives_per_positive: f64,
     /// Overlapping candidates are merged, keeping the higher score: a centre inside another
     /// candidate's shape, or centres closer than this (metres). Not in the paper, which reports
     /// split fruit as false positives (its Discussion); 0 switches merging off.
@@ -92,6 +99,8 @@ impl Default for ShapeFitParams {
             class_weights: balanced(),
             cv_metric: balanced_accuracy(),
             max_negatives_per_positive: 5.0,
+            hard_negative_rounds: 1,
+            hard_negatives_per_positive: hard_negatives_per_positive(),
             merge_radius_m: 0.03,
             coaxial_merge: CoaxialMergeParams::default(),
             size_prior: SizePriorMode::default(),
@@ -105,6 +114,10 @@ impl Default for ShapeFitParams {
 
 fn reference_kinds() -> Vec<String> {
     vec!["reference_ball".to_string()]
+}
+
+fn hard_negatives_per_positive() -> f64 {
+    2.0
 }
 
 fn balanced() -> ClassWeights {

@@ -4,7 +4,9 @@
 use pomona_consensus::nalgebra::{Point2, Point3};
 use pomona_consensus::{Cylinder, Shape};
 use pomona_core::{Detection, FrameTruth, FruitTruth, PinholeCamera, PixelBox, RgbdFrame};
-use pomona_learn::{GridAxis, GridSearchParams, ModelFile, Samples, SvmParams, TrainingSet};
+use pomona_learn::{
+    GridAxis, GridSearchParams, ModelFile, Samples, SvmClassifier, SvmParams, TrainingSet,
+};
 use pomona_pipeline::{
     params_from_json, params_to_json, run_stage, Detector, FrameSource, LabelledFrame, Pipeline,
     PipelineError, StageTimings, TrainOptions,
@@ -12,6 +14,7 @@ use pomona_pipeline::{
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
+use crate::negative_selection::{cap_negatives, hardest_negatives};
 use crate::stages::{
     ClassifierStage, ColorMaskStage, DepthProposalStage, DescriptorStage, RegionGrowingStage,
     ShapeStage,
@@ -470,47 +473,6 @@ impl Pipeline for ShapeFitPipeline {
     }
 }
 
-/// Keeps every positive and at most `ratio` negatives per positive, chosen by a seeded shuffle
-/// (seed 002 trains with negatives outnumbering positives about 5:1; more only slows the grid
-/// search).
-fn cap_negatives(
-    values: Vec<f64>,
-    labels: Vec<bool>,
-    ratio: f64,
-    seed: u64,
-) -> (Vec<f64>, Vec<bool>) {
-    use rand::seq::SliceRandom;
-    use rand::SeedableRng;
-    let positives = labels.iter().filter(|&&l| l).count();
-    let mut negatives: Vec<usize> = (0..labels.len()).filter(|&i| !labels[i]).collect();
-    let cap = (ratio * positives.max(1) as f64).ceil() as usize;
-    if negatives.len() <= cap {
-        return (values, labels);
-    }
-    negatives.shuffle(&mut rand_chacha::ChaCha8Rng::seed_from_u64(seed));
-    let mut keep = vec![false; labels.len()];
-    for &i in negatives.iter().take(cap) {
-        keep[i] = true;
-    }
-    for (i, &l) in labels.iter().enumerate() {
-        keep[i] |= l;
-    }
-    let n = crate::GPCD_LEN;
-    let kept_values = values
-        .chunks_exact(n)
-        .zip(&keep)
-        .filter(|(_, &k)| k)
-        .flat_map(|(v, _)| v.iter().copied())
-        .collect();
-    let kept_labels = labels
-        .iter()
-        .zip(&keep)
-        .filter(|(_, &k)| k)
-        .map(|(&l, _)| l)
-        .collect();
-    (kept_values, kept_labels)
-}
-
 /// One frame's colour counts (with colour) and annotated fruit, for the colour model and the
 /// The error for training data that gives nothing to learn from.
 fn not_enough(reason: String) -> PipelineError {
@@ -589,28 +551,56 @@ fn labelled_candidates(
     Ok((values, labels, pairs))
 }
 
-/// Caps the negatives, grid-searches the RBF SVM on the descriptors and packages the model.
+/// Caps the negatives, grid-searches the RBF SVM on the descriptors, mines hard negatives for
+/// `hard_negative_rounds` rounds (see [`crate::negative_selection`]) and packages the model.
 fn fit_classifier(
     stage_params: ShapeFitStageParams,
     values: Vec<Vec<f64>>,
     labels: Vec<bool>,
     options: &TrainOptions,
 ) -> Result<ModelFile, PipelineError> {
-    let values: Vec<f64> = values.into_iter().flatten().collect();
-    let (values, labels) = cap_negatives(
-        values,
-        labels,
-        stage_params.params.max_negatives_per_positive,
-        options.seed,
-    );
+    let p = &stage_params.params;
     let positives = labels.iter().filter(|&&l| l).count();
-    if positives < 2 || labels.len() - positives < 2 {
+    let mut chosen = cap_negatives(&labels, p.max_negatives_per_positive, options.seed);
+    let mut model = grid_search(&values, &labels, &chosen, p, options)?;
+    let per_round = (p.hard_negatives_per_positive * positives as f64).ceil() as usize;
+    for _ in 0..p.hard_negative_rounds {
+        let rows: Vec<&[f64]> = values.iter().map(Vec::as_slice).collect();
+        let scores = model.decision_values(&rows)?;
+        let hard = hardest_negatives(&labels, &chosen, &scores, per_round);
+        if hard.is_empty() {
+            break;
+        }
+        chosen.extend(hard);
+        chosen.sort_unstable();
+        model = grid_search(&values, &labels, &chosen, p, options)?;
+    }
+    let stage_json = serde_json::to_value(&stage_params)
+        .map_err(|e| PipelineError::StageParams(e.to_string()))?;
+    Ok(ModelFile::new(PIPELINE_NAME, stage_json, &model))
+}
+
+/// The cross-validated grid search of the RBF SVM on the `chosen` candidates.
+fn grid_search(
+    values: &[Vec<f64>],
+    labels: &[bool],
+    chosen: &[usize],
+    params: &ShapeFitParams,
+    options: &TrainOptions,
+) -> Result<SvmClassifier, PipelineError> {
+    let positives = chosen.iter().filter(|&&i| labels[i]).count();
+    if positives < 2 || chosen.len() - positives < 2 {
         return Err(not_enough(format!(
             "{positives} positive and {} negative candidates",
-            labels.len() - positives
+            chosen.len() - positives
         )));
     }
-    let data = TrainingSet::new(Samples::new(crate::GPCD_LEN, values)?, labels)?;
+    let rows: Vec<f64> = chosen
+        .iter()
+        .flat_map(|&i| values[i].iter().copied())
+        .collect();
+    let chosen_labels = chosen.iter().map(|&i| labels[i]).collect();
+    let data = TrainingSet::new(Samples::new(crate::GPCD_LEN, rows)?, chosen_labels)?;
     let (log2_c, log2_gamma) = if options.full_grid {
         let d = GridSearchParams::default();
         (d.log2_c, d.log2_gamma)
@@ -634,16 +624,14 @@ fn fit_classifier(
         folds: options.folds,
         fine: options.full_grid,
         seed: options.seed,
-        metric: stage_params.params.cv_metric,
+        metric: params.cv_metric,
         base: SvmParams::default()
-            .class_weights(stage_params.params.class_weights)
+            .class_weights(params.class_weights)
             .seed(options.seed),
     }
     .check()?
     .fit(&data)?;
-    let stage_json = serde_json::to_value(&stage_params)
-        .map_err(|e| PipelineError::StageParams(e.to_string()))?;
-    Ok(ModelFile::new(PIPELINE_NAME, stage_json, &search.model))
+    Ok(search.model)
 }
 
 /// size prior.

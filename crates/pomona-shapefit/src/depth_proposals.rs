@@ -42,6 +42,13 @@ pub struct DepthProposalParams {
     /// depth is dropped (default 0.3, twice the mask clusters' limit: on the held-out synthetic
     /// sets it drops 30–45 % of the proposals, mean wide AP 0.845 at 0.15 and 0.849 at 0.3).
     pub min_fruit_discs: f64,
+    /// The screen: a proposal goes on to the shape fit only when the detector's classifier scores
+    /// the GPCD of the whole cluster (no shape fitted, at most `screen_points` strided pixels) at
+    /// least this; `None` sends every proposal on. Default −1, the negative edge of the SVM's
+    /// margin.
+    pub screen_min_score: Option<f64>,
+    /// Pixels of a cluster the screen's descriptor uses, at most (default 64).
+    pub screen_points: usize,
 }
 
 impl Default for DepthProposalParams {
@@ -51,6 +58,8 @@ impl Default for DepthProposalParams {
             max_color_coverage: 0.5,
             max_fruit_discs: 2.0,
             min_fruit_discs: 0.3,
+            screen_min_score: Some(-1.0),
+            screen_points: 64,
         }
     }
 }

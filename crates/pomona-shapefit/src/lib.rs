@@ -18,6 +18,11 @@
 //! fitted sphere's poorly observed radius and refits its centre. Truth marked incomplete
 //! (`"complete": false`) does not turn every unmatched candidate into a negative: candidates
 //! that could be unannotated fruit are left out of training (see `docs/learning-and-evaluation.md`).
+//!
+//! Two additions for scenes the models were not tuned on: **depth proposals**
+//! ([`DepthProposalParams`]) offer fruit-sized depth-only clusters the colour mask missed (green
+//! fruit among green leaves) to the same shape fit and classifier, and training mines **hard
+//! negatives** (`hard_negative_rounds`) among the candidates a random cap left out.
 
 mod candidate;
 mod color_model;

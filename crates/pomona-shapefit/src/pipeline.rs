@@ -16,11 +16,11 @@ use serde::{Deserialize, Serialize};
 
 use crate::negative_selection::{cap_negatives, hardest_negatives};
 use crate::stages::{
-    ClassifierStage, ColorMaskStage, DepthProposalStage, DescriptorStage, RegionGrowingStage,
-    ShapeStage,
+    ClassifierStage, ColorMaskStage, DepthProposalStage, DescriptorStage, ProposalScreenStage,
+    RegionGrowingStage, ShapeStage,
 };
 use crate::{
-    Candidate, CoaxialMergeParams, ColorBayes, ColorHistograms, ColorLut, LabelRule,
+    Candidate, CoaxialMergeParams, ColorBayes, ColorHistograms, ColorLut, GpcdParams, LabelRule,
     RadiusCalibration, ShapeFitParams, SizePrior, SizePriorMode,
 };
 
@@ -314,6 +314,7 @@ impl ShapeFitPipeline {
         });
         Ok(Stages {
             proposals,
+            screen: None,
             mask: ColorMaskStage {
                 lut: stage
                     .color_model
@@ -341,6 +342,8 @@ struct Stages {
     mask: ColorMaskStage,
     /// Depth proposals (colour models with them switched on).
     proposals: Option<DepthProposalStage>,
+    /// The screen of the proposals (a loaded detector's, when switched on).
+    screen: Option<ProposalScreenStage>,
     regions: RegionGrowingStage,
     shapes: ShapeStage,
     descriptor: DescriptorStage,
@@ -369,7 +372,10 @@ impl Stages {
         let mut candidates = run_stage(&self.shapes, (frame, clusters.as_slice()), t)?;
         let first_proposal = candidates.len();
         if let Some(proposals) = proposals {
-            let clusters = run_stage(proposals, (frame, keep.as_slice()), t)?;
+            let mut clusters = run_stage(proposals, (frame, keep.as_slice()), t)?;
+            if let Some(screen) = &self.screen {
+                clusters = run_stage(screen, (frame, clusters.as_slice()), t)?;
+            }
             candidates.extend(run_stage(&self.shapes, (frame, clusters.as_slice()), t)?);
         }
         let features = run_stage(&self.descriptor, (frame, candidates.as_slice()), t)?;
@@ -459,7 +465,21 @@ impl Pipeline for ShapeFitPipeline {
         let stage_params: ShapeFitStageParams = serde_json::from_value(model.stage_params.clone())
             .map_err(|e| PipelineError::StageParams(e.to_string()))?;
         let use_color = stage_params.color_model.is_some();
-        let stages = self.stages(&stage_params, use_color)?;
+        let mut stages = self.stages(&stage_params, use_color)?;
+        let p = &stage_params.params;
+        if let (Some(min_score), Some(_)) = (p.depth_proposals.screen_min_score, &stages.proposals)
+        {
+            stages.screen = Some(ProposalScreenStage {
+                normals: stages.shapes.normals,
+                gpcd: GpcdParams {
+                    max_points: p.depth_proposals.screen_points,
+                    ..p.gpcd
+                },
+                use_color,
+                svm: model.classifier(),
+                min_score,
+            });
+        }
         Ok(Box::new(ShapeFitDetector {
             stages,
             classifier: ClassifierStage {

@@ -110,6 +110,69 @@ impl<'a> Stage<(&'a RgbdFrame, &'a [bool]), Vec<Vec<usize>>> for DepthProposalSt
     }
 }
 
+/// The classifier's first look at each depth proposal, before the shape fit pays for it (not in
+/// the paper; see [`DepthProposalParams::screen_min_score`]): the GPCD of at most
+/// `gpcd.max_points` evenly strided pixels of the whole cluster, with their normals, scored by
+/// the detector's own SVM. Clusters scoring below `min_score` are dropped.
+pub struct ProposalScreenStage {
+    /// Normal estimation, as in the shape stage.
+    pub normals: WindowNormals,
+    /// The descriptor, with the screen's (smaller) point budget.
+    pub gpcd: GpcdParams,
+    /// Whether the model uses colour.
+    pub use_color: bool,
+    /// The detector's classifier.
+    pub svm: SvmClassifier,
+    /// Lowest score kept.
+    pub min_score: f64,
+}
+
+impl<'a> Stage<(&'a RgbdFrame, &'a [Vec<usize>]), Vec<Vec<usize>>> for ProposalScreenStage {
+    fn name(&self) -> &'static str {
+        "proposal-screen"
+    }
+
+    fn run(
+        &self,
+        (frame, clusters): (&'a RgbdFrame, &'a [Vec<usize>]),
+    ) -> Result<Vec<Vec<usize>>, PipelineError> {
+        let cloud = frame.to_cloud();
+        let color = if self.use_color { frame.color() } else { None };
+        let features: Result<Vec<Vec<f64>>, PipelineError> = clusters
+            .par_iter()
+            .map(|cluster| {
+                let stride = cluster.len().div_ceil(self.gpcd.max_points.max(2));
+                let pixels: Vec<usize> = cluster.iter().copied().step_by(stride).collect();
+                let normals = self.normals.estimate_at(&cloud, &pixels).map_err(err)?;
+                let points: Vec<Point3<f64>> = pixels
+                    .iter()
+                    .map(|&i| cloud.points()[i].cast::<f64>())
+                    .collect();
+                let colors: Vec<[u8; 3]> = match color {
+                    Some(img) => {
+                        let w = img.width() as usize;
+                        pixels
+                            .iter()
+                            .filter_map(|&i| img.get((i % w) as u32, (i / w) as u32))
+                            .collect()
+                    }
+                    None => Vec::new(),
+                };
+                Ok(gpcd(&points, &normals, &colors, &self.gpcd).to_vec())
+            })
+            .collect();
+        let features = features?;
+        let rows: Vec<&[f64]> = features.iter().map(Vec::as_slice).collect();
+        let scores = self.svm.decision_values(&rows)?;
+        Ok(clusters
+            .iter()
+            .zip(scores)
+            .filter(|(_, s)| *s >= self.min_score)
+            .map(|(c, _)| c.clone())
+            .collect())
+    }
+}
+
 /// Back-projection (Eq. 3), PCA normals, and repeated MSAC per cluster (Algorithm 1). Clusters
 /// run in parallel; each uses its own seed derived from the base seed and its index, so the
 /// result does not depend on the number of threads.
@@ -231,5 +294,35 @@ impl<'a> Stage<&'a [Vec<f64>], Vec<f64>> for ClassifierStage {
     fn run(&self, features: &'a [Vec<f64>]) -> Result<Vec<f64>, PipelineError> {
         let rows: Vec<&[f64]> = features.iter().map(Vec::as_slice).collect();
         Ok(self.svm.decision_values(&rows)?)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use pomona_consensus::WindowNormalParams;
+    use pomona_core::{DepthImage, PinholeCamera};
+
+    #[test]
+    fn the_screen_keeps_the_clusters_its_classifier_scores_high_enough() {
+        // A 40×40 tilted plane at about 1 m, cut into two clusters.
+        let cam = PinholeCamera::new(40, 40, 100.0, 100.0, 20.0, 20.0).unwrap();
+        let raw: Vec<u16> = (0..1600).map(|i| 1000 + (i % 40) as u16).collect();
+        let depth = DepthImage::from_u16(40, 40, &raw, 0.001).unwrap();
+        let frame = RgbdFrame::new(cam, depth, None).unwrap();
+        let clusters = vec![(0..800).collect::<Vec<usize>>(), (800..1600).collect()];
+        let screen = |score: f64| ProposalScreenStage {
+            normals: WindowNormalParams::default().check().unwrap(),
+            gpcd: GpcdParams {
+                max_points: 64,
+                ..GpcdParams::default()
+            },
+            use_color: false,
+            svm: SvmClassifier::constant(crate::GPCD_LEN, score),
+            min_score: -1.0,
+        };
+        assert_eq!(screen(-0.5).run((&frame, &clusters)).unwrap(), clusters);
+        assert_eq!(screen(-1.0).run((&frame, &clusters)).unwrap().len(), 2);
+        assert!(screen(-1.5).run((&frame, &clusters)).unwrap().is_empty());
     }
 }

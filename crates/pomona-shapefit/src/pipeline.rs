@@ -493,7 +493,6 @@ impl Pipeline for ShapeFitPipeline {
     }
 }
 
-/// One frame's colour counts (with colour) and annotated fruit, for the colour model and the
 /// The error for training data that gives nothing to learn from.
 fn not_enough(reason: String) -> PipelineError {
     PipelineError::NotEnoughTrainingData {
@@ -654,6 +653,7 @@ fn grid_search(
     Ok(search.model)
 }
 
+/// One frame's colour counts (with colour) and annotated fruit, for the colour model and the
 /// size prior.
 type FramePrior = (Option<ColorHistograms>, Vec<FruitTruth>);
 

@@ -16,8 +16,8 @@ use serde::{Deserialize, Serialize};
 
 use crate::negative_selection::{cap_negatives, hardest_negatives};
 use crate::stages::{
-    ClassifierStage, ColorMaskStage, DepthProposalStage, DescriptorStage, ProposalScreenStage,
-    RegionGrowingStage, ShapeStage,
+    BackProjectionStage, ClassifierStage, ColorMaskStage, DepthProposalStage, DescriptorStage,
+    ProposalScreenStage, RegionGrowingStage, ShapeStage,
 };
 use crate::{
     Candidate, CoaxialMergeParams, ColorBayes, ColorHistograms, ColorLut, GpcdParams, LabelRule,
@@ -369,14 +369,15 @@ impl Stages {
     ) -> Result<CandidateSet, PipelineError> {
         let keep = run_stage(mask, frame, t)?;
         let clusters = run_stage(&self.regions, (frame, keep.as_slice()), t)?;
-        let mut candidates = run_stage(&self.shapes, (frame, clusters.as_slice()), t)?;
+        let cloud = run_stage(&BackProjectionStage, frame, t)?;
+        let mut candidates = run_stage(&self.shapes, (&cloud, clusters.as_slice()), t)?;
         let first_proposal = candidates.len();
         if let Some(proposals) = proposals {
             let mut clusters = run_stage(proposals, (frame, keep.as_slice()), t)?;
             if let Some(screen) = &self.screen {
-                clusters = run_stage(screen, (frame, clusters.as_slice()), t)?;
+                clusters = run_stage(screen, (frame, &cloud, clusters.as_slice()), t)?;
             }
-            candidates.extend(run_stage(&self.shapes, (frame, clusters.as_slice()), t)?);
+            candidates.extend(run_stage(&self.shapes, (&cloud, clusters.as_slice()), t)?);
         }
         let features = run_stage(&self.descriptor, (frame, candidates.as_slice()), t)?;
         Ok(CandidateSet {

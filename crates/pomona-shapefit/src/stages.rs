@@ -127,23 +127,24 @@ pub struct ProposalScreenStage {
     pub min_score: f64,
 }
 
-impl<'a> Stage<(&'a RgbdFrame, &'a [Vec<usize>]), Vec<Vec<usize>>> for ProposalScreenStage {
+impl<'a> Stage<(&'a RgbdFrame, &'a PointCloud, &'a [Vec<usize>]), Vec<Vec<usize>>>
+    for ProposalScreenStage
+{
     fn name(&self) -> &'static str {
         "proposal-screen"
     }
 
     fn run(
         &self,
-        (frame, clusters): (&'a RgbdFrame, &'a [Vec<usize>]),
+        (frame, cloud, clusters): (&'a RgbdFrame, &'a PointCloud, &'a [Vec<usize>]),
     ) -> Result<Vec<Vec<usize>>, PipelineError> {
-        let cloud = frame.to_cloud();
         let color = if self.use_color { frame.color() } else { None };
         let features: Result<Vec<Vec<f64>>, PipelineError> = clusters
             .par_iter()
             .map(|cluster| {
                 let stride = cluster.len().div_ceil(self.gpcd.max_points.max(2));
                 let pixels: Vec<usize> = cluster.iter().copied().step_by(stride).collect();
-                let normals = self.normals.estimate_at(&cloud, &pixels).map_err(err)?;
+                let normals = self.normals.estimate_at(cloud, &pixels).map_err(err)?;
                 let points: Vec<Point3<f64>> = pixels
                     .iter()
                     .map(|&i| cloud.points()[i].cast::<f64>())
@@ -173,7 +174,21 @@ impl<'a> Stage<(&'a RgbdFrame, &'a [Vec<usize>]), Vec<Vec<usize>>> for ProposalS
     }
 }
 
-/// Back-projection (Eq. 3), PCA normals, and repeated MSAC per cluster (Algorithm 1). Clusters
+/// Back-projection of the frame to an organised point cloud (Eq. 3), once per frame for every
+/// stage that needs points.
+pub struct BackProjectionStage;
+
+impl<'a> Stage<&'a RgbdFrame, PointCloud> for BackProjectionStage {
+    fn name(&self) -> &'static str {
+        "back-projection"
+    }
+
+    fn run(&self, frame: &'a RgbdFrame) -> Result<PointCloud, PipelineError> {
+        Ok(frame.to_cloud())
+    }
+}
+
+/// PCA normals and repeated MSAC per cluster (Algorithm 1). Clusters
 /// run in parallel; each uses its own seed derived from the base seed and its index, so the
 /// result does not depend on the number of threads.
 pub struct ShapeStage {
@@ -224,20 +239,19 @@ impl ShapeStage {
     }
 }
 
-impl<'a> Stage<(&'a RgbdFrame, &'a [Vec<usize>]), Vec<Candidate>> for ShapeStage {
+impl<'a> Stage<(&'a PointCloud, &'a [Vec<usize>]), Vec<Candidate>> for ShapeStage {
     fn name(&self) -> &'static str {
         "msac-shapes"
     }
 
     fn run(
         &self,
-        (frame, clusters): (&'a RgbdFrame, &'a [Vec<usize>]),
+        (cloud, clusters): (&'a PointCloud, &'a [Vec<usize>]),
     ) -> Result<Vec<Candidate>, PipelineError> {
-        let cloud = frame.to_cloud();
         let per_cluster: Result<Vec<Vec<Candidate>>, PipelineError> = clusters
             .par_iter()
             .enumerate()
-            .map(|(k, c)| self.cluster_candidates(&cloud, k, c))
+            .map(|(k, c)| self.cluster_candidates(cloud, k, c))
             .collect();
         Ok(per_cluster?.into_iter().flatten().collect())
     }
@@ -321,8 +335,10 @@ mod tests {
             svm: SvmClassifier::constant(crate::GPCD_LEN, score),
             min_score: -1.0,
         };
-        assert_eq!(screen(-0.5).run((&frame, &clusters)).unwrap(), clusters);
-        assert_eq!(screen(-1.0).run((&frame, &clusters)).unwrap().len(), 2);
-        assert!(screen(-1.5).run((&frame, &clusters)).unwrap().is_empty());
+        let cloud = frame.to_cloud();
+        let run = |score: f64| screen(score).run((&frame, &cloud, &clusters)).unwrap();
+        assert_eq!(run(-0.5), clusters);
+        assert_eq!(run(-1.0).len(), 2);
+        assert!(run(-1.5).is_empty());
     }
 }

@@ -240,4 +240,31 @@ mod tests {
         let p: ShapeFitParams = serde_json::from_value(json).unwrap();
         assert_eq!(p.shapes.shapes, ShapeChoice::Cylinder);
     }
+
+    #[test]
+    fn older_files_keep_the_colour_path_alone_and_were_trained_without_mining() {
+        let fresh = ShapeFitParams::default();
+        assert!(fresh.depth_proposals.enabled);
+        assert_eq!(fresh.hard_negative_rounds, 1);
+        let mut json = serde_json::to_value(&fresh).unwrap();
+        let map = json.as_object_mut().unwrap();
+        for key in [
+            "depth_proposals",
+            "hard_negative_rounds",
+            "hard_negatives_per_positive",
+        ] {
+            assert!(map.remove(key).is_some(), "{key}");
+        }
+        let old: ShapeFitParams = serde_json::from_value(json).unwrap();
+        assert!(!old.depth_proposals.enabled);
+        assert_eq!(old.hard_negative_rounds, 0);
+        assert_eq!(old.hard_negatives_per_positive, 2.0);
+        // Everything else reads back as written.
+        let restored = ShapeFitParams {
+            depth_proposals: fresh.depth_proposals,
+            hard_negative_rounds: 1,
+            ..old
+        };
+        assert_eq!(restored, fresh);
+    }
 }

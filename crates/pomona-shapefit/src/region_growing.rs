@@ -95,33 +95,32 @@ pub fn grow_regions(
     }
     let min_pixels = params.min_pixels_for(fx_px);
     let step = params.max_step_m as f32;
-    let mut visited = vec![false; n];
-    let mut clusters = Vec::new();
+    // `fill[i]`: 0 while pixel i is unreached, else 1 + the number of the flood fill that
+    // reached it; `kept[f]`: the output index of flood fill f, if its cluster is kept. The kept
+    // clusters' pixels are then collected by one raster scan, already sorted.
+    let mut fill = vec![0u32; n];
+    let mut kept: Vec<Option<usize>> = Vec::new();
+    let mut sizes: Vec<usize> = Vec::new();
+    let mut cluster = Vec::new();
     let mut stack = Vec::new();
     for seed in 0..n {
-        if visited[seed] || !keep[seed] || !depth_m[seed].is_finite() {
+        if fill[seed] != 0 || !keep[seed] || !depth_m[seed].is_finite() {
             continue;
         }
-        visited[seed] = true;
-        let mut cluster = vec![seed];
+        let id = kept.len() as u32 + 1;
+        fill[seed] = id;
+        cluster.clear();
+        cluster.push(seed);
         stack.push(seed);
         while let Some(i) = stack.pop() {
-            let (u, v) = ((i % width) as isize, (i / width) as isize);
+            let (u, v) = (i % width, i / width);
             let d = depth_m[i];
-            for dv in -1..=1isize {
-                for du in -1..=1isize {
-                    let (nu, nv) = (u + du, v + dv);
-                    if (du, dv) == (0, 0)
-                        || nu < 0
-                        || nv < 0
-                        || nu >= width as isize
-                        || nv >= height as isize
-                    {
-                        continue;
-                    }
-                    let j = nv as usize * width + nu as usize;
-                    if !visited[j] && keep[j] && (depth_m[j] - d).abs() <= step {
-                        visited[j] = true;
+            // The 8-neighbourhood clipped to the image (i itself is already reached).
+            for nv in v.saturating_sub(1)..=(v + 1).min(height - 1) {
+                for nu in u.saturating_sub(1)..=(u + 1).min(width - 1) {
+                    let j = nv * width + nu;
+                    if fill[j] == 0 && keep[j] && (depth_m[j] - d).abs() <= step {
+                        fill[j] = id;
                         cluster.push(j);
                         stack.push(j);
                     }
@@ -135,9 +134,17 @@ pub fn grow_regions(
                     && cluster.len() >= area.min_pixels_at(fx_px, median_depth(depth_m, &cluster))
             }
         };
+        kept.push(big_enough.then_some(sizes.len()));
         if big_enough {
-            cluster.sort_unstable();
-            clusters.push(cluster);
+            sizes.push(cluster.len());
+        }
+    }
+    let mut clusters: Vec<Vec<usize>> = sizes.iter().map(|&s| Vec::with_capacity(s)).collect();
+    if !clusters.is_empty() {
+        for (i, &f) in fill.iter().enumerate() {
+            if let Some(k) = f.checked_sub(1).and_then(|f| kept[f as usize]) {
+                clusters[k].push(i);
+            }
         }
     }
     if params.rim_px > 0 {

@@ -1,6 +1,7 @@
-//! The five stages of the detector, each behind [`pomona_pipeline::Stage`] so it can be timed,
-//! benchmarked or replaced alone: colour mask → region growing (plus our depth proposals) → MSAC
-//! shapes → GPCD → SVM.
+//! The stages of the detector, each behind [`pomona_pipeline::Stage`] so it can be timed,
+//! benchmarked or replaced alone: seed 002's colour mask → region growing → back-projection →
+//! MSAC shapes → GPCD → SVM, and our depth proposals with their screen, which feed more clusters
+//! to the same MSAC stage.
 
 use pomona_consensus::nalgebra::Point3;
 use pomona_consensus::{OrientedPoint, ShapeExtractionParams, WindowNormals};

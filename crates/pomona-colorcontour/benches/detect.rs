@@ -1,0 +1,103 @@
+//! Color-contour end to end with the embedded default model on frames held in memory (fixed
+//! seeds), in a one-thread rayon pool; one iteration detects every frame of a set, so divide by
+//! three for a frame:
+//!
+//! * `wide d435`: three `wide` 640×480 D435 frames of mixed fruit (seed 611, never used for
+//!   training), the resolution seed 004's speed target is stated for;
+//! * `orchard kinect-v2`: three `orchard` frames of citrus trees in daylight (seed 612), the
+//!   domain the model is tested on but never trained on;
+//! * `real ecopom apple`: the first colour-only frame of `../shared/data/ecopom-apples-2d`
+//!   (D435i colour, 2D detection); skipped with a message when the data folder is absent (and a
+//!   failure with `POMONA_REQUIRE_DATA=1`).
+//!
+//! `cargo bench -p pomona-colorcontour --bench detect`
+
+#![allow(missing_docs)]
+
+use criterion::{criterion_group, criterion_main, Criterion};
+use pomona_colorcontour::ColorContourPipeline;
+use pomona_core::RgbdFrame;
+use pomona_io::Dataset;
+use pomona_learn::ModelFile;
+use pomona_pipeline::SyntheticFrames;
+use pomona_pipeline::{DatasetFrames, FrameSource, Pipeline, StageTimings};
+use pomona_synth::{
+    CameraPreset, Domain, FruitChoice, FruitKind, LightPreset, NoiseModel, SceneSpec,
+};
+
+fn load(frames: &dyn FrameSource) -> Vec<RgbdFrame> {
+    (0..frames.len())
+        .map(|i| frames.load(i).unwrap_or_else(|e| panic!("{e}")).frame)
+        .collect()
+}
+
+/// The first ecopom-apples-2d frame, when the data is there.
+fn real_apple_frame() -> Option<RgbdFrame> {
+    let root = pomona_test_support::shared_data(
+        "ecopom-apples-2d",
+        "pomona-colorcontour/benches/detect.rs",
+    )?;
+    let all = DatasetFrames::new(vec![Dataset::open(&root).unwrap_or_else(|e| panic!("{e}"))]);
+    Some(all.load(0).unwrap_or_else(|e| panic!("{e}")).frame)
+}
+
+fn detect(c: &mut Criterion) {
+    let pipeline = ColorContourPipeline::default();
+    let json = pipeline
+        .default_model()
+        .unwrap_or_else(|| panic!("no embedded model"));
+    let model = ModelFile::from_json(json, std::path::Path::new("default.json"), "color-contour")
+        .unwrap_or_else(|e| panic!("{e}"));
+    let detector = pipeline.load(&model).unwrap_or_else(|e| panic!("{e}"));
+    let orchard = SyntheticFrames {
+        spec: SceneSpec {
+            fruit: FruitChoice::Only(FruitKind::Orange),
+            camera: CameraPreset::KinectV2.camera(),
+            noise: NoiseModel::for_camera(CameraPreset::KinectV2),
+            domain: Domain::Orchard,
+            light: LightPreset::Day,
+            ..SceneSpec::default()
+        },
+        seed: 612,
+        first: 0,
+        count: 3,
+    };
+    let mut sets = vec![
+        (
+            "color-contour detect 3 wide d435 frames",
+            load(&SyntheticFrames::mixed_fruit(
+                Domain::Wide,
+                CameraPreset::D435,
+                0.2,
+                611,
+                3,
+            )),
+        ),
+        (
+            "color-contour detect 3 orchard kinect-v2 frames",
+            load(&orchard),
+        ),
+    ];
+    if let Some(frame) = real_apple_frame() {
+        sets.push(("color-contour detect real ecopom apple frame", vec![frame]));
+    }
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap_or_else(|e| panic!("{e}"));
+    for (name, frames) in &sets {
+        c.bench_function(name, |b| {
+            b.iter(|| {
+                one.install(|| {
+                    for frame in frames {
+                        let found = detector.detect(frame, &mut StageTimings::default());
+                        criterion::black_box(found.unwrap_or_else(|e| panic!("{e}")));
+                    }
+                })
+            })
+        });
+    }
+}
+
+criterion_group!(benches, detect);
+criterion_main!(benches);

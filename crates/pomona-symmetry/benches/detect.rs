@@ -2,7 +2,9 @@
 //! single-threaded (a one-thread rayon pool), per pipeline variant (`symmetry+pruning+cascade`
 //! is the default `symmetry` pipeline; without `+cascade` every box gets the symmetry search,
 //! as in seed 000), plus the symmetry-plane
-//! search on one box and the normal estimators (window vs kd-tree) on the whole frame.
+//! search on one box and the normal estimators (window vs kd-tree) on the whole frame; and the
+//! built-in `symmetry` and `viewer-pose` models on one `wide` frame from each camera (Kinect v2,
+//! D435, SR4000; mixed fruit, each camera's own depth noise, seeds 621–623, never trained on).
 //!
 //! `cargo bench -p pomona-symmetry --bench detect`
 #![allow(clippy::unwrap_used, clippy::expect_used, missing_docs)]
@@ -10,13 +12,14 @@
 use criterion::{criterion_group, criterion_main, Criterion};
 use pomona_consensus::{KnnNormalParams, WindowNormalParams};
 use pomona_core::nalgebra::Point3;
+use pomona_learn::ModelFile;
 use pomona_pipeline::{
     FrameSource, LabelledFrame, Pipeline, StageTimings, SyntheticFrames, TrainOptions,
 };
 use pomona_symmetry::{
     BoxDetector, FrameKind, StageParams, SymmetryPipeline, SymmetryPlaneSearch, ViewerPosePipeline,
 };
-use pomona_synth::{CameraPreset, NoiseModel, SceneSpec};
+use pomona_synth::{CameraPreset, Domain, NoiseModel, SceneSpec};
 
 fn frames(n: usize) -> Vec<LabelledFrame> {
     let spec = SceneSpec {
@@ -88,6 +91,40 @@ fn bench(c: &mut Criterion) {
                 })
             })
         });
+    }
+    group.finish();
+
+    let mut group = c.benchmark_group("builtin-wide-1-thread");
+    group.sample_size(10);
+    let cameras = [
+        ("kinect-v2", CameraPreset::KinectV2, 621),
+        ("d435", CameraPreset::D435, 622),
+        ("sr4000", CameraPreset::Sr4000, 623),
+    ];
+    let builtin: [Box<dyn Pipeline>; 2] = [
+        Box::new(SymmetryPipeline::default()),
+        Box::new(ViewerPosePipeline::default()),
+    ];
+    for pipeline in &builtin {
+        let json = pipeline.default_model().unwrap();
+        let path = std::path::Path::new("default.json");
+        let model = ModelFile::from_json(json, path, pipeline.name()).unwrap();
+        let detector = BoxDetector::from_model(pipeline.name(), &model).unwrap();
+        for (camera, preset, seed) in cameras {
+            let frame = SyntheticFrames::mixed_fruit(Domain::Wide, preset, 0.2, seed, 1)
+                .load(0)
+                .unwrap()
+                .frame;
+            group.bench_function(format!("{} {camera}", pipeline.name()), |b| {
+                b.iter(|| {
+                    one.install(|| {
+                        detector
+                            .detect_frame(&frame, &mut StageTimings::default())
+                            .unwrap()
+                    })
+                })
+            });
+        }
     }
     group.finish();
 

@@ -4,11 +4,12 @@
 //! Seed 002 clusters only the pixels its colour model calls fruit. On randomised worlds that is
 //! where most missed fruit are lost: unripe green peppers, guavas and apples put fewer than
 //! 20 % of their pixels through the mask, so they never become candidates, and no ranking
-//! can bring them back (AP equals the largest recall reached, docs/results.md §"Depth
-//! proposals"). Region growing on depth alone gives each of these fruit its own cluster, but
+//! can bring them back (AP equalled the largest recall reached, docs/results.md §"Depth
+//! proposals and hard-negative mining"). Region growing on depth alone gives each of these fruit its own cluster, but
 //! also about 170 clusters of leaves, stems and ground per frame; the classifier, trained on
 //! such candidates too (training always adds them), ranks them. Two cheap tests drop the
-//! clusters that cannot add a fruit before the shape fit pays for them:
+//! clusters that cannot add a fruit before the shape fit pays for them, and the detector's
+//! screen (`screen_min_score`, `crate::stages::ProposalScreenStage`) drops most of the rest:
 //!
 //! * **already seen**: at least `max_color_coverage` of the cluster's pixels passed the colour
 //!   mask, so the colour path clustered that surface already;
@@ -19,7 +20,7 @@
 //!   20–50 % of all clustered pixels; the lower limit drops leaf specks.
 //!
 //! A learned gate on cluster statistics (size, PCA extents, a least-squares sphere, colour) was
-//! measured too: at 98 % of the fruit clusters kept it still passed 60–70 % of the others, not
+//! measured too: at 98 % of the fruit clusters kept it still passed 55–75 % of the others, not
 //! worth a model.
 
 use serde::{Deserialize, Serialize};

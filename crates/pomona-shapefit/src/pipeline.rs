@@ -16,8 +16,8 @@ use serde::{Deserialize, Serialize};
 
 use crate::negative_selection::{cap_negatives, hardest_negatives};
 use crate::stages::{
-    BackProjectionStage, ClassifierStage, ColorMaskStage, DepthProposalStage, DescriptorStage,
-    ProposalScreenStage, RegionGrowingStage, ShapeStage,
+    pixel_colors, BackProjectionStage, ClassifierStage, ColorMaskStage, DepthProposalStage,
+    DescriptorStage, ProposalScreenStage, RegionGrowingStage, ShapeStage,
 };
 use crate::{
     Candidate, CoaxialMergeParams, ColorBayes, ColorHistograms, ColorLut, GpcdParams, LabelRule,
@@ -215,11 +215,8 @@ fn size_in_prior(shape: &Shape, params: &ShapeFitParams) -> bool {
 /// Mean colour posterior of the candidate's pixels, `None` without a colour model or image.
 fn mean_posterior(c: &Candidate, lut: Option<&ColorLut>, frame: &RgbdFrame) -> Option<f64> {
     let (lut, color) = (lut?, frame.color()?);
-    let w = color.width() as usize;
-    let values: Vec<f64> = c
-        .pixels
-        .iter()
-        .filter_map(|&i| color.get((i % w) as u32, (i / w) as u32))
+    let values: Vec<f64> = pixel_colors(Some(color), &c.pixels)
+        .into_iter()
         .map(|rgb| f64::from(lut.posterior(rgb)))
         .collect();
     (!values.is_empty()).then(|| values.iter().sum::<f64>() / values.len() as f64)

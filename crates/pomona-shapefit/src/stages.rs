@@ -5,7 +5,7 @@
 
 use pomona_consensus::nalgebra::Point3;
 use pomona_consensus::{OrientedPoint, ShapeExtractionParams, WindowNormals};
-use pomona_core::{PointCloud, RgbdFrame};
+use pomona_core::{ColorImage, PointCloud, RgbdFrame};
 use pomona_learn::SvmClassifier;
 use pomona_pipeline::{PipelineError, Stage};
 use rayon::prelude::*;
@@ -150,16 +150,7 @@ impl<'a> Stage<(&'a RgbdFrame, &'a PointCloud, &'a [Vec<usize>]), Vec<Vec<usize>
                     .iter()
                     .map(|&i| cloud.points()[i].cast::<f64>())
                     .collect();
-                let colors: Vec<[u8; 3]> = match color {
-                    Some(img) => {
-                        let w = img.width() as usize;
-                        pixels
-                            .iter()
-                            .filter_map(|&i| img.get((i % w) as u32, (i / w) as u32))
-                            .collect()
-                    }
-                    None => Vec::new(),
-                };
+                let colors = pixel_colors(color, &pixels);
                 Ok(gpcd(&points, &normals, &colors, &self.gpcd).to_vec())
             })
             .collect();
@@ -258,6 +249,18 @@ impl<'a> Stage<(&'a PointCloud, &'a [Vec<usize>]), Vec<Candidate>> for ShapeStag
     }
 }
 
+/// The colours of row-major `pixels` of `image` (none without an image).
+pub(crate) fn pixel_colors(image: Option<&ColorImage>, pixels: &[usize]) -> Vec<[u8; 3]> {
+    let Some(img) = image else {
+        return Vec::new();
+    };
+    let w = img.width() as usize;
+    pixels
+        .iter()
+        .filter_map(|&i| img.get((i % w) as u32, (i / w) as u32))
+        .collect()
+}
+
 /// The GPCD of every candidate (colour terms zero when `use_color` is off).
 pub struct DescriptorStage {
     /// Descriptor parameters.
@@ -279,16 +282,7 @@ impl<'a> Stage<(&'a RgbdFrame, &'a [Candidate]), Vec<Vec<f64>>> for DescriptorSt
         Ok(candidates
             .par_iter()
             .map(|c| {
-                let colors: Vec<[u8; 3]> = match color {
-                    Some(img) => {
-                        let w = img.width() as usize;
-                        c.pixels
-                            .iter()
-                            .filter_map(|&i| img.get((i % w) as u32, (i / w) as u32))
-                            .collect()
-                    }
-                    None => Vec::new(),
-                };
+                let colors = pixel_colors(color, &c.pixels);
                 gpcd(&c.points, &c.normals, &colors, &self.params).to_vec()
             })
             .collect())

@@ -56,6 +56,14 @@ pub enum HueStatistics {
     Circular,
 }
 
+impl GpcdParams {
+    /// The step through `n` points that leaves at most `max_points` of them (at least 2) to pair:
+    /// the subset the descriptor uses is every `stride`-th point from the first.
+    pub fn stride_for(&self, n: usize) -> usize {
+        n.div_ceil(self.max_points.max(2)).max(1)
+    }
+}
+
 impl Default for GpcdParams {
     fn default() -> Self {
         Self {
@@ -79,7 +87,7 @@ pub fn gpcd(
     if n < 2 {
         return out;
     }
-    let stride = n.div_ceil(params.max_points.max(2));
+    let stride = params.stride_for(n);
     // The strided subset as plain vectors, normals unwrapped once (not once per pair).
     let subset: Vec<(Vector3<f64>, Option<Vector3<f64>>)> = (0..n)
         .step_by(stride)

@@ -143,7 +143,7 @@ impl<'a> Stage<(&'a RgbdFrame, &'a PointCloud, &'a [Vec<usize>]), Vec<Vec<usize>
         let features: Result<Vec<Vec<f64>>, PipelineError> = clusters
             .par_iter()
             .map(|cluster| {
-                let stride = cluster.len().div_ceil(self.gpcd.max_points.max(2));
+                let stride = self.gpcd.stride_for(cluster.len());
                 let pixels: Vec<usize> = cluster.iter().copied().step_by(stride).collect();
                 let normals = self.normals.estimate_at(cloud, &pixels).map_err(err)?;
                 let points: Vec<Point3<f64>> = pixels

@@ -51,15 +51,19 @@
 //! pipeline-specific fields. [`Detector::detect`] applies no threshold; [`Detector::keeps`]
 //! applies the model's operating confidence, as `pomona detect` does by default.
 
+mod detection_folder;
 mod detector;
 mod error;
+mod failures_list;
 mod frame_record;
 mod model_info;
 mod param_override;
 mod registry;
 
+pub use detection_folder::{prepare_detection_folder, RunIdentity};
 pub use detector::{Detector, DetectorBuilder};
 pub use error::Error;
+pub use failures_list::{write_failures, FailedFrame};
 pub use model_info::{ModelInfo, ModelSource};
 pub use param_override::{apply_overrides, overrides_to_json, settable_keys, ParamOverride};
 pub use registry::{find_pipeline, pipeline, pipeline_names, pipelines};

@@ -45,6 +45,13 @@
 //! # }
 //! ```
 //!
+//! ## Writing the detection files of a run
+//! A batch runner (`pomona detect`, the Python package's Dask runner) writes one detection file
+//! per frame ([`Detector::frame_record`]) into a folder prepared by [`prepare_detection_folder`]
+//! (which refuses another run's files, removes temporaries a killed run left, and returns the
+//! frames already done, to skip on resume) and lists failed frames with [`write_failures`]; so
+//! every front end accepts, refuses and resumes the same folders.
+//!
 //! ## What a detection holds
 //! See [`Detection`]: `center_m` (camera frame: x right, y down, z forward), `score` (raw
 //! classifier value), `confidence` (calibrated, comparable across models), `diameter_m`, and

@@ -4,7 +4,8 @@
 //! Both calls return or write exactly what `pomona detect` writes: the same facade detector,
 //! the same confidence threshold rule ([`pomona::Detector::min_confidence_for`]) and the same
 //! detection file record ([`pomona::Detector::frame_record`]). Detection runs with the GIL
-//! released.
+//! released. `prepare_folder` applies `pomona detect`'s output-folder rules
+//! ([`pomona::prepare_detection_folder`]) for runners such as the Dask one.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;

@@ -7,7 +7,6 @@
 
 pub mod commands;
 pub mod detect_input;
-pub mod detection_folder;
 pub mod detection_run;
 pub mod error_line;
 pub mod exit_status;

@@ -7,7 +7,8 @@
 //! detections equal the CLI's files. Depth arrives as a numpy array and is converted once (to
 //! metres, `f32`); detection runs with the GIL released, so Python threads (and Dask) can detect
 //! in parallel. The Python side (`python/pomona/`) adds the module-level `detect`, type stubs and
-//! the Dask runner.
+//! the Dask runner, which prepares its output folder and writes its failures list through the
+//! facade's code as the CLI does.
 
 mod frame_arrays;
 mod json_bridge;
@@ -15,6 +16,7 @@ mod py_dataset;
 mod py_detector;
 mod py_error;
 mod py_evaluate;
+mod py_failures_list;
 mod py_synth;
 
 use pyo3::prelude::*;
@@ -29,6 +31,7 @@ fn _pomona(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(pipelines, m)?)?;
     m.add_function(wrap_pyfunction!(py_synth::synth, m)?)?;
     m.add_function(wrap_pyfunction!(py_evaluate::evaluate, m)?)?;
+    m.add_function(wrap_pyfunction!(py_failures_list::write_failures, m)?)?;
     Ok(())
 }
 

@@ -4,9 +4,10 @@
 //! Both calls return or write exactly what `pomona detect` writes: the same facade detector,
 //! the same confidence threshold rule ([`pomona::Detector::min_confidence_for`]) and the same
 //! detection file record ([`pomona::Detector::frame_record`]). Detection runs with the GIL
-//! released.
+//! released. `prepare_folder` applies `pomona detect`'s output-folder rules
+//! ([`pomona::prepare_detection_folder`]) for runners such as the Dask one.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use pomona::{ParamOverride, RgbdFrame};
@@ -29,6 +30,32 @@ pub struct Detector {
 }
 
 impl Detector {
+    /// The dataset folder `data`, checked to suit this detector's pipeline, and `frames` of it
+    /// (default: all), checked to exist.
+    fn open_dataset(
+        &self,
+        data: &Path,
+        frames: Option<Vec<String>>,
+    ) -> PyResult<(pomona::Dataset, Vec<String>)> {
+        let dataset = pomona::Dataset::open(data).map_err(to_py)?;
+        let pipeline = pomona::pipeline(self.inner.pipeline()).map_err(to_py)?;
+        if pipeline.needs_color() && !dataset.has_color() {
+            return Err(to_py(format!(
+                "{} has no colour images (no color/ folder), and pipeline `{}` needs colour",
+                data.display(),
+                self.inner.pipeline()
+            )));
+        }
+        let frames = frames.unwrap_or_else(|| dataset.frames().to_vec());
+        if let Some(unknown) = frames.iter().find(|f| !dataset.frames().contains(f)) {
+            return Err(to_py(format!(
+                "{} has no frame `{unknown}`",
+                data.display()
+            )));
+        }
+        Ok((dataset, frames))
+    }
+
     /// Detections of `frame` kept at `min_confidence`, as the detection file's list.
     fn detect_frame(
         &self,
@@ -140,22 +167,7 @@ impl Detector {
             .inner
             .min_confidence_for(min_confidence)
             .map_err(to_py)?;
-        let dataset = pomona::Dataset::open(&data).map_err(to_py)?;
-        let pipeline = pomona::pipeline(self.inner.pipeline()).map_err(to_py)?;
-        if pipeline.needs_color() && !dataset.has_color() {
-            return Err(to_py(format!(
-                "{} has no colour images (no color/ folder), and pipeline `{}` needs colour",
-                data.display(),
-                self.inner.pipeline()
-            )));
-        }
-        let frames = frames.unwrap_or_else(|| dataset.frames().to_vec());
-        if let Some(unknown) = frames.iter().find(|f| !dataset.frames().contains(f)) {
-            return Err(to_py(format!(
-                "{} has no frame `{unknown}`",
-                data.display()
-            )));
-        }
+        let (dataset, frames) = self.open_dataset(&data, frames)?;
         std::fs::create_dir_all(&out)
             .map_err(|e| to_py(format!("cannot create {}: {e}", out.display())))?;
         let results = py.detach(|| {
@@ -205,6 +217,36 @@ impl Detector {
             list.append(row)?;
         }
         Ok(list)
+    }
+
+    /// Prepares the output folder ``out`` for writing detection files of ``frames`` of the
+    /// dataset folder ``data`` (default: all) at ``min_confidence``, with the rules of
+    /// ``pomona detect``: creates the folder, removes the ``.pomona-*.partial`` temporaries a
+    /// killed run left, and checks the existing ``<frame>.json`` files of those frames.
+    ///
+    /// Returns the frames whose detection file this detector would write unchanged (same
+    /// pipeline, model, overrides and threshold), sorted: skip them to resume a run, or write
+    /// them again.
+    ///
+    /// Raises ``PomonaError`` naming the file for a ``<frame>.json`` that is not a detection
+    /// file or was made by another pipeline, model or threshold (two runs never mix in one
+    /// folder), and for the errors of ``write_detections`` (dataset, frames, threshold).
+    #[pyo3(signature = (data, out, frames = None, *, min_confidence = None))]
+    fn prepare_folder(
+        &self,
+        data: PathBuf,
+        out: PathBuf,
+        frames: Option<Vec<String>>,
+        min_confidence: Option<f64>,
+    ) -> PyResult<Vec<String>> {
+        let threshold = self
+            .inner
+            .min_confidence_for(min_confidence)
+            .map_err(to_py)?;
+        let (dataset, frames) = self.open_dataset(&data, frames)?;
+        let identity = self.inner.run_identity(dataset.has_color(), threshold);
+        let done = pomona::prepare_detection_folder(&out, &frames, &identity).map_err(to_py)?;
+        Ok(done.into_iter().collect())
     }
 
     fn __repr__(&self) -> String {

@@ -1,12 +1,16 @@
 //! The one error type of the facade: everything that can go wrong between "I have a model name
-//! or file" and "here are the detections", each variant naming the file, model or frame at fault.
+//! or file" and "here are the detections", and in the output folder a detection run writes
+//! them to, each variant naming the file, model or frame at fault.
+
+use std::path::PathBuf;
 
 use pomona_io::DatasetError;
 use pomona_learn::ModelFileError;
 use pomona_pipeline::PipelineError;
 
-/// Why a detector could not be built or could not detect. Every message names the pipeline,
-/// model file, parameter or dataset file at fault.
+/// Why a detector could not be built or could not detect, or a detection run's output folder
+/// cannot be used. Every message names the pipeline, model file, parameter, dataset or output
+/// file at fault.
 ///
 /// ```
 /// match pomona::Detector::builtin("apple-finder") {
@@ -89,7 +93,44 @@ pub enum Error {
     /// A frame built in memory is inconsistent (image sizes, camera parameters).
     #[error("invalid frame: {0}")]
     Frame(#[from] pomona_core::CoreError),
-    /// A dataset or one of its frames could not be read.
+    /// A dataset or one of its frames could not be read, or an output file written.
     #[error(transparent)]
     Dataset(#[from] DatasetError),
+    /// A detection run's output folder, or a file in it, cannot be created, listed, read or
+    /// removed.
+    #[error("cannot {action} {}: {source}", path.display())]
+    OutputIo {
+        /// What was tried, e.g. "create output folder" or "remove stale".
+        action: &'static str,
+        /// The folder or file.
+        path: PathBuf,
+        /// The operating system's reason.
+        source: std::io::Error,
+    },
+    /// A `<frame>.json` in a detection run's output folder is not a detection file, so the run
+    /// will not overwrite it.
+    #[error(
+        "{} is not a detection file; refusing to overwrite it (move it or choose another \
+         output folder): {source}",
+        path.display()
+    )]
+    NotDetectionFile {
+        /// The file.
+        path: PathBuf,
+        /// Why it does not parse as one.
+        source: serde_json::Error,
+    },
+    /// A detection run's output folder holds a detection file made by another pipeline, model
+    /// or confidence threshold, so the two runs would mix.
+    #[error(
+        "{} holds detections made with {difference}; refusing to mix two runs in one folder \
+         (choose another output folder or remove the old files)",
+        path.display()
+    )]
+    ForeignDetections {
+        /// The file.
+        path: PathBuf,
+        /// What differs, e.g. "pipeline `symmetry` (this run: `shape-fit`)".
+        difference: String,
+    },
 }

@@ -45,21 +45,32 @@
 //! # }
 //! ```
 //!
+//! ## Writing the detection files of a run
+//! A batch runner (`pomona detect`, the Python package's Dask runner) writes one detection file
+//! per frame ([`Detector::frame_record`]) into a folder prepared by [`prepare_detection_folder`]
+//! (which refuses another run's files, removes temporaries a killed run left, and returns the
+//! frames already done, to skip on resume) and lists failed frames with [`write_failures`]; so
+//! every front end accepts, refuses and resumes the same folders.
+//!
 //! ## What a detection holds
 //! See [`Detection`]: `center_m` (camera frame: x right, y down, z forward), `score` (raw
 //! classifier value), `confidence` (calibrated, comparable across models), `diameter_m`, and
 //! pipeline-specific fields. [`Detector::detect`] applies no threshold; [`Detector::keeps`]
 //! applies the model's operating confidence, as `pomona detect` does by default.
 
+mod detection_folder;
 mod detector;
 mod error;
+mod failures_list;
 mod frame_record;
 mod model_info;
 mod param_override;
 mod registry;
 
+pub use detection_folder::{prepare_detection_folder, RunIdentity};
 pub use detector::{Detector, DetectorBuilder};
 pub use error::Error;
+pub use failures_list::{write_failures, FailedFrame};
 pub use model_info::{ModelInfo, ModelSource};
 pub use param_override::{apply_overrides, overrides_to_json, settable_keys, ParamOverride};
 pub use registry::{find_pipeline, pipeline, pipeline_names, pipelines};

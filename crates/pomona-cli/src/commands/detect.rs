@@ -8,8 +8,9 @@
 //! A frame that fails (unreadable image, detection error) does not stop the run: every other
 //! frame is written, the failures go to `<out>/failures.json`, and the command exits with status
 //! 3 (see `exit_status.rs`). `--resume` continues a killed run: frames whose file it would write
-//! unchanged are skipped (see `detection_folder.rs`). `--shard I/N` processes task `I`'s share of
-//! the frames, for array jobs on a cluster (see `shard.rs`).
+//! unchanged are skipped; a folder of another run is refused (the folder rules are the facade's,
+//! `pomona::prepare_detection_folder`, shared with the Python Dask runner). `--shard I/N`
+//! processes task `I`'s share of the frames, for array jobs on a cluster (see `shard.rs`).
 //!
 //! `--rrd OUT.rrd` also writes a rerun recording of the run (see `recording.rs`), recorded from
 //! the worker threads as frames finish and closed before the command returns.
@@ -18,7 +19,6 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use crate::detect_input::DetectInput;
-use crate::detection_folder::{prepare, write_failures, FailedFrame, RunIdentity};
 use crate::detection_run::{detect_frames, load_detector, min_confidence, thread_pool};
 use crate::error_line::error_line;
 use crate::exit_status::FramesFailed;
@@ -28,7 +28,10 @@ use crate::recording::{self, RunDescription};
 use crate::robot_recording::RecordingArgs;
 use crate::shard::Shard;
 use anyhow::{bail, Context, Result};
-use pomona::{Detection, ModelSource, Pipeline, StageTimings};
+use pomona::{
+    prepare_detection_folder, write_failures, Detection, FailedFrame, ModelSource, Pipeline,
+    RunIdentity, StageTimings,
+};
 
 /// Arguments of `pomona detect`.
 #[derive(Debug, Clone, clap::Args)]
@@ -164,11 +167,7 @@ pub fn run_with(pipelines: &[Box<dyn Pipeline>], args: &DetectArgs) -> Result<De
     let min_confidence = min_confidence(&detector, args.min_confidence)?;
     let model = detector.model_for_color(input.has_color()).clone();
     let name = pipeline.name();
-    let identity = RunIdentity {
-        pipeline: name,
-        model_id: &model.id,
-        min_confidence,
-    };
+    let identity = detector.run_identity(input.has_color(), min_confidence);
     let (frames, resumed) = frames_to_run(args, &input, &identity)?;
     let description = RunDescription {
         pipeline: name,
@@ -269,7 +268,7 @@ pub fn run_with(pipelines: &[Box<dyn Pipeline>], args: &DetectArgs) -> Result<De
 
 /// The frames this run detects on: the shard's share of the dataset (all of it without
 /// `--shard`), less those `--resume` finds done; and how many it skipped for that. Checks the
-/// output folder first (see `detection_folder.rs`).
+/// output folder first ([`pomona::prepare_detection_folder`]).
 ///
 /// # Errors
 /// An output folder holding detections made differently, or one that cannot be read.
@@ -282,7 +281,7 @@ fn frames_to_run(
         Some(shard) => shard.select(input.frames()).into_iter().cloned().collect(),
         None => input.frames().to_vec(),
     };
-    let already = prepare(&args.out, &mine, identity)?;
+    let already = prepare_detection_folder(&args.out, &mine, identity)?;
     let total = mine.len();
     let frames: Vec<String> = mine
         .into_iter()

@@ -12,7 +12,9 @@ a calibrated confidence: exactly what ``pomona detect`` writes, computed by the 
 
 ``Detector`` loads a model once for many frames, ``Dataset`` reads dataset folders into arrays,
 ``synth`` renders synthetic datasets, ``evaluate`` scores detection files, and
-``pomona.dask.detect_dataset`` spreads a dataset over a Dask cluster.
+``pomona.dask.detect_dataset`` spreads a dataset over a Dask cluster (resuming a killed run with
+``resume=True``). ``Detector.prepare_folder`` and ``write_failures`` apply the output-folder
+rules of ``pomona detect`` for a runner of your own.
 """
 
 from __future__ import annotations
@@ -28,6 +30,7 @@ from pomona._pomona import (
     evaluate,
     pipelines,
     synth,
+    write_failures,
 )
 
 __all__ = [
@@ -39,6 +42,7 @@ __all__ = [
     "evaluate",
     "pipelines",
     "synth",
+    "write_failures",
 ]
 
 

@@ -46,6 +46,14 @@ class Detector:
         *,
         min_confidence: Optional[float] = None,
     ) -> list[dict[str, Any]]: ...
+    def prepare_folder(
+        self,
+        data: StrPath,
+        out: StrPath,
+        frames: Optional[Sequence[str]] = None,
+        *,
+        min_confidence: Optional[float] = None,
+    ) -> list[str]: ...
 
 class Dataset:
     """A dataset folder read frame by frame into numpy arrays."""
@@ -87,3 +95,9 @@ def evaluate(
     threshold: Optional[float] = None,
     image_2d: bool = False,
 ) -> dict[str, Any]: ...
+def write_failures(
+    out: StrPath,
+    pipeline: str,
+    frames_tried: int,
+    failures: Sequence[Mapping[str, Any]],
+) -> Optional[Path]: ...

@@ -11,6 +11,14 @@ process loads the detector once and keeps it for every later batch, reads its fr
 dataset folder and writes their detection files itself. Detection runs in Rust with the GIL
 released, so a worker with several threads detects on several cores.
 
+The output folder follows the rules of ``pomona detect``, checked on the client by the same Rust
+code before any task is sent: a folder holding detection files of another pipeline, model,
+parameter override or ``min_confidence``, or a ``<frame>.json`` that is not a detection file, is
+refused (``PomonaError`` naming the file); temporaries a killed run left are removed; with
+``resume=True`` the frames whose file this run would write are skipped, so a killed run (or a
+lost worker) is continued rather than redone. ``failures.json`` is written by the same Rust code
+as the CLI's.
+
 Needs the ``dask`` extra: ``pip install "./crates/pomona-py[dask]"``.
 """
 
@@ -19,16 +27,13 @@ from __future__ import annotations
 import json
 import math
 import os
-import tempfile
 import time
 from pathlib import Path
 from typing import Any, Mapping, Optional, Sequence, Union
 
-from pomona._pomona import Dataset, Detector
+from pomona._pomona import Dataset, Detector, write_failures
 
 __all__ = ["detect_dataset"]
-
-FAILURES_FILE = "failures.json"
 
 # Detectors loaded in this (worker) process, by what identifies them.
 _DETECTORS: dict[tuple[str, Optional[str], str], Detector] = {}
@@ -64,26 +69,6 @@ def _batches(frames: Sequence[str], size: int) -> list[list[str]]:
     return [list(frames[i : i + size]) for i in range(0, len(frames), size)]
 
 
-def _write_failures(out: Path, pipeline: str, tried: int, failures: list[dict]) -> Optional[Path]:
-    """Writes ``failures.json`` as ``pomona detect`` does (atomically), or removes an old one."""
-    path = out / FAILURES_FILE
-    if not failures:
-        if path.is_file():
-            path.unlink()
-        return None
-    listed = [{"frame": f["frame"], "file": f["file"], "error": f["error"]} for f in failures]
-    text = json.dumps(
-        {"pipeline": pipeline, "frames_tried": tried, "failures": listed},
-        indent=2,
-        ensure_ascii=False,
-    )
-    fd, partial = tempfile.mkstemp(prefix=".pomona-", suffix=".partial", dir=out)
-    with os.fdopen(fd, "w", encoding="utf-8") as f:
-        f.write(text)
-    os.replace(partial, path)
-    return path
-
-
 def detect_dataset(
     data: Union[str, os.PathLike],
     out: Union[str, os.PathLike],
@@ -94,6 +79,7 @@ def detect_dataset(
     min_confidence: Optional[float] = None,
     set: Optional[Mapping[str, Any]] = None,
     batch_size: Optional[int] = None,
+    resume: bool = False,
 ) -> dict[str, Any]:
     """Detects fruit in every frame of the dataset folder ``data`` on a Dask cluster and writes
     ``<out>/<frame>.json`` for each: the same bytes as
@@ -103,13 +89,21 @@ def detect_dataset(
     ``set`` (stage-parameter overrides, as ``--set``) as for ``Detector``. ``batch_size``: frames
     per task (default: about four tasks per worker thread, at most 64 frames each).
 
+    ``out`` may hold files of an earlier run. Detection files made by this same run (pipeline,
+    model, ``set`` and ``min_confidence``) are written again, or skipped with ``resume=True`` (as
+    ``pomona detect --resume``: continue a killed run); stale ``.pomona-*.partial`` temporaries
+    are removed.
+
     A frame that fails does not stop the run: it is listed in ``<out>/failures.json`` (as by
     ``pomona detect``) and in the summary. Returns a summary dict: ``frames`` (written),
-    ``failed``, ``failures`` (dicts with ``frame``, ``file``, ``error``), ``detections``,
-    ``seconds`` (wall time), ``frames_per_second``, ``workers`` and ``threads`` (of the cluster).
+    ``skipped`` (already done, with ``resume=True``), ``failed``, ``failures`` (dicts with
+    ``frame``, ``file``, ``error``), ``detections``, ``seconds`` (wall time),
+    ``frames_per_second``, ``workers`` and ``threads`` (of the cluster).
 
-    Raises ``PomonaError`` for an unreadable dataset or a model the detector cannot load (checked
-    here, before any task is sent).
+    Raises ``PomonaError``, before any task is sent, for an unreadable dataset, a model the
+    detector cannot load, a bad threshold, and an output folder holding a ``<frame>.json`` that
+    is not a detection file or was made by another pipeline, model or threshold (the message
+    names the file and what differs).
     """
     from dask.distributed import get_client
 
@@ -117,11 +111,13 @@ def detect_dataset(
     data_dir, out_dir = Path(data).resolve(), Path(out).resolve()
     model_path = None if model is None else str(Path(model).resolve())
     overrides = json.dumps(dict(set or {}), sort_keys=True)
-    # Fail early, on the client, for a bad dataset, pipeline, model or threshold.
+    # Fail early, on the client, for a bad dataset, pipeline, model, threshold or output folder.
     detector = _worker_detector(pipeline, model_path, overrides)
-    frames = Dataset(data_dir).frames
-    out_dir.mkdir(parents=True, exist_ok=True)
-    detector.write_detections(data_dir, out_dir, [], min_confidence=min_confidence)
+    everything = Dataset(data_dir).frames
+    # (`set` is the overrides argument here, hence frozenset.)
+    done = frozenset(detector.prepare_folder(data_dir, out_dir, min_confidence=min_confidence))
+    frames = [f for f in everything if not (resume and f in done)]
+    skipped = len(everything) - len(frames)
 
     threads = sum(client.nthreads().values()) or 1
     size = batch_size or max(1, min(64, math.ceil(len(frames) / (4 * threads))))
@@ -140,15 +136,16 @@ def detect_dataset(
     rows = [row for batch in client.gather(futures) for row in batch]
     seconds = time.perf_counter() - started
     failures = [r for r in rows if r["error"] is not None]
-    _write_failures(out_dir, pipeline, len(rows), failures)
-    done = len(rows) - len(failures)
+    write_failures(out_dir, pipeline, len(rows), failures)
+    written = len(rows) - len(failures)
     return {
-        "frames": done,
+        "frames": written,
+        "skipped": skipped,
         "failed": len(failures),
         "failures": [{k: r[k] for k in ("frame", "file", "error")} for r in failures],
         "detections": sum(r["detections"] for r in rows),
         "seconds": seconds,
-        "frames_per_second": done / seconds if seconds > 0 else math.inf,
+        "frames_per_second": written / seconds if seconds > 0 else math.inf,
         "workers": len(client.nthreads()),
         "threads": threads,
     }

@@ -40,6 +40,23 @@ fn bench(c: &mut Criterion) {
     group.bench_function("predict_10000x100", |b| {
         b.iter(|| model.decision_function(candidates.samples()).unwrap())
     });
+    // The detectors' scoring path: a frame's candidates against a symmetry-sized model (168
+    // features, about 2000 support vectors), one thread.
+    let wide = data(4000, 168, 3);
+    let model = params.fit(&wide).unwrap();
+    let boxes = data(500, 168, 4);
+    let rows: Vec<&[f64]> = (0..boxes.len()).map(|i| boxes.samples().row(i)).collect();
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    group.bench_function(
+        format!(
+            "decision_values_500x168_{}sv_1_thread",
+            model.svm.n_support()
+        ),
+        |b| b.iter(|| pool.install(|| model.decision_values(&rows).unwrap())),
+    );
     group.finish();
 }
 

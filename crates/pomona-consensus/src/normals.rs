@@ -167,21 +167,26 @@ impl KnnNormals {
         let tree = KdTree::build(points);
         let k = self.params.k;
         let vp = self.params.viewpoint;
-        points
+        // Queries in tree order: consecutive points share leaves, so the search stays in cache.
+        let order: Vec<(usize, Point3<f64>)> = tree.tree_order().collect();
+        let in_tree_order: Vec<Option<Unit<Vector3<f64>>>> = order
             .par_iter()
             .map_init(
                 || (Vec::with_capacity(k), Vec::with_capacity(k)),
-                |(found, neigh), p| {
-                    if !p.iter().all(|c| c.is_finite()) {
-                        return None;
-                    }
+                |(found, neigh), (_, p)| {
                     tree.nearest_k(p, k, found);
                     neigh.clear();
                     neigh.extend(found.iter().map(|&(i, _)| points[i]));
                     pca_normal(neigh).map(|n| orient_towards(n, p, &vp))
                 },
             )
-            .collect()
+            .collect();
+        // Non-finite points are not in the tree and keep `None`.
+        let mut out = vec![None; points.len()];
+        for ((i, _), n) in order.iter().zip(in_tree_order) {
+            out[*i] = n;
+        }
+        out
     }
 
     /// Normals for any cloud (its grid is ignored), `NaN` where undefined, ready for

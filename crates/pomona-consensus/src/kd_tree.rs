@@ -90,12 +90,31 @@ impl KdTree {
     /// Replaces `out` by the `k` points nearest to `query` as `(index, squared distance)`,
     /// nearest first (fewer when the tree is smaller). Ties are broken by index.
     pub fn nearest_k(&self, query: &Point3<f64>, k: usize, out: &mut Vec<(usize, f64)>) {
+        self.nearest_k_within(query, k, f64::INFINITY, out);
+    }
+
+    /// As [`KdTree::nearest_k`], among the points within squared distance `bound2` of `query`
+    /// only: fewer than `k` when fewer lie that close. A caller that knows a bound on the k-th
+    /// distance (for example from a nearby query's result, by the triangle inequality) gets the
+    /// same answer as `nearest_k` sooner, and knows the bound was too small when fewer than `k`
+    /// come back.
+    pub fn nearest_k_within(
+        &self,
+        query: &Point3<f64>,
+        k: usize,
+        bound2: f64,
+        out: &mut Vec<(usize, f64)>,
+    ) {
         out.clear();
-        if k == 0 || self.entries.is_empty() {
+        if k == 0 || self.entries.is_empty() || bound2.is_nan() {
             return;
         }
         let q = [query.x, query.y, query.z];
-        let mut search = KnnSearch { k, best: out };
+        let mut search = KnnSearch {
+            k,
+            worst: bound2,
+            best: out,
+        };
         let mut off = [0.0; 3];
         self.knn_node(0, &q, &mut off, &mut search);
     }
@@ -117,7 +136,7 @@ impl KdTree {
         if n.left == LEAF {
             for e in &self.entries[n.lo as usize..n.hi as usize] {
                 let d2 = dist2(&e.p, q);
-                if d2 <= s.worst() {
+                if d2 <= s.worst {
                     s.offer(e.id, d2);
                 }
             }
@@ -135,7 +154,7 @@ impl KdTree {
         // |diff|, along the other axes what the enclosing cell already had.
         let saved = off[dim];
         off[dim] = diff * diff;
-        if off[0] + off[1] + off[2] <= s.worst() {
+        if off[0] + off[1] + off[2] <= s.worst {
             self.knn_node(far, q, off, s);
         }
         off[dim] = saved;
@@ -224,42 +243,42 @@ fn build_node(entries: &mut [Entry], offset: usize, nodes: &mut Vec<Node>) -> u3
     index
 }
 
-/// The current k best, sorted ascending by (distance, index).
+/// The current k best, sorted ascending by (distance, index), and the squared distance a point
+/// must not exceed to enter: the bound until `k` are found, then the k-th distance.
 struct KnnSearch<'a> {
     k: usize,
+    worst: f64,
     best: &'a mut Vec<(usize, f64)>,
 }
 
 impl KnnSearch<'_> {
-    #[inline]
-    fn worst(&self) -> f64 {
-        if self.best.len() < self.k {
-            f64::INFINITY
-        } else {
-            self.best.last().map_or(f64::INFINITY, |b| b.1)
-        }
-    }
-
+    /// Offers a point with `d2 <= self.worst`.
     #[inline]
     fn offer(&mut self, id: usize, d2: f64) {
         let key = (d2, id);
-        if self.best.len() >= self.k {
-            match self.best.last() {
+        let best = &mut *self.best;
+        if best.len() >= self.k {
+            match best.last() {
                 Some(&(lid, ld)) if key >= (ld, lid) => return,
                 _ => {}
             }
-            self.best.pop();
+            best.pop();
         }
         // Insertion from the back: new candidates are usually among the farther ones.
-        let mut pos = self.best.len();
+        best.push((id, d2));
+        let mut pos = best.len() - 1;
         while pos > 0 {
-            let (bid, bd) = self.best[pos - 1];
+            let (bid, bd) = best[pos - 1];
             if (bd, bid) < key {
                 break;
             }
+            best[pos] = best[pos - 1];
             pos -= 1;
         }
-        self.best.insert(pos, (id, d2));
+        best[pos] = (id, d2);
+        if best.len() >= self.k {
+            self.worst = best[best.len() - 1].1;
+        }
     }
 }
 

@@ -167,14 +167,27 @@ impl KnnNormals {
         let tree = KdTree::build(points);
         let k = self.params.k;
         let vp = self.params.viewpoint;
-        // Queries in tree order: consecutive points share leaves, so the search stays in cache.
+        // Queries in tree order: consecutive points share leaves, so the search stays in cache,
+        // and the previous query's k-th distance bounds this one's (triangle inequality), which
+        // prunes the search from the start. The bound only saves work: a bound that proves too
+        // small (fewer than k found, e.g. from rounding) is dropped and the query repeated, so
+        // the result is always exactly `nearest_k`'s.
         let order: Vec<(usize, Point3<f64>)> = tree.tree_order().collect();
+        let wanted = k.min(tree.len());
         let in_tree_order: Vec<Option<Unit<Vector3<f64>>>> = order
             .par_iter()
             .map_init(
-                || (Vec::with_capacity(k), Vec::with_capacity(k)),
-                |(found, neigh), (_, p)| {
-                    tree.nearest_k(p, k, found);
+                || (Vec::with_capacity(k), Vec::with_capacity(k), None),
+                |(found, neigh, previous): &mut (_, _, Option<(Point3<f64>, f64)>), (_, p)| {
+                    let bound2 = previous.map_or(f64::INFINITY, |(q, kth): (Point3<f64>, f64)| {
+                        let r = (p - q).norm() + kth;
+                        r * r * (1.0 + 1e-9)
+                    });
+                    tree.nearest_k_within(p, k, bound2, found);
+                    if found.len() < wanted {
+                        tree.nearest_k(p, k, found);
+                    }
+                    *previous = found.last().map(|&(_, d2)| (*p, d2.sqrt()));
                     neigh.clear();
                     neigh.extend(found.iter().map(|&(i, _)| points[i]));
                     pca_normal(neigh).map(|n| orient_towards(n, p, &vp))

@@ -255,11 +255,12 @@ impl KnnSearch<'_> {
     /// Offers a point with `d2 <= self.worst`.
     #[inline]
     fn offer(&mut self, id: usize, d2: f64) {
-        let key = (d2, id);
+        // (d2, id) < (bd, bid), written out: distances rarely tie.
+        let before = |&(bid, bd): &(usize, f64)| d2 < bd || (d2 == bd && id < bid);
         let best = &mut *self.best;
         if best.len() >= self.k {
             match best.last() {
-                Some(&(lid, ld)) if key >= (ld, lid) => return,
+                Some(last) if !before(last) => return,
                 _ => {}
             }
             best.pop();
@@ -267,11 +268,7 @@ impl KnnSearch<'_> {
         // Insertion from the back: new candidates are usually among the farther ones.
         best.push((id, d2));
         let mut pos = best.len() - 1;
-        while pos > 0 {
-            let (bid, bd) = best[pos - 1];
-            if (bd, bid) < key {
-                break;
-            }
+        while pos > 0 && before(&best[pos - 1]) {
             best[pos] = best[pos - 1];
             pos -= 1;
         }

@@ -506,6 +506,68 @@ mod tests {
         );
     }
 
+    /// The kNN normals are exactly those of brute-force neighbours (sorted by squared distance,
+    /// then index) fed to `pca_normal`: the tree, its query order and the bounds from the
+    /// previous query change only the speed. Also independent of the thread count.
+    #[test]
+    fn knn_normals_equal_brute_force_neighbourhoods_on_any_thread_count() {
+        let mut rng = ChaCha8Rng::seed_from_u64(21);
+        // A noisy wavy surface with sparse clutter, duplicates and an invalid point.
+        let mut pts: Vec<Point3<f64>> = (0..1500)
+            .map(|_| {
+                let (x, y): (f64, f64) = (rng.gen_range(-0.2..0.2), rng.gen_range(-0.2..0.2));
+                Point3::new(
+                    x,
+                    y,
+                    1.0 + 0.03 * (x * 30.0).sin() + rng.gen_range(-0.001..0.001),
+                )
+            })
+            .collect();
+        pts.extend((0..60).map(|_| {
+            Point3::new(
+                rng.gen_range(-0.3..0.3),
+                rng.gen_range(-0.3..0.3),
+                rng.gen_range(0.6..1.4),
+            )
+        }));
+        pts[7] = pts[8];
+        pts[9] = Point3::new(f64::NAN, 0.0, 1.0);
+        let params = KnnNormalParams {
+            k: 20,
+            viewpoint: Point3::new(0.1, 0.0, 0.0),
+        };
+        let knn = params.check().unwrap();
+        let one = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap();
+        let two = rayon::ThreadPoolBuilder::new()
+            .num_threads(2)
+            .build()
+            .unwrap();
+        let got = one.install(|| knn.estimate(&pts));
+        assert_eq!(got, two.install(|| knn.estimate(&pts)));
+        for (i, p) in pts.iter().enumerate() {
+            if !p.x.is_finite() {
+                assert!(got[i].is_none());
+                continue;
+            }
+            let mut all: Vec<(f64, usize)> = pts
+                .iter()
+                .enumerate()
+                .filter(|(_, q)| q.x.is_finite())
+                .map(|(j, q)| {
+                    let (dx, dy, dz) = (q.x - p.x, q.y - p.y, q.z - p.z);
+                    (dx * dx + dy * dy + dz * dz, j)
+                })
+                .collect();
+            all.sort_by(|a, b| a.partial_cmp(b).unwrap());
+            let neigh: Vec<Point3<f64>> = all[..params.k].iter().map(|&(_, j)| pts[j]).collect();
+            let want = pca_normal(&neigh).map(|n| orient_towards(n, p, &params.viewpoint));
+            assert_eq!(got[i], want, "point {i}");
+        }
+    }
+
     #[test]
     fn unorganised_noisy_plane_normals_face_the_viewpoint() {
         let mut rng = ChaCha8Rng::seed_from_u64(5);

@@ -11,8 +11,10 @@ frame as Pomona's example `open3d_blocks` (crates/pomona-consensus/examples/open
   ransac_plane      segment_plane(threshold, 3, iterations, probability=1.0: no early stop)
   voxel_downsample  voxel_down_sample(voxel)
 
-Each block: one warm-up run, then the median of --repeats timed runs. Prints a Markdown table
-(Pomona ms, Open3D ms, ratio Pomona / Open3D, output sizes of both) and writes it to --out.
+`measure`: each block gets one warm-up run, then the median of --repeats timed runs, printed as
+JSON. `table`: the median over rounds (the shell script alternates the two sides, so both see
+the same machine load) of each side's medians, as a Markdown table (Pomona ms, Open3D ms, ratio
+Pomona / Open3D, output sizes of both), also written to --out.
 """
 
 import argparse
@@ -22,7 +24,11 @@ import sys
 import time
 
 import numpy as np
-import open3d as o3d
+
+try:
+    import open3d as o3d
+except ImportError:  # `table` needs only the standard library
+    o3d = None
 
 BLOCKS = [
     ("back_projection", "back-projection (depth → cloud)"),
@@ -99,41 +105,61 @@ def open3d_side(args):
     }
 
 
-def main():
-    p = argparse.ArgumentParser()
-    p.add_argument("--data", required=True)
-    p.add_argument("--frame", required=True)
-    p.add_argument("--label", required=True)
-    p.add_argument("--pomona-json", required=True)
-    p.add_argument("--out", required=True)
-    p.add_argument("--repeats", type=int, default=15)
-    p.add_argument("--k", type=int, default=30)
-    p.add_argument("--plane-iterations", type=int, default=1000)
-    p.add_argument("--plane-threshold-m", type=float, default=0.01)
-    p.add_argument("--voxel-m", type=float, default=0.01)
-    args = p.parse_args()
-    pomona = json.load(open(args.pomona_json))
-    o3d.utility.set_verbosity_level(o3d.utility.VerbosityLevel.Error)
-    other = open3d_side(args)
+def table(args):
+    """Median over rounds of each side's per-round medians, as a Markdown table."""
+    sides = {}
+    for side, files in (("pomona", args.pomona_json), ("open3d", args.open3d_json)):
+        runs = [json.load(open(f)) for f in files]
+        sides[side] = {
+            "runs": runs,
+            "ms": {k: statistics.median(r["ms"][k] for r in runs) for k, _ in BLOCKS},
+        }
+    pomona, other = sides["pomona"]["runs"][0], sides["open3d"]["runs"][0]
+    rounds = len(sides["pomona"]["runs"])
     lines = [
-        f"**{args.label}** (`{args.data}`, frame `{args.frame}`): "
-        f"{pomona['points']} valid points; median of {args.repeats} runs; "
+        f"**{args.label}** (frame `{args.frame}`): {pomona['points']} valid points; "
+        f"median over {rounds} alternating rounds of each side's median of {args.repeats} runs; "
         f"Pomona: {pomona['threads']}; Open3D: {other['threads']}",
         "",
         "| block | Pomona ms | Open3D ms | ratio Pomona / Open3D | output Pomona / Open3D |",
         "|---|---:|---:|---:|---|",
     ]
     for key, name in BLOCKS:
-        a, b = pomona["ms"][key], other["ms"][key]
+        a, b = sides["pomona"]["ms"][key], sides["open3d"]["ms"][key]
         lines.append(
             f"| {name} | {a:.1f} | {b:.1f} | {a / b:.2f} | "
             f"{pomona['outputs'][key]} / {other['outputs'][key]} |"
         )
-    table = "\n".join(lines) + "\n"
-    print(table)
+    text = "\n".join(lines) + "\n"
+    print(text)
     with open(args.out, "w") as f:
-        f.write(table)
-        f.write("\n<!-- raw: " + json.dumps({"pomona": pomona, "open3d": other}) + " -->\n")
+        f.write(text)
+
+
+def main():
+    p = argparse.ArgumentParser()
+    sub = p.add_subparsers(dest="mode", required=True)
+    m = sub.add_parser("measure", help="time Open3D's blocks once, print JSON")
+    m.add_argument("--data", required=True)
+    m.add_argument("--frame", required=True)
+    m.add_argument("--repeats", type=int, default=15)
+    m.add_argument("--k", type=int, default=30)
+    m.add_argument("--plane-iterations", type=int, default=1000)
+    m.add_argument("--plane-threshold-m", type=float, default=0.01)
+    m.add_argument("--voxel-m", type=float, default=0.01)
+    t = sub.add_parser("table", help="combine both sides' JSON files into a table")
+    t.add_argument("--label", required=True)
+    t.add_argument("--frame", required=True)
+    t.add_argument("--repeats", type=int, required=True)
+    t.add_argument("--pomona-json", nargs="+", required=True)
+    t.add_argument("--open3d-json", nargs="+", required=True)
+    t.add_argument("--out", required=True)
+    args = p.parse_args()
+    if args.mode == "table":
+        table(args)
+        return
+    o3d.utility.set_verbosity_level(o3d.utility.VerbosityLevel.Error)
+    print(json.dumps(open3d_side(args), indent=1))
 
 
 if __name__ == "__main__":

@@ -10,12 +10,15 @@
 # with a message otherwise). Installs Open3D from PyPI into a venv under the cargo target folder
 # (with `libusb-package`, which provides the libusb-1.0 that Open3D's wheel links against).
 # Threads: Pomona runs inside a one-thread rayon pool (and RAYON_NUM_THREADS=1), Open3D under
-# OMP_NUM_THREADS=1. REPEATS=N (default 15) sets the runs per block (median reported).
+# OMP_NUM_THREADS=1. The two sides alternate ROUNDS times (default 3), so both see the same machine
+# load; each round times every block REPEATS times (default 15) after a warm-up, and the table
+# gives the median over rounds of those medians.
 # Prints Markdown tables and writes them to OUT/table.md.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 OUT=${1:-/tmp/pomona-open3d-blocks}
 REPEATS=${REPEATS:-15}
+ROUNDS=${ROUNDS:-3}
 TARGET=${CARGO_TARGET_DIR:-$(pwd)/target}
 VENV="$TARGET/open3d-venv"
 mkdir -p "$OUT"
@@ -53,12 +56,20 @@ i=0
 for f in "${FRAMES[@]}"; do
   IFS='|' read -r label data frame <<< "$f"
   i=$((i + 1))
-  RAYON_NUM_THREADS=1 "$BLOCKS" --data "$data" --frame "$frame" --repeats "$REPEATS" \
-    > "$OUT/pomona-$i.json"
-  LD_LIBRARY_PATH="$USB_DIR${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}" OMP_NUM_THREADS=1 \
-    "$VENV/bin/python" scripts/open3d_blocks.py --data "$data" --frame "$frame" \
-    --label "$label" --pomona-json "$OUT/pomona-$i.json" --out "$OUT/table-$i.md" \
-    --repeats "$REPEATS"
+  POMONA_RUNS=()
+  OPEN3D_RUNS=()
+  for r in $(seq 1 "$ROUNDS"); do
+    RAYON_NUM_THREADS=1 "$BLOCKS" --data "$data" --frame "$frame" --repeats "$REPEATS" \
+      > "$OUT/pomona-$i-$r.json"
+    LD_LIBRARY_PATH="$USB_DIR${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}" OMP_NUM_THREADS=1 \
+      "$VENV/bin/python" scripts/open3d_blocks.py measure --data "$data" --frame "$frame" \
+      --repeats "$REPEATS" > "$OUT/open3d-$i-$r.json"
+    POMONA_RUNS+=("$OUT/pomona-$i-$r.json")
+    OPEN3D_RUNS+=("$OUT/open3d-$i-$r.json")
+  done
+  "$VENV/bin/python" scripts/open3d_blocks.py table --label "$label" --frame "$frame" \
+    --repeats "$REPEATS" --pomona-json "${POMONA_RUNS[@]}" --open3d-json "${OPEN3D_RUNS[@]}" \
+    --out "$OUT/table-$i.md"
   cat "$OUT/table-$i.md" >> "$OUT/table.md"
 done
 echo "load while timing: $(uptime)" | tee -a "$OUT/table.md"

@@ -10,8 +10,9 @@
 //! * a query keeps, per axis, its distance to the cell it is visiting, so a far child is skipped
 //!   when the whole cell (not just its splitting plane) is farther than the current k-th
 //!   neighbour (the incremental distance of Arya & Mount, as in nanoflann, which Open3D uses);
-//! * the k best are a small array kept sorted by `(squared distance, index)`, reused across
-//!   queries: no allocation per query;
+//! * candidates for the k best are appended to the caller's reused vector and cut back to the k
+//!   smallest (linear-time selection) whenever 2k have gathered: O(1) amortised per candidate,
+//!   no allocation per query, one sort of k at the end;
 //! * [`KdTree::tree_order`] lists the points in tree order (spatially coherent), so
 //!   consecutive queries touch the same leaves — how `KnnNormals` queries every point.
 //!
@@ -117,6 +118,7 @@ impl KdTree {
         };
         let mut off = [0.0; 3];
         self.knn_node(0, &q, &mut off, &mut search);
+        search.finish();
     }
 
     /// Replaces `out` by every point within `radius` of `query` as `(index, squared distance)`,
@@ -243,8 +245,20 @@ fn build_node(entries: &mut [Entry], offset: usize, nodes: &mut Vec<Node>) -> u3
     index
 }
 
-/// The current k best, sorted ascending by (distance, index), and the squared distance a point
-/// must not exceed to enter: the bound until `k` are found, then the k-th distance.
+/// Orders candidates by squared distance, then index: for the non-negative, non-NaN squared
+/// distances here the IEEE bit pattern orders like the value, so the key is one integer: the bits, then the index.
+#[inline]
+fn distance_then_index(c: &(usize, f64)) -> u128 {
+    (u128::from(c.1.to_bits()) << 64) | c.0 as u128
+}
+
+/// The candidates for the k best, and the squared distance a point must not exceed to enter:
+/// the bound until `k` are known, then the k-th distance.
+///
+/// Candidates are appended unsorted; when `2k` have gathered, the k smallest are selected
+/// (linear time) and the rest dropped, which tightens `worst`. Each offer thus costs O(1)
+/// amortised instead of an insertion into a sorted list, and [`KnnSearch::finish`] sorts only
+/// the k survivors.
 struct KnnSearch<'a> {
     k: usize,
     worst: f64,
@@ -255,27 +269,28 @@ impl KnnSearch<'_> {
     /// Offers a point with `d2 <= self.worst`.
     #[inline]
     fn offer(&mut self, id: usize, d2: f64) {
-        // (d2, id) < (bd, bid), written out: distances rarely tie.
-        let before = |&(bid, bd): &(usize, f64)| d2 < bd || (d2 == bd && id < bid);
-        let best = &mut *self.best;
-        if best.len() >= self.k {
-            match best.last() {
-                Some(last) if !before(last) => return,
-                _ => {}
-            }
-            best.pop();
+        self.best.push((id, d2));
+        if self.best.len() >= 2 * self.k {
+            self.keep_k();
         }
-        // Insertion from the back: new candidates are usually among the farther ones.
-        best.push((id, d2));
-        let mut pos = best.len() - 1;
-        while pos > 0 && before(&best[pos - 1]) {
-            best[pos] = best[pos - 1];
-            pos -= 1;
+    }
+
+    /// Keeps the k smallest candidates (unordered); the k-th becomes the bound.
+    fn keep_k(&mut self) {
+        let k = self.k;
+        if self.best.len() > k {
+            self.best
+                .select_nth_unstable_by_key(k - 1, distance_then_index);
+            self.best.truncate(k);
+            // After the selection the k-th smallest sits last.
+            self.worst = self.best[k - 1].1;
         }
-        best[pos] = (id, d2);
-        if best.len() >= self.k {
-            self.worst = best[best.len() - 1].1;
-        }
+    }
+
+    /// The k best, nearest first.
+    fn finish(mut self) {
+        self.keep_k();
+        self.best.sort_unstable_by_key(distance_then_index);
     }
 }
 

@@ -86,7 +86,8 @@ def open3d_side(args):
     finite = np.isfinite(np.asarray(with_normals.normals)).all(axis=1)
     return {
         "side": "open3d",
-        "threads": "OMP_NUM_THREADS=1 (OpenMP), open3d " + o3d.__version__,
+        "threads": "o3d.utility.set_max_threads(1) (oneTBB) and OMP_NUM_THREADS=1, open3d "
+        + o3d.__version__,
         "points": len(pcd.points),
         "ms": {
             "back_projection": bp,
@@ -159,6 +160,11 @@ def main():
         table(args)
         return
     o3d.utility.set_verbosity_level(o3d.utility.VerbosityLevel.Error)
+    # Open3D 0.20 parallelises with oneTBB, which ignores OMP_NUM_THREADS (the machine's core
+    # count is used otherwise: normals and RANSAC ran on two threads here).
+    o3d.utility.set_max_threads(1)
+    if o3d.utility.get_max_threads() != 1:
+        sys.exit("could not limit Open3D to one thread")
     print(json.dumps(open3d_side(args), indent=1))
 
 

@@ -9,11 +9,12 @@
 # Azure Kinect orchard frame ../shared/data/ak-apples/121804 when that folder is present (skipped
 # with a message otherwise). Installs Open3D from PyPI into a venv under the cargo target folder
 # (with `libusb-package`, which provides the libusb-1.0 that Open3D's wheel links against).
-# Threads: Pomona runs inside a one-thread rayon pool (and RAYON_NUM_THREADS=1), Open3D under
-# OMP_NUM_THREADS=1. The two sides alternate ROUNDS times (default 3), so both see the same machine
+# Threads: Pomona runs inside a one-thread rayon pool (and RAYON_NUM_THREADS=1), Open3D after
+# o3d.utility.set_max_threads(1) (its oneTBB ignores OMP_NUM_THREADS; set as well). The two sides alternate ROUNDS times (default 3), so both see the same machine
 # load; each round times every block REPEATS times (default 15) after a warm-up, and the table
 # gives the median over rounds of those medians.
-# Prints Markdown tables and writes them to OUT/table.md.
+# POMONA_BLOCKS=/path/to/open3d_blocks times that build of Pomona's example instead (e.g. an older
+# commit's, for a before/after table). Prints Markdown tables and writes them to OUT/table.md.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 OUT=${1:-/tmp/pomona-open3d-blocks}
@@ -37,7 +38,7 @@ ln -sf "$("$VENV/bin/python" -c 'import libusb_package, pathlib; print(pathlib.P
 
 cargo build --release -q -p pomona-cli -p pomona-consensus --example open3d_blocks
 POMONA="$TARGET/release/pomona"
-BLOCKS="$TARGET/release/examples/open3d_blocks"
+BLOCKS=${POMONA_BLOCKS:-$TARGET/release/examples/open3d_blocks}
 
 SYNTH="$OUT/synth-kinect-v2-wide"
 if [ ! -f "$SYNTH/depth/000000.png" ]; then

@@ -2,8 +2,8 @@
 //!
 //! Robust geometric fitting for the `shape-fit` detector (seed 002, "MSAC-based shape
 //! detection"): generic sample-consensus traits, MSAC and RANSAC loops, sphere and cylinder
-//! estimators with fruit-size priors, repeated extraction of several shapes from one cluster
-//! (Algorithm 1), and the PCA normals the cylinder estimator needs.
+//! estimators with fruit-size priors, a plane estimator, repeated extraction of several shapes
+//! from one cluster (Algorithm 1), and the PCA normals the cylinder estimator needs.
 //!
 //! The design follows rust-cv's `sample-consensus` and kornia-rs's RANSAC: algorithms are
 //! separate from data. A [`Model`] measures residuals, an [`Estimator`] builds models from minimal
@@ -53,6 +53,7 @@ mod kd_tree;
 mod msac;
 pub mod normals;
 mod oriented_point;
+mod plane;
 mod ransac;
 mod sampler;
 mod sphere;
@@ -69,6 +70,7 @@ pub use kd_tree::KdTree;
 pub use msac::{Acceptance, CostFunction, Msac, MsacParams};
 pub use normals::{KnnNormalParams, KnnNormals, WindowNormalParams, WindowNormals};
 pub use oriented_point::{OrientedPoint, Positioned};
+pub use plane::{Plane, PlaneEstimator};
 pub use ransac::{Ransac, RansacParams};
 pub use sampler::{Sampler, UniformSampler};
 pub use sphere::{Sphere, SphereEstimator, SphereEstimatorParams};

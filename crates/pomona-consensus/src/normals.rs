@@ -167,21 +167,39 @@ impl KnnNormals {
         let tree = KdTree::build(points);
         let k = self.params.k;
         let vp = self.params.viewpoint;
-        points
+        // Queries in tree order: consecutive points share leaves, so the search stays in cache,
+        // and the previous query's k-th distance bounds this one's (triangle inequality), which
+        // prunes the search from the start. The bound only saves work: a bound that proves too
+        // small (fewer than k found, e.g. from rounding) is dropped and the query repeated, so
+        // the result is always exactly `nearest_k`'s.
+        let order: Vec<(usize, Point3<f64>)> = tree.tree_order().collect();
+        let wanted = k.min(tree.len());
+        let in_tree_order: Vec<Option<Unit<Vector3<f64>>>> = order
             .par_iter()
             .map_init(
-                || (Vec::with_capacity(k), Vec::with_capacity(k)),
-                |(found, neigh), p| {
-                    if !p.iter().all(|c| c.is_finite()) {
-                        return None;
+                || (Vec::with_capacity(k), Vec::with_capacity(k), None),
+                |(found, neigh, previous): &mut (_, _, Option<(Point3<f64>, f64)>), (_, p)| {
+                    let bound2 = previous.map_or(f64::INFINITY, |(q, kth): (Point3<f64>, f64)| {
+                        let r = (p - q).norm() + kth;
+                        r * r * (1.0 + 1e-9)
+                    });
+                    tree.nearest_k_within(p, k, bound2, found);
+                    if found.len() < wanted {
+                        tree.nearest_k(p, k, found);
                     }
-                    tree.nearest_k(p, k, found);
+                    *previous = found.last().map(|&(_, d2)| (*p, d2.sqrt()));
                     neigh.clear();
                     neigh.extend(found.iter().map(|&(i, _)| points[i]));
                     pca_normal(neigh).map(|n| orient_towards(n, p, &vp))
                 },
             )
-            .collect()
+            .collect();
+        // Non-finite points are not in the tree and keep `None`.
+        let mut out = vec![None; points.len()];
+        for ((i, _), n) in order.iter().zip(in_tree_order) {
+            out[*i] = n;
+        }
+        out
     }
 
     /// Normals for any cloud (its grid is ignored), `NaN` where undefined, ready for
@@ -486,6 +504,68 @@ mod tests {
         assert!(
             smallest_eigenvector(&Matrix3::from_diagonal(&Vector3::new(1.0, 0.0, 0.0))).is_none()
         );
+    }
+
+    /// The kNN normals are exactly those of brute-force neighbours (sorted by squared distance,
+    /// then index) fed to `pca_normal`: the tree, its query order and the bounds from the
+    /// previous query change only the speed. Also independent of the thread count.
+    #[test]
+    fn knn_normals_equal_brute_force_neighbourhoods_on_any_thread_count() {
+        let mut rng = ChaCha8Rng::seed_from_u64(21);
+        // A noisy wavy surface with sparse clutter, duplicates and an invalid point.
+        let mut pts: Vec<Point3<f64>> = (0..1500)
+            .map(|_| {
+                let (x, y): (f64, f64) = (rng.gen_range(-0.2..0.2), rng.gen_range(-0.2..0.2));
+                Point3::new(
+                    x,
+                    y,
+                    1.0 + 0.03 * (x * 30.0).sin() + rng.gen_range(-0.001..0.001),
+                )
+            })
+            .collect();
+        pts.extend((0..60).map(|_| {
+            Point3::new(
+                rng.gen_range(-0.3..0.3),
+                rng.gen_range(-0.3..0.3),
+                rng.gen_range(0.6..1.4),
+            )
+        }));
+        pts[7] = pts[8];
+        pts[9] = Point3::new(f64::NAN, 0.0, 1.0);
+        let params = KnnNormalParams {
+            k: 20,
+            viewpoint: Point3::new(0.1, 0.0, 0.0),
+        };
+        let knn = params.check().unwrap();
+        let one = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap();
+        let two = rayon::ThreadPoolBuilder::new()
+            .num_threads(2)
+            .build()
+            .unwrap();
+        let got = one.install(|| knn.estimate(&pts));
+        assert_eq!(got, two.install(|| knn.estimate(&pts)));
+        for (i, p) in pts.iter().enumerate() {
+            if !p.x.is_finite() {
+                assert!(got[i].is_none());
+                continue;
+            }
+            let mut all: Vec<(f64, usize)> = pts
+                .iter()
+                .enumerate()
+                .filter(|(_, q)| q.x.is_finite())
+                .map(|(j, q)| {
+                    let (dx, dy, dz) = (q.x - p.x, q.y - p.y, q.z - p.z);
+                    (dx * dx + dy * dy + dz * dz, j)
+                })
+                .collect();
+            all.sort_by(|a, b| a.partial_cmp(b).unwrap());
+            let neigh: Vec<Point3<f64>> = all[..params.k].iter().map(|&(_, j)| pts[j]).collect();
+            let want = pca_normal(&neigh).map(|n| orient_towards(n, p, &params.viewpoint));
+            assert_eq!(got[i], want, "point {i}");
+        }
     }
 
     #[test]

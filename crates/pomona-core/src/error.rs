@@ -48,4 +48,12 @@ pub enum CoreError {
     /// A bounding box whose corners are out of order or not finite.
     #[error("bounding box [{0}, {1}, {2}, {3}] must be finite with xmin <= xmax and ymin <= ymax")]
     InvalidBox(f64, f64, f64, f64),
+    /// A voxel side that is not finite and positive, or too small for the cloud.
+    #[error("voxel size {voxel_m} m {reason}")]
+    InvalidVoxelSize {
+        /// The offending side, metres.
+        voxel_m: f64,
+        /// What is wrong with it.
+        reason: &'static str,
+    },
 }

@@ -6,7 +6,8 @@
 //!
 //! This crate has no I/O and no algorithms beyond the geometry that *defines* the types
 //! (back-projection and projection) and the colour space the detectors share (RGB → HSV and
-//! circular hue statistics, [`rgb_to_hsv`]). Reading files lives in `pomona-io`; detectors live above it.
+//! circular hue statistics, [`rgb_to_hsv`]), plus the one cloud reduction every stage may want
+//! ([`voxel_downsample`]). Reading files lives in `pomona-io`; detectors live above it.
 //! Keeping the bottom layer small means every algorithm crate can depend on it without pulling in
 //! image codecs or file formats.
 //!
@@ -29,6 +30,7 @@ mod instance_mask;
 mod pixel_box;
 mod radial_distortion;
 mod truth;
+mod voxel_grid;
 
 pub use camera::PinholeCamera;
 pub use cloud::{CloudLayout, PointCloud};
@@ -43,6 +45,7 @@ pub use instance_mask::InstanceMask;
 pub use pixel_box::PixelBox;
 pub use radial_distortion::{RadialDistortion, UNDISTORT_ITERATIONS};
 pub use truth::{FrameTruth, FruitTruth};
+pub use voxel_grid::voxel_downsample;
 
 /// Re-exported so downstream crates name the same nalgebra version.
 pub use nalgebra;

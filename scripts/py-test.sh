@@ -21,8 +21,8 @@ pip=("$venv/bin/python" -m pip install --quiet --disable-pip-version-check)
 "${pip[@]}" --force-reinstall --no-deps "./crates/pomona-py"
 
 if [ -z "${POMONA_BIN:-}" ]; then
-  # The test profile (target/debug): what `cargo test` built already.
+  # The test profile (target/debug, or $CARGO_TARGET_DIR/debug): what `cargo test` built already.
   cargo build --locked --profile test -p pomona-cli --bin pomona
-  export POMONA_BIN="$PWD/target/debug/pomona"
+  export POMONA_BIN="${CARGO_TARGET_DIR:-$PWD/target}/debug/pomona"
 fi
 exec "$venv/bin/python" -m pytest crates/pomona-py/tests "$@"

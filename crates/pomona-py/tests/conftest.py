@@ -30,12 +30,16 @@ def kinect(tmp_path_factory: pytest.TempPathFactory) -> pomona.Dataset:
 
 @pytest.fixture(scope="session")
 def pomona_bin() -> Path:
-    """The ``pomona`` binary: ``$POMONA_BIN``, else the workspace's release or debug build.
-    ``scripts/test.sh`` builds it first and sets ``POMONA_BIN``, so in CI this never skips."""
+    """The ``pomona`` binary: ``$POMONA_BIN``, else the workspace's release or debug build (in
+    ``$CARGO_TARGET_DIR`` when set). ``scripts/test.sh`` builds it first and sets ``POMONA_BIN``,
+    so in CI this never skips."""
     given = os.environ.get("POMONA_BIN")
+    target = Path(os.environ.get("CARGO_TARGET_DIR") or REPO / "target")
+    if not target.is_absolute():
+        target = REPO / target
     candidates = [Path(given)] if given else [
-        REPO / "target" / "release" / "pomona",
-        REPO / "target" / "debug" / "pomona",
+        target / "release" / "pomona",
+        target / "debug" / "pomona",
     ]
     for path in candidates:
         if path.is_file():

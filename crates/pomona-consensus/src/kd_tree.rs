@@ -21,6 +21,8 @@
 
 use nalgebra::Point3;
 
+use crate::Positioned;
+
 /// Ranges this small are scanned instead of split further.
 const LEAF_SIZE: usize = 12;
 
@@ -59,7 +61,7 @@ impl KdTree {
         let mut entries: Vec<Entry> = points
             .iter()
             .enumerate()
-            .filter(|(_, p)| p.iter().all(|c| c.is_finite()))
+            .filter(|(_, p)| p.has_finite_position())
             .map(|(id, p)| Entry {
                 p: [p.x, p.y, p.z],
                 id,
@@ -117,7 +119,7 @@ impl KdTree {
             best: out,
         };
         let mut off = [0.0; 3];
-        self.knn_node(0, &q, &mut off, &mut search);
+        self.visit(0, &q, &mut off, &mut search);
         search.finish();
     }
 
@@ -130,16 +132,24 @@ impl KdTree {
         }
         let q = [query.x, query.y, query.z];
         let mut off = [0.0; 3];
-        self.radius_node(0, &q, radius * radius, &mut off, out);
+        let mut search = RadiusSearch {
+            r2: radius * radius,
+            found: out,
+        };
+        self.visit(0, &q, &mut off, &mut search);
     }
 
-    fn knn_node(&self, node: u32, q: &[f64; 3], off: &mut [f64; 3], s: &mut KnnSearch<'_>) {
+    /// Visits every point of the subtree of `node` that lies within the visitor's current bound,
+    /// nearer child first. `off` holds, per axis, the squared distance from `q` to the cell being
+    /// visited, so a far child is skipped when its whole cell (not just its splitting plane) lies
+    /// beyond the bound.
+    fn visit<V: Visitor>(&self, node: u32, q: &[f64; 3], off: &mut [f64; 3], v: &mut V) {
         let n = &self.nodes[node as usize];
         if n.left == LEAF {
             for e in &self.entries[n.lo as usize..n.hi as usize] {
                 let d2 = dist2(&e.p, q);
-                if d2 <= s.worst {
-                    s.offer(e.id, d2);
+                if d2 <= v.bound() {
+                    v.accept(e.id, d2);
                 }
             }
             return;
@@ -151,49 +161,42 @@ impl KdTree {
         } else {
             (n.right, n.left)
         };
-        self.knn_node(near, q, off, s);
+        self.visit(near, q, off, v);
         // The far cell lies beyond the splitting plane: its distance along `dim` is at least
         // |diff|, along the other axes what the enclosing cell already had.
         let saved = off[dim];
         off[dim] = diff * diff;
-        if off[0] + off[1] + off[2] <= s.worst {
-            self.knn_node(far, q, off, s);
+        if off[0] + off[1] + off[2] <= v.bound() {
+            self.visit(far, q, off, v);
         }
         off[dim] = saved;
     }
+}
 
-    fn radius_node(
-        &self,
-        node: u32,
-        q: &[f64; 3],
-        r2: f64,
-        off: &mut [f64; 3],
-        out: &mut Vec<(usize, f64)>,
-    ) {
-        let n = &self.nodes[node as usize];
-        if n.left == LEAF {
-            for e in &self.entries[n.lo as usize..n.hi as usize] {
-                let d2 = dist2(&e.p, q);
-                if d2 <= r2 {
-                    out.push((e.id, d2));
-                }
-            }
-            return;
-        }
-        let dim = n.dim as usize;
-        let diff = q[dim] - n.split;
-        let (near, far) = if diff < 0.0 {
-            (n.left, n.right)
-        } else {
-            (n.right, n.left)
-        };
-        self.radius_node(near, q, r2, off, out);
-        let saved = off[dim];
-        off[dim] = diff * diff;
-        if off[0] + off[1] + off[2] <= r2 {
-            self.radius_node(far, q, r2, off, out);
-        }
-        off[dim] = saved;
+/// What a tree walk does with the points it reaches: [`KnnSearch`] (the bound shrinks as better
+/// points arrive) and [`RadiusSearch`] (a fixed bound).
+trait Visitor {
+    /// Points (and cells) with a larger squared distance are not visited.
+    fn bound(&self) -> f64;
+    /// A point with squared distance `d2 <= self.bound()`.
+    fn accept(&mut self, id: usize, d2: f64);
+}
+
+/// Every point within a fixed squared distance.
+struct RadiusSearch<'a> {
+    r2: f64,
+    found: &'a mut Vec<(usize, f64)>,
+}
+
+impl Visitor for RadiusSearch<'_> {
+    #[inline]
+    fn bound(&self) -> f64 {
+        self.r2
+    }
+
+    #[inline]
+    fn accept(&mut self, id: usize, d2: f64) {
+        self.found.push((id, d2));
     }
 }
 
@@ -265,16 +268,22 @@ struct KnnSearch<'a> {
     best: &'a mut Vec<(usize, f64)>,
 }
 
-impl KnnSearch<'_> {
-    /// Offers a point with `d2 <= self.worst`.
+impl Visitor for KnnSearch<'_> {
     #[inline]
-    fn offer(&mut self, id: usize, d2: f64) {
+    fn bound(&self) -> f64 {
+        self.worst
+    }
+
+    #[inline]
+    fn accept(&mut self, id: usize, d2: f64) {
         self.best.push((id, d2));
         if self.best.len() >= 2 * self.k {
             self.keep_k();
         }
     }
+}
 
+impl KnnSearch<'_> {
     /// Keeps the k smallest candidates (unordered); the k-th becomes the bound.
     fn keep_k(&mut self) {
         let k = self.k;

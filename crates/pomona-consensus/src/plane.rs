@@ -55,7 +55,7 @@ impl Plane {
     pub fn fit_least_squares(points: &[Point3<f64>]) -> Option<Self> {
         let pts: Vec<Point3<f64>> = points
             .iter()
-            .filter(|p| p.iter().all(|c| c.is_finite()))
+            .filter(|p| p.has_finite_position())
             .copied()
             .collect();
         let normal = pca_normal(&pts)?;

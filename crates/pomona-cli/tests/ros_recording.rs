@@ -97,7 +97,14 @@ fn record_bag(root: &Path, bag: &Path, compression: BagCompression) -> Vec<u64> 
 
 /// `extract` of `recording` gives the dataset at `data`'s pixels and camera (depth in `unit`),
 /// and `detect --recording` its detections, with stamps and frame ids.
-fn check_recording(dir: &Path, data: &Path, recording: &Path, stamps: &[u64], unit: f64, case: &str) {
+fn check_recording(
+    dir: &Path,
+    data: &Path,
+    recording: &Path,
+    stamps: &[u64],
+    unit: f64,
+    case: &str,
+) {
     let source = Dataset::open(data).unwrap();
 
     // extract → the same pixels and camera, frames named by the colour stamp.
@@ -136,7 +143,10 @@ fn check_recording(dir: &Path, data: &Path, recording: &Path, stamps: &[u64], un
     // detect --recording → the detections of detect --data, plus stamp and frame id.
     let on_data = dir.join(format!("det-data-{case}"));
     let on_rec = dir.join(format!("det-rec-{case}"));
-    for (flag, input, det) in [("--data", data, &on_data), ("--recording", recording, &on_rec)] {
+    for (flag, input, det) in [
+        ("--data", data, &on_data),
+        ("--recording", recording, &on_rec),
+    ] {
         let out = pomona(&[
             "detect",
             "--pipeline",
@@ -189,7 +199,14 @@ fn recording_gives_the_datasets_pixels_camera_and_detections() {
         synth(&data, unit);
         let mcap = dir.path().join(format!("rec{case}.mcap"));
         let stamps = record(&data, &mcap, encodings);
-        check_recording(dir.path(), &data, &mcap, &stamps, unit, &format!("mcap{case}"));
+        check_recording(
+            dir.path(),
+            &data,
+            &mcap,
+            &stamps,
+            unit,
+            &format!("mcap{case}"),
+        );
     }
 }
 
@@ -198,7 +215,11 @@ fn ros1_bags_give_the_datasets_pixels_camera_and_detections() {
     let dir = tempfile::tempdir().unwrap();
     let data = dir.path().join("data");
     synth(&data, 1e-3);
-    for compression in [BagCompression::None, BagCompression::Bz2, BagCompression::Lz4] {
+    for compression in [
+        BagCompression::None,
+        BagCompression::Bz2,
+        BagCompression::Lz4,
+    ] {
         // The name does not decide the format: the lz4 bag is called .mcap.
         let name = match compression {
             BagCompression::Lz4 => "lz4-bag.mcap".to_owned(),
@@ -206,7 +227,14 @@ fn ros1_bags_give_the_datasets_pixels_camera_and_detections() {
         };
         let bag = dir.path().join(name);
         let stamps = record_bag(&data, &bag, compression);
-        check_recording(dir.path(), &data, &bag, &stamps, 1e-3, &format!("{compression:?}"));
+        check_recording(
+            dir.path(),
+            &data,
+            &bag,
+            &stamps,
+            1e-3,
+            &format!("{compression:?}"),
+        );
     }
 }
 

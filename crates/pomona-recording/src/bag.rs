@@ -310,7 +310,9 @@ impl<'a> Bag<'a> {
         {
             return Err(BagError::Corrupt {
                 offset: index_pos as u64,
-                what: format!("chunk infos count messages of connection {id}, which has no connection record"),
+                what: format!(
+                    "chunk infos count messages of connection {id}, which has no connection record"
+                ),
             });
         }
         Ok(bag)
@@ -459,8 +461,7 @@ fn inflate(record: &Record<'_>) -> Result<Vec<u8>, BagError> {
         "bz2" => bzip2::read::BzDecoder::new(record.data)
             .take(limit)
             .read_to_end(&mut out),
-        "lz4" => lz4::Decoder::new(record.data)
-            .and_then(|d| d.take(limit).read_to_end(&mut out)),
+        "lz4" => lz4::Decoder::new(record.data).and_then(|d| d.take(limit).read_to_end(&mut out)),
         _ => {
             return Err(BagError::Compression {
                 offset: record.offset,

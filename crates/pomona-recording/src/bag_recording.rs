@@ -11,8 +11,7 @@ use pomona_core::{DepthImage, PinholeCamera};
 use crate::bag::Bag;
 use crate::depth_registration::register_depth;
 use crate::realsense::{
-    decode_float32, decode_transform, RealSenseCalibration, RealSenseLayout,
-    DEFAULT_DEPTH_UNIT_M,
+    decode_float32, decode_transform, RealSenseCalibration, RealSenseLayout, DEFAULT_DEPTH_UNIT_M,
 };
 use crate::recording::{stamp, OpenedMessages, RecordingFormat, Stamped, TopicMessages};
 use crate::ros1::Ros1Reader;
@@ -99,7 +98,7 @@ pub(crate) fn read(
                 schema: c.message_type.clone(),
                 encoding: "ros1".to_owned(),
                 expected,
-                expected_encoding: "ros1",
+                expected_encoding: Serialization::Ros1,
             });
         }
         roles.insert(c.id, role);
@@ -147,8 +146,8 @@ pub(crate) fn read(
         };
         match role {
             Role::Color | Role::Depth => {
-                let (header, _) = Image::read_encoding(&message.data, Serialization::Ros1)
-                    .map_err(cdr_error)?;
+                let (header, _) =
+                    Image::read_encoding(&message.data, Serialization::Ros1).map_err(cdr_error)?;
                 let stamped = Stamped {
                     stamp_ns: stamp(path, topic, &header)?,
                     frame_id: header.frame_id,
@@ -161,10 +160,12 @@ pub(crate) fn read(
                 }
             }
             Role::Info | Role::DepthInfo => {
-                let info = CameraInfo::read_as(&message.data, Serialization::Ros1)
-                    .map_err(cdr_error)?;
+                let info =
+                    CameraInfo::read_as(&message.data, Serialization::Ros1).map_err(cdr_error)?;
                 if role == Role::Info {
-                    messages.info.push((stamp(path, topic, &info.header)?, info));
+                    messages
+                        .info
+                        .push((stamp(path, topic, &info.header)?, info));
                 } else if extras.depth_info.is_none() {
                     extras.depth_info = Some((topic.to_owned(), info));
                 }
@@ -234,7 +235,13 @@ impl Extras {
         let references: BTreeSet<u32> = self.color_tf.keys().copied().collect();
         let Some((color_from_ref, depth_from_ref)) = references.iter().find_map(|r| {
             let color = self.color_tf.get(r)?;
-            Some((*color, self.depth_tf.get(r).copied().unwrap_or_else(Isometry3::identity)))
+            Some((
+                *color,
+                self.depth_tf
+                    .get(r)
+                    .copied()
+                    .unwrap_or_else(Isometry3::identity),
+            ))
         }) else {
             return Err(fail(format!(
                 "no depth→colour extrinsics: no `{}` transform",
@@ -298,13 +305,7 @@ pub(crate) fn registered_depth(
             camera_height: d.height,
         }));
     }
-    let depth_m = register_depth(
-        &raw,
-        unit_m,
-        d,
-        color_camera,
-        &calibration.color_from_depth,
-    );
+    let depth_m = register_depth(&raw, unit_m, d, color_camera, &calibration.color_from_depth);
     DepthImage::from_meters(color_camera.width, color_camera.height, depth_m)
         .map_err(|e| RawDepthError::Image(ImageError::Core(e)))
 }

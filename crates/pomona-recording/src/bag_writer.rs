@@ -381,8 +381,7 @@ impl BagWriter {
         let compressed = match self.compression {
             BagCompression::None => records.clone(),
             BagCompression::Bz2 => {
-                let mut e =
-                    bzip2::write::BzEncoder::new(Vec::new(), bzip2::Compression::default());
+                let mut e = bzip2::write::BzEncoder::new(Vec::new(), bzip2::Compression::default());
                 e.write_all(&records)
                     .and_then(|()| e.finish())
                     .map_err(|e| self.io(e))?

@@ -179,8 +179,6 @@ impl<'a> CdrReader<'a> {
         let len = self.u32(what)? as usize;
         self.take(len, what)
     }
-
-
 }
 
 impl<'a> FieldReader<'a> for CdrReader<'a> {
@@ -273,8 +271,6 @@ impl CdrWriter {
         self.length(value.len());
         self.bytes.extend_from_slice(value);
     }
-
-
 
     fn length(&mut self, len: usize) {
         // ROS messages cannot exceed 4 GiB; saturating keeps a reader's length check failing

@@ -150,6 +150,9 @@ mod tests {
         let row = &out[15 * 40..16 * 40];
         assert_eq!(row[24], 0.5, "{row:?}");
         assert_eq!(row[30], 2.0, "{row:?}");
-        assert!(row[0].is_nan() && row[5].is_nan(), "left edge unseen: {row:?}");
+        assert!(
+            row[0].is_nan() && row[5].is_nan(),
+            "left edge unseen: {row:?}"
+        );
     }
 }

@@ -101,7 +101,7 @@ pub enum RecordingError {
         /// The schema name expected.
         expected: &'static str,
         /// The message encoding expected (`cdr`, `ros1`).
-        expected_encoding: &'static str,
+        expected_encoding: crate::Serialization,
     },
     /// A message payload is not valid CDR (or ROS 1 serialisation) of its type.
     #[error("{}: message on `{topic}` logged at {log_time_ns} ns: {source}", path.display())]

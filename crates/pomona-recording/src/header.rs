@@ -5,7 +5,6 @@
 
 use serde::{Deserialize, Serialize};
 
-
 /// `std_msgs/msg/Header`.
 #[derive(Debug, Clone, PartialEq, Eq, Default, Serialize, Deserialize)]
 pub struct Header {

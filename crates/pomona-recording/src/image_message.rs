@@ -26,6 +26,16 @@ pub enum Serialization {
     Ros1,
 }
 
+impl std::fmt::Display for Serialization {
+    /// The message-encoding name: `cdr` (as MCAP channels say) or `ros1`.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Self::Cdr => "cdr",
+            Self::Ros1 => "ros1",
+        })
+    }
+}
+
 /// Millimetres per metre: the unit of `16UC1` depth.
 pub const DEPTH_16UC1_UNIT_M: f64 = 0.001;
 
@@ -382,7 +392,11 @@ mod tests {
         let mut bgra = msg.clone();
         bgra.encoding = "bgra8".into();
         bgra.step = 3 * 4;
-        bgra.data = msg.data.chunks_exact(3).flat_map(|p| [p[0], p[1], p[2], 255]).collect();
+        bgra.data = msg
+            .data
+            .chunks_exact(3)
+            .flat_map(|p| [p[0], p[1], p[2], 255])
+            .collect();
         assert_eq!(bgra.to_color().unwrap(), color);
     }
 

@@ -46,10 +46,10 @@ pub use bag_writer::{
 };
 pub use camera_info::{CameraInfo, CameraInfoError, RegionOfInterest, CAMERA_INFO_SCHEMA};
 pub use cdr::CdrError;
+pub use depth_registration::register_depth;
 pub use depth_unit::{dataset_depth_unit_m, finest_unit_m, FLOAT_DEPTH_UNITS_M};
 pub use error::RecordingError;
 pub use header::Header;
-pub use depth_registration::register_depth;
 pub use image_message::{Image, ImageError, Serialization, DEPTH_16UC1_UNIT_M, IMAGE_SCHEMA};
 pub use recording::{
     frame_stem, Recording, RecordingFormat, RecordingOptions, SyncedFrame, TopicSummary,

@@ -220,8 +220,14 @@ mod tests {
             layout.depth.depth_units_topic(),
             "/device_0/sensor_0/option/Depth Units/value"
         );
-        assert_eq!(layout.depth.tf_reference("/device_0/sensor_0/Depth_0/tf/0"), Some(0));
-        assert_eq!(layout.color.tf_reference("/device_0/sensor_0/Depth_0/tf/0"), None);
+        assert_eq!(
+            layout.depth.tf_reference("/device_0/sensor_0/Depth_0/tf/0"),
+            Some(0)
+        );
+        assert_eq!(
+            layout.color.tf_reference("/device_0/sensor_0/Depth_0/tf/0"),
+            None
+        );
         assert!(RealSenseLayout::find(["/device_0/sensor_0/Depth_0/image/data"]).is_none());
     }
 

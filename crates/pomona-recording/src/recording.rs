@@ -401,29 +401,29 @@ impl Recording {
         };
         match &self.realsense {
             None => self.image(message, topic)?.to_depth().map_err(image_error),
-            Some(calibration) => crate::bag_recording::registered_depth(
-                &message.payload,
-                calibration,
-                camera,
-            )
-            .map_err(|e| match e {
-                crate::bag_recording::RawDepthError::Cdr(source) => RecordingError::Cdr {
-                    path: self.path.clone(),
-                    topic: topic.clone(),
-                    log_time_ns: message.stamp_ns,
-                    source,
-                },
-                crate::bag_recording::RawDepthError::Image(source) => image_error(source),
-            }),
+            Some(calibration) => {
+                crate::bag_recording::registered_depth(&message.payload, calibration, camera)
+                    .map_err(|e| match e {
+                        crate::bag_recording::RawDepthError::Cdr(source) => RecordingError::Cdr {
+                            path: self.path.clone(),
+                            topic: topic.clone(),
+                            log_time_ns: message.stamp_ns,
+                            source,
+                        },
+                        crate::bag_recording::RawDepthError::Image(source) => image_error(source),
+                    })
+            }
         }
     }
 
     fn image(&self, message: &Stamped, topic: &str) -> Result<Image, RecordingError> {
-        Image::read_as(&message.payload, self.serialization()).map_err(|source| RecordingError::Cdr {
-            path: self.path.clone(),
-            topic: topic.to_owned(),
-            log_time_ns: message.stamp_ns,
-            source,
+        Image::read_as(&message.payload, self.serialization()).map_err(|source| {
+            RecordingError::Cdr {
+                path: self.path.clone(),
+                topic: topic.to_owned(),
+                log_time_ns: message.stamp_ns,
+                source,
+            }
         })
     }
 
@@ -527,7 +527,7 @@ impl TopicMessages {
                     schema: schema.to_owned(),
                     encoding: channel.message_encoding.clone(),
                     expected,
-                    expected_encoding: "cdr",
+                    expected_encoding: Serialization::Cdr,
                 });
             }
             let cdr_error = |source| RecordingError::Cdr {
@@ -578,7 +578,11 @@ impl TopicMessages {
 
     /// [`RecordingError::MissingTopic`] (listing the file's topics) for the first of the three
     /// requested topics without messages.
-    pub(crate) fn require_all(&self, path: &Path, topics: &RecordingTopics) -> Result<(), RecordingError> {
+    pub(crate) fn require_all(
+        &self,
+        path: &Path,
+        topics: &RecordingTopics,
+    ) -> Result<(), RecordingError> {
         let requested = [
             (
                 "colour",

@@ -25,7 +25,9 @@ fn frame(i: u32) -> RgbdFrame {
     for p in 0..60 {
         color.set(p, (p + i) % 40, [250, (i * 7) as u8, p as u8]);
     }
-    let mut depth_m: Vec<f32> = (0..2400).map(|p| 0.5 + 0.001 * ((p + i) % 900) as f32).collect();
+    let mut depth_m: Vec<f32> = (0..2400)
+        .map(|p| 0.5 + 0.001 * ((p + i) % 900) as f32)
+        .collect();
     depth_m[3] = f32::NAN;
     let depth = DepthImage::from_meters(60, 40, depth_m).unwrap();
     RgbdFrame::new(camera, depth, Some(color)).unwrap()
@@ -37,8 +39,14 @@ fn write_bag(path: &Path, n: u32, compression: BagCompression) -> Vec<RgbdFrame>
     let frames: Vec<RgbdFrame> = (0..n).map(frame).collect();
     for (i, f) in frames.iter().enumerate() {
         let stamp = T0 + i as u64 * FRAME_NS;
-        w.write_frame(&topics, stamp, "camera_color_optical_frame", f, FrameEncodings::default())
-            .unwrap();
+        w.write_frame(
+            &topics,
+            stamp,
+            "camera_color_optical_frame",
+            f,
+            FrameEncodings::default(),
+        )
+        .unwrap();
     }
     w.finish().unwrap();
     frames
@@ -47,7 +55,11 @@ fn write_bag(path: &Path, n: u32, compression: BagCompression) -> Vec<RgbdFrame>
 #[test]
 fn every_compression_gives_the_frames_back_on_the_ros1_default_topics() {
     let dir = tempfile::tempdir().unwrap();
-    for compression in [BagCompression::None, BagCompression::Bz2, BagCompression::Lz4] {
+    for compression in [
+        BagCompression::None,
+        BagCompression::Bz2,
+        BagCompression::Lz4,
+    ] {
         // 80 frames of 12 kB: several 768 KiB chunks.
         let path = dir.path().join(format!("rec-{compression:?}.bag"));
         let frames = write_bag(&path, 80, compression);
@@ -110,7 +122,9 @@ fn chosen_topics_and_missing_topics_are_reported() {
         },
         ..RecordingOptions::default()
     };
-    let text = Recording::open_with(&path, &options).unwrap_err().to_string();
+    let text = Recording::open_with(&path, &options)
+        .unwrap_err()
+        .to_string();
     assert!(
         text.contains("sensor_msgs/CameraInfo") && text.contains("expected `sensor_msgs/Image`"),
         "{text}"
@@ -124,11 +138,13 @@ fn chosen_topics_and_missing_topics_are_reported() {
         depth: "/cam/depth".into(),
         camera_info: "/cam/info".into(),
     };
-    w.write_frame(&topics, T0, "cam", &f, FrameEncodings::default()).unwrap();
+    w.write_frame(&topics, T0, "cam", &f, FrameEncodings::default())
+        .unwrap();
     w.finish().unwrap();
     let text = Recording::open(&other).unwrap_err().to_string();
     assert!(
-        text.contains("/camera/color/image_raw") && text.contains("/cam/rgb (sensor_msgs/Image, 1 messages)"),
+        text.contains("/camera/color/image_raw")
+            && text.contains("/cam/rgb (sensor_msgs/Image, 1 messages)"),
         "{text}"
     );
     let rec = Recording::open_with(
@@ -154,7 +170,13 @@ fn bad_bags_are_errors_naming_the_file() {
     std::fs::write(&cut, &bytes[..bytes.len() / 2]).unwrap();
     let e = Recording::open(&cut).unwrap_err();
     assert!(
-        matches!(e, RecordingError::Bag { source: BagError::Truncated { .. }, .. }),
+        matches!(
+            e,
+            RecordingError::Bag {
+                source: BagError::Truncated { .. },
+                ..
+            }
+        ),
         "{e}"
     );
     assert!(e.to_string().contains("cut.bag"), "{e}");
@@ -165,7 +187,10 @@ fn bad_bags_are_errors_naming_the_file() {
     v12[..13].copy_from_slice(b"#ROSBAG V1.2\n");
     std::fs::write(&old, &v12).unwrap();
     let e = Recording::open(&old).unwrap_err().to_string();
-    assert!(e.contains("old.bag") && e.contains("#ROSBAG V1.2") && e.contains("2.0"), "{e}");
+    assert!(
+        e.contains("old.bag") && e.contains("#ROSBAG V1.2") && e.contains("2.0"),
+        "{e}"
+    );
 
     // Neither MCAP nor a bag.
     let junk = dir.path().join("junk.bag");
@@ -209,7 +234,11 @@ fn damaged_bytes_never_panic() {
     };
     let mut errors = 0;
     let mut cases = 0;
-    for compression in [BagCompression::None, BagCompression::Bz2, BagCompression::Lz4] {
+    for compression in [
+        BagCompression::None,
+        BagCompression::Bz2,
+        BagCompression::Lz4,
+    ] {
         let path = dir.path().join("rec.bag");
         write_bag(&path, 3, compression);
         let bytes = std::fs::read(&path).unwrap();

@@ -157,7 +157,8 @@ fn raw_depth_is_registered_to_the_colour_camera() {
         let mut holes = 0;
         for y in 10..h - 10 {
             for x in 10..w - 10 {
-                let window = (y - 2..=y + 2).flat_map(|yy| (x - 2..=x + 2).map(move |xx| t[yy * w + xx]));
+                let window =
+                    (y - 2..=y + 2).flat_map(|yy| (x - 2..=x + 2).map(move |xx| t[yy * w + xx]));
                 let (lo, hi) = window.fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), d| {
                     (lo.min(d), hi.max(d))
                 });

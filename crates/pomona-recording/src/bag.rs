@@ -452,7 +452,9 @@ fn inflate(record: &Record<'_>) -> Result<Vec<u8>, BagError> {
     let size = record.u32("size")? as usize;
     let compression = record.text("compression")?;
     let limit = size as u64 + 1;
-    let mut out = Vec::new();
+    // The declared size, up to 64 MiB (rosbag's chunks are 768 KiB): a corrupt size cannot
+    // allocate more before the data proves it.
+    let mut out = Vec::with_capacity(size.min(64 << 20));
     let result = match compression.as_str() {
         "none" => {
             out = record.data.to_vec();

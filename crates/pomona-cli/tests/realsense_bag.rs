@@ -2,8 +2,12 @@
 //! from one camera, raw depth from a second camera 15 mm beside it, the extrinsics and the depth
 //! units as librealsense records them. The scene is rendered by pomona-synth from both cameras,
 //! so the registered depth can be checked against the depth the colour camera itself sees.
+//! (Here rather than in pomona-recording's tests: the renderer is a higher layer.)
 
 #![allow(clippy::unwrap_used)]
+
+#[path = "support/run.rs"]
+mod run;
 
 use std::path::Path;
 
@@ -193,6 +197,37 @@ fn raw_depth_is_registered_to_the_colour_camera() {
     }
     // The extracted depth unit is a float unit: registration moves depth off whole units.
     assert!(!rec.depth_is_millimetres().unwrap());
+
+    // `pomona extract` finds the layout by itself and stores the registered depth at 0.1 mm.
+    let out_dir = dir.path().join("extracted");
+    let out = run::pomona(&[
+        "extract",
+        path.to_str().unwrap(),
+        "--out",
+        out_dir.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", run::stderr(&out));
+    assert!(
+        run::stderr(&out).contains("RealSense SDK bag"),
+        "{}",
+        run::stderr(&out)
+    );
+    let dataset = pomona_io::Dataset::open(&out_dir).unwrap();
+    assert_eq!(dataset.frames().len(), 2);
+    assert_eq!(dataset.depth_unit_m(), 1e-4);
+    assert_eq!(dataset.camera(), &color_camera());
+    let first = dataset.load_frame(&dataset.frames()[0]).unwrap();
+    let registered = rec.load_frame(0).unwrap();
+    let within_unit = first
+        .depth()
+        .as_slice()
+        .iter()
+        .zip(registered.frame.depth().as_slice())
+        .all(|(a, b)| (a.is_nan() && b.is_nan()) || (a - b).abs() <= 0.5e-4 + 1e-6);
+    assert!(
+        within_unit,
+        "extracted depth is the registered depth rounded to 0.1 mm"
+    );
 }
 
 #[test]

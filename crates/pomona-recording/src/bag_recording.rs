@@ -309,3 +309,50 @@ pub(crate) fn registered_depth(
     DepthImage::from_meters(color_camera.width, color_camera.height, depth_m)
         .map_err(|e| RawDepthError::Image(ImageError::Core(e)))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Header;
+
+    #[test]
+    fn an_images_own_depth_units_win_over_the_option() {
+        let camera = PinholeCamera::new(3, 1, 2.0, 2.0, 1.0, 0.0).unwrap();
+        let calibration = RealSenseCalibration {
+            depth_camera: camera,
+            color_from_depth: Isometry3::identity(),
+            depth_unit_m: 0.001,
+        };
+        let image = Image {
+            header: Header::at(5, "0"),
+            height: 1,
+            width: 3,
+            encoding: "mono16".into(),
+            is_bigendian: 0,
+            step: 6,
+            data: [1000u16, 0, 2500]
+                .iter()
+                .flat_map(|v| v.to_le_bytes())
+                .collect(),
+        };
+        let plain = image.to_ros1();
+        let depth = registered_depth(&plain, &calibration, &camera).unwrap();
+        assert_eq!(depth.as_slice()[0], 1.0);
+        assert!(depth.as_slice()[1].is_nan());
+        assert_eq!(depth.as_slice()[2], 2.5);
+        let mut with_units = plain.clone();
+        with_units.extend_from_slice(&0.0001f32.to_le_bytes());
+        let depth = registered_depth(&with_units, &calibration, &camera).unwrap();
+        assert!((depth.as_slice()[0] - 0.1).abs() < 1e-6);
+        // A depth image of another size than its camera is an error, not garbage.
+        let small = PinholeCamera::new(2, 1, 2.0, 2.0, 1.0, 0.0).unwrap();
+        let wrong = RealSenseCalibration {
+            depth_camera: small,
+            ..calibration
+        };
+        assert!(matches!(
+            registered_depth(&plain, &wrong, &camera),
+            Err(RawDepthError::Image(ImageError::CameraSize { .. }))
+        ));
+    }
+}

@@ -1,5 +1,5 @@
-//! Where `pomona detect` reads its frames: a dataset folder (`--data`) or a ROS 2 MCAP
-//! recording (`--recording`), behind one interface so the run (parallel detection, resume,
+//! Where `pomona detect` reads its frames: a dataset folder (`--data`) or a recording
+//! (`--recording`: ROS 2 MCAP, ROS 1 bag or RealSense bag), behind one interface so the run (parallel detection, resume,
 //! shards, failures) is the same for both.
 //!
 //! A recording's frames are its synchronised colour/depth pairs, named by the colour stamp

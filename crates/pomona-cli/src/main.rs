@@ -35,7 +35,8 @@ enum Command {
     /// Find fruit in every frame of a dataset or a ROS 2 recording; writes one detection file
     /// per frame.
     Detect(commands::detect::DetectArgs),
-    /// Write a ROS 2 MCAP recording's synchronised colour/depth frames as a dataset folder.
+    /// Write a recording's (ROS 2 MCAP, ROS 1 bag, RealSense bag) synchronised colour/depth frames
+    /// as a dataset folder.
     Extract(commands::extract::ExtractArgs),
     /// Repeated random train/test splits of one dataset: train, detect, evaluate; mean ± sd.
     Experiment(commands::experiment::ExperimentArgs),

@@ -1,27 +1,30 @@
-//! What `extract` and `detect --recording` share: the flags choosing a ROS 2 MCAP recording's
-//! topics and sync tolerance, opening it, and telling the user which colour images found no
+//! What `extract` and `detect --recording` share: the flags choosing a recording's (ROS 2 MCAP,
+//! ROS 1 bag or RealSense bag) topics and sync tolerance, opening it, and telling the user which colour images found no
 //! depth (they are skipped, never silently).
 
 use std::path::Path;
 
 use anyhow::{bail, Context, Result};
-use pomona_recording::{
-    Recording, RecordingOptions, RecordingTopics, DEFAULT_COLOR_TOPIC, DEFAULT_DEPTH_TOPIC,
-    DEFAULT_INFO_TOPIC,
-};
+use pomona_recording::{Recording, RecordingFormat, RecordingOptions, TopicRequest};
 
 /// Topic and synchronisation flags of the commands that read recordings.
 #[derive(Debug, Clone, PartialEq, clap::Args)]
 pub struct RecordingArgs {
-    /// Colour topic (`sensor_msgs/msg/Image`, rgb8 or bgr8).
-    #[arg(long, value_name = "TOPIC", default_value = DEFAULT_COLOR_TOPIC)]
-    pub color_topic: String,
-    /// Depth topic registered to colour (`sensor_msgs/msg/Image`, 16UC1 mm or 32FC1 m).
-    #[arg(long, value_name = "TOPIC", default_value = DEFAULT_DEPTH_TOPIC)]
-    pub depth_topic: String,
-    /// Colour camera-info topic (`sensor_msgs/msg/CameraInfo`).
-    #[arg(long, value_name = "TOPIC", default_value = DEFAULT_INFO_TOPIC)]
-    pub info_topic: String,
+    /// Colour topic (`sensor_msgs/Image`, rgb8 or bgr8) [default: MCAP
+    /// /camera/camera/color/image_raw, ROS 1 bag /camera/color/image_raw].
+    #[arg(long, value_name = "TOPIC")]
+    pub color_topic: Option<String>,
+    /// Depth topic registered to colour (`sensor_msgs/Image`, 16UC1 mm or 32FC1 m) [default:
+    /// MCAP /camera/camera/aligned_depth_to_color/image_raw, ROS 1 bag
+    /// /camera/aligned_depth_to_color/image_raw].
+    #[arg(long, value_name = "TOPIC")]
+    pub depth_topic: Option<String>,
+    /// Colour camera-info topic (`sensor_msgs/CameraInfo`) [default: MCAP
+    /// /camera/camera/color/camera_info, ROS 1 bag /camera/color/camera_info]. A ROS 1 bag
+    /// without the defaults and no topic flag is read as a RealSense SDK bag when it has
+    /// /device_0/... streams.
+    #[arg(long, value_name = "TOPIC")]
+    pub info_topic: Option<String>,
     /// Largest difference between a colour and a depth header stamp of one frame, ms.
     #[arg(long, value_name = "MS", default_value_t = 20.0)]
     pub sync_tolerance_ms: f64,
@@ -30,9 +33,9 @@ pub struct RecordingArgs {
 impl Default for RecordingArgs {
     fn default() -> Self {
         Self {
-            color_topic: DEFAULT_COLOR_TOPIC.to_owned(),
-            depth_topic: DEFAULT_DEPTH_TOPIC.to_owned(),
-            info_topic: DEFAULT_INFO_TOPIC.to_owned(),
+            color_topic: None,
+            depth_topic: None,
+            info_topic: None,
             sync_tolerance_ms: 20.0,
         }
     }
@@ -49,7 +52,7 @@ impl RecordingArgs {
             bail!("--sync-tolerance-ms must be a finite number ≥ 0 (got {ms})");
         }
         Ok(RecordingOptions {
-            topics: RecordingTopics {
+            topics: TopicRequest {
                 color: self.color_topic.clone(),
                 depth: self.depth_topic.clone(),
                 camera_info: self.info_topic.clone(),
@@ -67,6 +70,15 @@ impl RecordingArgs {
     pub fn open(&self, path: &Path) -> Result<Recording> {
         let recording = Recording::open_with(path, &self.options()?)
             .with_context(|| format!("cannot read recording {}", path.display()))?;
+        if recording.format() == RecordingFormat::RealSenseBag {
+            let topics = recording.selected_topics();
+            eprintln!(
+                "note: {} is a RealSense SDK bag: colour {}, depth {} registered to colour",
+                path.display(),
+                topics.color,
+                topics.depth
+            );
+        }
         let unmatched = recording.unmatched_color_ns();
         if let (Some(first), Some(last)) = (unmatched.first(), unmatched.last()) {
             eprintln!(

@@ -1,5 +1,5 @@
-//! `pomona extract` and `pomona detect --recording` on ROS 2 MCAP recordings written in the
-//! test from synthetic datasets (never downloaded): the recording gives the same pixels, camera
+//! `pomona extract` and `pomona detect --recording` on ROS 2 MCAP recordings and ROS 1 bags
+//! written in the test from synthetic datasets (never downloaded): the recording gives the same pixels, camera
 //! and detections as the dataset it was recorded from, and bad recordings fail naming the file.
 
 #![allow(clippy::unwrap_used)]
@@ -11,7 +11,9 @@ use std::path::Path;
 
 use pomona_core::FrameDetections;
 use pomona_io::Dataset;
-use pomona_recording::{FrameEncodings, Header, Image, RecordingTopics, RecordingWriter};
+use pomona_recording::{
+    BagCompression, BagWriter, FrameEncodings, Header, Image, RecordingTopics, RecordingWriter,
+};
 use pomona_synth::{
     generate_dataset, CameraPreset, DatasetSpec, FruitChoice, FruitKind, SceneSpec,
 };
@@ -68,6 +70,110 @@ fn s(p: &Path) -> &str {
     p.to_str().unwrap()
 }
 
+/// Records every frame of the dataset at `root` into a ROS 1 bag on the ROS 1 driver's topics,
+/// 30 Hz from `T0`; returns the stamps in frame order.
+fn record_bag(root: &Path, bag: &Path, compression: BagCompression) -> Vec<u64> {
+    let dataset = Dataset::open(root).unwrap();
+    let topics = RecordingTopics::ros1();
+    let mut writer = BagWriter::create(bag, compression).unwrap();
+    let mut stamps = Vec::new();
+    for (i, stem) in dataset.frames().iter().enumerate() {
+        let stamp = T0 + i as u64 * FRAME_NS;
+        let frame = dataset.load_frame(stem).unwrap();
+        writer
+            .write_frame(
+                &topics,
+                stamp,
+                "camera_color_optical_frame",
+                &frame,
+                FrameEncodings::default(),
+            )
+            .unwrap();
+        stamps.push(stamp);
+    }
+    writer.finish().unwrap();
+    stamps
+}
+
+/// `extract` of `recording` gives the dataset at `data`'s pixels and camera (depth in `unit`),
+/// and `detect --recording` its detections, with stamps and frame ids.
+fn check_recording(
+    dir: &Path,
+    data: &Path,
+    recording: &Path,
+    stamps: &[u64],
+    unit: f64,
+    case: &str,
+) {
+    let source = Dataset::open(data).unwrap();
+
+    // extract → the same pixels and camera, frames named by the colour stamp.
+    let extracted = dir.join(format!("extracted-{case}"));
+    let out = pomona(&["extract", s(recording), "--out", s(&extracted)]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(
+        stdout(&out).contains("extracted 3 frame(s)"),
+        "{}",
+        stdout(&out)
+    );
+    let copy = Dataset::open(&extracted).unwrap();
+    assert_eq!(copy.camera(), source.camera());
+    assert_eq!(
+        copy.depth_unit_m(),
+        unit,
+        "the finest unit that holds the depth"
+    );
+    let want_stems: Vec<String> = stamps.iter().map(|t| format!("{t:019}")).collect();
+    assert_eq!(copy.frames(), want_stems.as_slice());
+    for (stem, original) in copy.frames().iter().zip(source.frames()) {
+        let (a, b) = (
+            copy.load_frame(stem).unwrap(),
+            source.load_frame(original).unwrap(),
+        );
+        assert_eq!(a.color(), b.color(), "case {case} frame {stem}");
+        let same_depth = a
+            .depth()
+            .as_slice()
+            .iter()
+            .zip(b.depth().as_slice())
+            .all(|(x, y)| x.to_bits() == y.to_bits() || (x.is_nan() && y.is_nan()));
+        assert!(same_depth, "case {case} frame {stem}: depth differs");
+    }
+
+    // detect --recording → the detections of detect --data, plus stamp and frame id.
+    let on_data = dir.join(format!("det-data-{case}"));
+    let on_rec = dir.join(format!("det-rec-{case}"));
+    for (flag, input, det) in [
+        ("--data", data, &on_data),
+        ("--recording", recording, &on_rec),
+    ] {
+        let out = pomona(&[
+            "detect",
+            "--pipeline",
+            "shape-fit",
+            flag,
+            s(input),
+            "--out",
+            s(det),
+        ]);
+        assert!(out.status.success(), "{flag}: {}", stderr(&out));
+    }
+    let mut found = 0;
+    for ((original, stem), stamp) in source.frames().iter().zip(&want_stems).zip(stamps) {
+        let a = read_detections(&on_data.join(format!("{original}.json")));
+        let b = read_detections(&on_rec.join(format!("{stem}.json")));
+        assert_eq!(a.detections, b.detections, "case {case} frame {original}");
+        assert_eq!((a.stamp_ns, a.frame_id.as_deref()), (None, None));
+        assert_eq!(b.stamp_ns, Some(*stamp));
+        assert_eq!(b.frame_id.as_deref(), Some("camera_color_optical_frame"));
+        assert_eq!(&b.frame, stem);
+        found += a.detections.len();
+        let text = std::fs::read_to_string(on_data.join(format!("{original}.json"))).unwrap();
+        assert!(!text.contains("stamp_ns") && !text.contains("frame_id"));
+    }
+    assert!(found > 0, "case {case}: the comparison needs detections");
+}
+
 #[test]
 fn recording_gives_the_datasets_pixels_camera_and_detections() {
     let dir = tempfile::tempdir().unwrap();
@@ -93,70 +199,42 @@ fn recording_gives_the_datasets_pixels_camera_and_detections() {
         synth(&data, unit);
         let mcap = dir.path().join(format!("rec{case}.mcap"));
         let stamps = record(&data, &mcap, encodings);
-        let source = Dataset::open(&data).unwrap();
-
-        // extract → the same pixels and camera, frames named by the colour stamp.
-        let extracted = dir.path().join(format!("extracted{case}"));
-        let out = pomona(&["extract", s(&mcap), "--out", s(&extracted)]);
-        assert!(out.status.success(), "{}", stderr(&out));
-        assert!(
-            stdout(&out).contains("extracted 3 frame(s)"),
-            "{}",
-            stdout(&out)
-        );
-        let copy = Dataset::open(&extracted).unwrap();
-        assert_eq!(copy.camera(), source.camera());
-        assert_eq!(
-            copy.depth_unit_m(),
+        check_recording(
+            dir.path(),
+            &data,
+            &mcap,
+            &stamps,
             unit,
-            "the finest unit that holds the depth"
+            &format!("mcap{case}"),
         );
-        let want_stems: Vec<String> = stamps.iter().map(|t| format!("{t:019}")).collect();
-        assert_eq!(copy.frames(), want_stems.as_slice());
-        for (stem, original) in copy.frames().iter().zip(source.frames()) {
-            let (a, b) = (
-                copy.load_frame(stem).unwrap(),
-                source.load_frame(original).unwrap(),
-            );
-            assert_eq!(a.color(), b.color(), "case {case} frame {stem}");
-            let same_depth = a
-                .depth()
-                .as_slice()
-                .iter()
-                .zip(b.depth().as_slice())
-                .all(|(x, y)| x.to_bits() == y.to_bits() || (x.is_nan() && y.is_nan()));
-            assert!(same_depth, "case {case} frame {stem}: depth differs");
-        }
+    }
+}
 
-        // detect --recording → the detections of detect --data, plus stamp and frame id.
-        let on_data = dir.path().join(format!("det-data{case}"));
-        let on_rec = dir.path().join(format!("det-rec{case}"));
-        for (flag, input, det) in [("--data", &data, &on_data), ("--recording", &mcap, &on_rec)] {
-            let out = pomona(&[
-                "detect",
-                "--pipeline",
-                "shape-fit",
-                flag,
-                s(input),
-                "--out",
-                s(det),
-            ]);
-            assert!(out.status.success(), "{flag}: {}", stderr(&out));
-        }
-        let mut found = 0;
-        for ((original, stem), stamp) in source.frames().iter().zip(&want_stems).zip(&stamps) {
-            let a = read_detections(&on_data.join(format!("{original}.json")));
-            let b = read_detections(&on_rec.join(format!("{stem}.json")));
-            assert_eq!(a.detections, b.detections, "case {case} frame {original}");
-            assert_eq!((a.stamp_ns, a.frame_id.as_deref()), (None, None));
-            assert_eq!(b.stamp_ns, Some(*stamp));
-            assert_eq!(b.frame_id.as_deref(), Some("camera_color_optical_frame"));
-            assert_eq!(&b.frame, stem);
-            found += a.detections.len();
-            let text = std::fs::read_to_string(on_data.join(format!("{original}.json"))).unwrap();
-            assert!(!text.contains("stamp_ns") && !text.contains("frame_id"));
-        }
-        assert!(found > 0, "case {case}: the comparison needs detections");
+#[test]
+fn ros1_bags_give_the_datasets_pixels_camera_and_detections() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = dir.path().join("data");
+    synth(&data, 1e-3);
+    for compression in [
+        BagCompression::None,
+        BagCompression::Bz2,
+        BagCompression::Lz4,
+    ] {
+        // The name does not decide the format: the lz4 bag is called .mcap.
+        let name = match compression {
+            BagCompression::Lz4 => "lz4-bag.mcap".to_owned(),
+            other => format!("{other:?}.bag"),
+        };
+        let bag = dir.path().join(name);
+        let stamps = record_bag(&data, &bag, compression);
+        check_recording(
+            dir.path(),
+            &data,
+            &bag,
+            &stamps,
+            1e-3,
+            &format!("{compression:?}"),
+        );
     }
 }
 

@@ -11,7 +11,9 @@ use pomona_core::{PinholeCamera, RadialDistortion};
 use serde::{Deserialize, Serialize};
 
 use crate::cdr::{CdrError, CdrReader, CdrWriter};
-use crate::Header;
+use crate::message_fields::{FieldReader, FieldWriter};
+use crate::ros1::{Ros1Reader, Ros1Writer};
+use crate::{Header, Serialization};
 
 /// The ROS schema name of [`CameraInfo`].
 pub const CAMERA_INFO_SCHEMA: &str = "sensor_msgs/msg/CameraInfo";
@@ -87,13 +89,32 @@ pub enum CameraInfoError {
 }
 
 impl CameraInfo {
-    /// Reads a camera-info message.
+    /// Reads a CDR camera-info message (ROS 2).
     ///
     /// # Errors
     /// [`CdrError`] for a truncated or malformed payload.
     pub fn read(payload: &[u8]) -> Result<Self, CdrError> {
-        let mut r = CdrReader::new(payload)?;
-        let (header, height, width) = Header::read_sized(&mut r)?;
+        Self::read_as(payload, Serialization::Cdr)
+    }
+
+    /// Reads a camera-info message in `serialization`.
+    ///
+    /// # Errors
+    /// [`CdrError`] for a truncated or malformed payload.
+    pub fn read_as(payload: &[u8], serialization: Serialization) -> Result<Self, CdrError> {
+        match serialization {
+            Serialization::Cdr => Self::decode(&mut CdrReader::new(payload)?),
+            Serialization::Ros1 => Self::decode(&mut Ros1Reader::new(payload)),
+        }
+    }
+
+    /// Reads the fields from `r`. ROS 1 names the arrays `D`, `K`, `R`, `P`; the layout is the
+    /// same.
+    ///
+    /// # Errors
+    /// [`CdrError`] for a truncated or malformed payload.
+    pub fn decode<'a>(r: &mut impl FieldReader<'a>) -> Result<Self, CdrError> {
+        let (header, height, width) = r.sized_header()?;
         Ok(Self {
             header,
             height,
@@ -115,10 +136,23 @@ impl CameraInfo {
         })
     }
 
-    /// The CDR payload.
+    /// The CDR payload (ROS 2).
     pub fn to_cdr(&self) -> Vec<u8> {
         let mut w = CdrWriter::new();
-        self.header.write_sized(&mut w, self.height, self.width);
+        self.encode(&mut w);
+        w.into_bytes()
+    }
+
+    /// The ROS 1 payload.
+    pub fn to_ros1(&self) -> Vec<u8> {
+        let mut w = Ros1Writer::new();
+        self.encode(&mut w);
+        w.into_bytes()
+    }
+
+    /// Writes the fields to `w`.
+    pub fn encode(&self, w: &mut impl FieldWriter) {
+        w.sized_header(&self.header, self.height, self.width);
         w.string(&self.distortion_model);
         w.f64_sequence(&self.d);
         w.f64_array(&self.k);
@@ -131,7 +165,6 @@ impl CameraInfo {
         w.u32(self.roi.height);
         w.u32(self.roi.width);
         w.u8(u8::from(self.roi.do_rectify));
-        w.into_bytes()
     }
 
     /// The camera info a driver would publish for `camera` (`plumb_bob`, its k1 and k2).
@@ -191,7 +224,8 @@ impl CameraInfo {
     fn check_distortion(&self) -> Result<(), CameraInfoError> {
         let radial_model = matches!(
             self.distortion_model.as_str(),
-            "plumb_bob" | "rational_polynomial"
+            // librealsense's name for the same forward model (k1, k2, p1, p2, k3).
+            "plumb_bob" | "rational_polynomial" | "Brown Conrady"
         );
         let only_radial = self.d.iter().skip(2).all(|&c| c == 0.0);
         let any = self.d.iter().any(|&c| c != 0.0);
@@ -222,6 +256,8 @@ mod tests {
             let back = CameraInfo::read(&info.to_cdr()).unwrap();
             assert_eq!(back, info);
             assert_eq!(back.to_camera().unwrap(), cam);
+            let ros1 = CameraInfo::read_as(&info.to_ros1(), Serialization::Ros1).unwrap();
+            assert_eq!(ros1, info);
         }
     }
 

@@ -9,6 +9,9 @@
 //! `sensor_msgs/CameraInfo` need is here: a compact reader and writer instead of a general serde
 //! format, so every length is checked against the bytes left before anything is allocated.
 
+use crate::message_fields::{FieldReader, FieldWriter};
+use crate::Header;
+
 /// Encapsulation identifier of little-endian plain CDR.
 const CDR_LE: [u8; 2] = [0x00, 0x01];
 /// Encapsulation identifier of big-endian plain CDR.
@@ -33,9 +36,17 @@ pub enum CdrError {
     /// The encapsulation header names a representation other than plain CDR.
     #[error("encapsulation {0:02x?} is not plain CDR (00 00 or 00 01)")]
     Encapsulation([u8; 2]),
-    /// A string is not NUL-terminated UTF-8.
+    /// A string is not NUL-terminated UTF-8 (CDR) or not UTF-8 (ROS 1).
     #[error("string field {0} is not NUL-terminated UTF-8")]
     BadString(&'static str),
+    /// A ROS 1 stamp whose seconds do not fit the 32-bit signed seconds Pomona keeps (after
+    /// 2038).
+    #[error("header stamp of {0} s is past 2038 (not representable)")]
+    StampOutOfRange(u32),
+    /// A `geometry_msgs/Transform` whose rotation is not a quaternion (zero or not finite) or
+    /// whose translation is not finite.
+    #[error("transform rotation {0:?} (x, y, z, w) is not a rotation")]
+    BadQuaternion([f64; 4]),
 }
 
 /// Reads the fields of one CDR payload in order.
@@ -168,34 +179,34 @@ impl<'a> CdrReader<'a> {
         let len = self.u32(what)? as usize;
         self.take(len, what)
     }
+}
 
-    /// A `float64[]` sequence.
-    ///
-    /// # Errors
-    /// [`CdrError::Truncated`] when the count exceeds the bytes left.
-    pub fn f64_sequence(&mut self, what: &'static str) -> Result<Vec<f64>, CdrError> {
-        let len = self.u32(what)? as usize;
-        let left = self.bytes.len().saturating_sub(self.position);
-        if len.saturating_mul(8) > left {
-            return Err(CdrError::Truncated {
-                what,
-                len: self.bytes.len() + HEADER_LEN,
-                needed: len.saturating_mul(8) - left,
-            });
-        }
-        (0..len).map(|_| self.f64(what)).collect()
+impl<'a> FieldReader<'a> for CdrReader<'a> {
+    fn u8(&mut self, what: &'static str) -> Result<u8, CdrError> {
+        CdrReader::u8(self, what)
     }
-
-    /// A `float64[N]` fixed array.
-    ///
-    /// # Errors
-    /// [`CdrError::Truncated`].
-    pub fn f64_array<const N: usize>(&mut self, what: &'static str) -> Result<[f64; N], CdrError> {
-        let mut out = [0.0; N];
-        for v in &mut out {
-            *v = self.f64(what)?;
-        }
-        Ok(out)
+    fn u32(&mut self, what: &'static str) -> Result<u32, CdrError> {
+        CdrReader::u32(self, what)
+    }
+    fn f64(&mut self, what: &'static str) -> Result<f64, CdrError> {
+        CdrReader::f64(self, what)
+    }
+    fn string(&mut self, what: &'static str) -> Result<String, CdrError> {
+        CdrReader::string(self, what)
+    }
+    fn byte_sequence(&mut self, what: &'static str) -> Result<&'a [u8], CdrError> {
+        CdrReader::byte_sequence(self, what)
+    }
+    fn remaining(&self) -> usize {
+        self.bytes.len().saturating_sub(self.position)
+    }
+    /// `builtin_interfaces/Time stamp` (`int32 sec`, `uint32 nanosec`), `string frame_id`.
+    fn header(&mut self) -> Result<Header, CdrError> {
+        Ok(Header {
+            stamp_sec: self.i32("header.stamp.sec")?,
+            stamp_nanosec: CdrReader::u32(self, "header.stamp.nanosec")?,
+            frame_id: CdrReader::string(self, "header.frame_id")?,
+        })
     }
 }
 
@@ -261,17 +272,6 @@ impl CdrWriter {
         self.bytes.extend_from_slice(value);
     }
 
-    /// Appends a `float64[]` sequence.
-    pub fn f64_sequence(&mut self, values: &[f64]) {
-        self.length(values.len());
-        values.iter().for_each(|&v| self.f64(v));
-    }
-
-    /// Appends a `float64[N]` fixed array.
-    pub fn f64_array(&mut self, values: &[f64]) {
-        values.iter().for_each(|&v| self.f64(v));
-    }
-
     fn length(&mut self, len: usize) {
         // ROS messages cannot exceed 4 GiB; saturating keeps a reader's length check failing
         // rather than wrapping.
@@ -284,9 +284,34 @@ impl CdrWriter {
     }
 }
 
+impl FieldWriter for CdrWriter {
+    fn u8(&mut self, value: u8) {
+        CdrWriter::u8(self, value);
+    }
+    fn u32(&mut self, value: u32) {
+        CdrWriter::u32(self, value);
+    }
+    fn f64(&mut self, value: f64) {
+        CdrWriter::f64(self, value);
+    }
+    fn string(&mut self, value: &str) {
+        CdrWriter::string(self, value);
+    }
+    fn byte_sequence(&mut self, value: &[u8]) {
+        CdrWriter::byte_sequence(self, value);
+    }
+    fn header(&mut self, header: &Header) {
+        self.i32(header.stamp_sec);
+        CdrWriter::u32(self, header.stamp_nanosec);
+        CdrWriter::string(self, &header.frame_id);
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    use crate::message_fields::{FieldReader, FieldWriter};
 
     #[test]
     fn fields_round_trip_with_alignment() {

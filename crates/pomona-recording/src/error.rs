@@ -24,6 +24,47 @@ pub enum RecordingError {
         /// What the MCAP reader or writer reported.
         source: mcap::McapError,
     },
+    /// The ROS 1 bag container is truncated or corrupt, or not format 2.0.
+    #[error("{} is not a readable ROS 1 bag: {source}", path.display())]
+    Bag {
+        /// The recording.
+        path: PathBuf,
+        /// What is wrong.
+        source: crate::BagError,
+    },
+    /// The file is neither an MCAP recording nor a ROS 1 bag.
+    #[error(
+        "{} is neither an MCAP recording (magic \\x89MCAP0) nor a ROS 1 bag (#ROSBAG V2.0); \
+         it starts with {start:?}",
+        path.display()
+    )]
+    UnknownFormat {
+        /// The file.
+        path: PathBuf,
+        /// Its first bytes, lossily as text.
+        start: String,
+    },
+    /// A RealSense bag whose calibration cannot be used (missing camera info or extrinsics,
+    /// bad depth units).
+    #[error("{}: RealSense recording: {what}", path.display())]
+    RealSense {
+        /// The recording.
+        path: PathBuf,
+        /// What is wrong.
+        what: String,
+    },
+    /// A bag being written got a second message type on one topic.
+    #[error("{}: topic `{topic}` was written as `{first}`, now `{now}`", path.display())]
+    BagTopicType {
+        /// The bag being written.
+        path: PathBuf,
+        /// The topic.
+        topic: String,
+        /// The type it was first written with.
+        first: String,
+        /// The type now.
+        now: String,
+    },
     /// A requested topic has no messages in the recording.
     #[error(
         "{} has no messages on the {role} topic `{topic}` (choose another with {flag}); \
@@ -45,7 +86,7 @@ pub enum RecordingError {
     /// A requested topic carries another message type or encoding.
     #[error(
         "{}: topic `{topic}` carries `{schema}` in `{encoding}` encoding, expected `{expected}` \
-         in `cdr`",
+         in `{expected_encoding}`",
         path.display()
     )]
     WrongSchema {
@@ -59,8 +100,10 @@ pub enum RecordingError {
         encoding: String,
         /// The schema name expected.
         expected: &'static str,
+        /// The message encoding expected (`cdr`, `ros1`).
+        expected_encoding: crate::Serialization,
     },
-    /// A message payload is not valid CDR of its type.
+    /// A message payload is not valid CDR (or ROS 1 serialisation) of its type.
     #[error("{}: message on `{topic}` logged at {log_time_ns} ns: {source}", path.display())]
     Cdr {
         /// The recording.
@@ -144,6 +187,10 @@ impl RecordingError {
         match self {
             Self::Io { path, .. }
             | Self::Mcap { path, .. }
+            | Self::Bag { path, .. }
+            | Self::UnknownFormat { path, .. }
+            | Self::RealSense { path, .. }
+            | Self::BagTopicType { path, .. }
             | Self::MissingTopic { path, .. }
             | Self::WrongSchema { path, .. }
             | Self::Cdr { path, .. }

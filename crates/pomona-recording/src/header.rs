@@ -1,10 +1,9 @@
 //! `std_msgs/Header`: the stamp and coordinate frame every sensor message starts with. The stamp
 //! (`builtin_interfaces/Time`, seconds and nanoseconds) is what frames are synchronised and named
-//! by.
+//! by. How it is encoded depends on the format (`FieldReader::header`): ROS 1 adds a `seq`
+//! and has unsigned seconds.
 
 use serde::{Deserialize, Serialize};
-
-use crate::cdr::{CdrError, CdrReader, CdrWriter};
 
 /// `std_msgs/msg/Header`.
 #[derive(Debug, Clone, PartialEq, Eq, Default, Serialize, Deserialize)]
@@ -34,45 +33,13 @@ impl Header {
         (self.stamp_nanosec < 1_000_000_000)
             .then(|| sec * 1_000_000_000 + u64::from(self.stamp_nanosec))
     }
-
-    /// Reads the header at the start of a message.
-    ///
-    /// # Errors
-    /// [`CdrError`] for a truncated payload or a bad `frame_id`.
-    pub fn read(r: &mut CdrReader<'_>) -> Result<Self, CdrError> {
-        Ok(Self {
-            stamp_sec: r.i32("header.stamp.sec")?,
-            stamp_nanosec: r.u32("header.stamp.nanosec")?,
-            frame_id: r.string("header.frame_id")?,
-        })
-    }
-
-    /// Appends the header.
-    pub fn write(&self, w: &mut CdrWriter) {
-        w.i32(self.stamp_sec);
-        w.u32(self.stamp_nanosec);
-        w.string(&self.frame_id);
-    }
-
-    /// Reads how `Image` and `CameraInfo` both begin: the header, then `height` and `width`.
-    ///
-    /// # Errors
-    /// As [`Header::read`].
-    pub fn read_sized(r: &mut CdrReader<'_>) -> Result<(Self, u32, u32), CdrError> {
-        Ok((Self::read(r)?, r.u32("height")?, r.u32("width")?))
-    }
-
-    /// Appends the header, `height` and `width` (see [`Header::read_sized`]).
-    pub fn write_sized(&self, w: &mut CdrWriter, height: u32, width: u32) {
-        self.write(w);
-        w.u32(height);
-        w.u32(width);
-    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::cdr::{CdrReader, CdrWriter};
+    use crate::message_fields::{FieldReader, FieldWriter};
 
     #[test]
     fn stamps_convert_both_ways() {
@@ -85,11 +52,8 @@ mod tests {
         };
         assert_eq!(before_epoch.stamp_ns(), None);
         let mut w = CdrWriter::new();
-        h.write(&mut w);
+        FieldWriter::header(&mut w, &h);
         let bytes = w.into_bytes();
-        assert_eq!(
-            Header::read(&mut CdrReader::new(&bytes).unwrap()).unwrap(),
-            h
-        );
+        assert_eq!(CdrReader::new(&bytes).unwrap().header().unwrap(), h);
     }
 }

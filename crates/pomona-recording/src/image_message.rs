@@ -1,7 +1,7 @@
 //! `sensor_msgs/Image`: one raw image (colour or depth) as the ROS driver publishes it, and its
 //! conversion to Pomona's [`ColorImage`] and [`DepthImage`].
 //!
-//! Supported encodings: colour `rgb8` and `bgr8`; depth `16UC1` (millimetres, 0 = no depth, as
+//! Supported encodings: colour `rgb8`, `bgr8`, `rgba8` and `bgra8` (alpha dropped); depth `16UC1` (millimetres, 0 = no depth, as
 //! the RealSense and Kinect drivers publish) and `32FC1` (metres; NaN, 0 and negatives = no
 //! depth). `step` and the data length are checked against width and height before any pixel is
 //! read; `is_bigendian` is honoured for the multi-byte depth encodings.
@@ -10,10 +10,31 @@ use pomona_core::{ColorImage, DepthImage};
 use serde::{Deserialize, Serialize};
 
 use crate::cdr::{CdrError, CdrReader, CdrWriter};
+use crate::message_fields::{FieldReader, FieldWriter};
+use crate::ros1::{Ros1Reader, Ros1Writer};
 use crate::Header;
 
 /// The ROS schema name of [`Image`].
 pub const IMAGE_SCHEMA: &str = "sensor_msgs/msg/Image";
+
+/// How a message payload is encoded.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Serialization {
+    /// CDR, as in ROS 2 MCAP recordings ([`crate::cdr`]).
+    Cdr,
+    /// ROS 1 serialisation, as in ROS 1 bags ([`crate::ros1`]).
+    Ros1,
+}
+
+impl std::fmt::Display for Serialization {
+    /// The message-encoding name: `cdr` (as MCAP channels say) or `ros1`.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Self::Cdr => "cdr",
+            Self::Ros1 => "ros1",
+        })
+    }
+}
 
 /// Millimetres per metre: the unit of `16UC1` depth.
 pub const DEPTH_16UC1_UNIT_M: f64 = 0.001;
@@ -69,19 +90,52 @@ pub enum ImageError {
         /// Data length.
         len: usize,
     },
+    /// A raw depth image whose size is not its camera's.
+    #[error(
+        "{width}×{height} depth image but its camera info says {camera_width}×{camera_height}"
+    )]
+    CameraSize {
+        /// Image columns.
+        width: u32,
+        /// Image rows.
+        height: u32,
+        /// Camera columns.
+        camera_width: u32,
+        /// Camera rows.
+        camera_height: u32,
+    },
     /// The pixels do not make a valid Pomona image.
     #[error("{0}")]
     Core(#[from] pomona_core::CoreError),
 }
 
 impl Image {
-    /// Reads an image message.
+    /// Reads a CDR image message (ROS 2).
     ///
     /// # Errors
     /// [`CdrError`] for a truncated or malformed payload.
     pub fn read(payload: &[u8]) -> Result<Self, CdrError> {
-        let mut r = CdrReader::new(payload)?;
-        let (header, height, width) = Header::read_sized(&mut r)?;
+        Self::read_as(payload, Serialization::Cdr)
+    }
+
+    /// Reads an image message in `serialization`. Bytes after `data` are ignored (RealSense
+    /// bags append a `depth_units` float there).
+    ///
+    /// # Errors
+    /// [`CdrError`] for a truncated or malformed payload.
+    pub fn read_as(payload: &[u8], serialization: Serialization) -> Result<Self, CdrError> {
+        match serialization {
+            Serialization::Cdr => Self::decode(&mut CdrReader::new(payload)?),
+            Serialization::Ros1 => Self::decode(&mut Ros1Reader::new(payload)),
+        }
+    }
+
+    /// Reads the fields from `r`.
+    ///
+    /// # Errors
+    /// [`CdrError`] for a truncated or malformed payload.
+    pub fn decode<'a>(r: &mut impl FieldReader<'a>) -> Result<Self, CdrError> {
+        let (header, height, width) = r.sized_header()?;
         Ok(Self {
             header,
             height,
@@ -93,33 +147,46 @@ impl Image {
         })
     }
 
-    /// Reads only the header of an image message (for synchronisation, without copying pixels).
+    /// Reads the header and the encoding of an image message, without its pixels (for
+    /// synchronisation, without copying pixels).
     ///
     /// # Errors
-    /// As [`Image::read`].
-    pub fn read_header(payload: &[u8]) -> Result<Header, CdrError> {
-        Header::read(&mut CdrReader::new(payload)?)
+    /// As [`Image::read_as`].
+    pub fn read_encoding(
+        payload: &[u8],
+        serialization: Serialization,
+    ) -> Result<(Header, String), CdrError> {
+        fn head<'a>(r: &mut impl FieldReader<'a>) -> Result<(Header, String), CdrError> {
+            let (header, _, _) = r.sized_header()?;
+            Ok((header, r.string("encoding")?))
+        }
+        match serialization {
+            Serialization::Cdr => head(&mut CdrReader::new(payload)?),
+            Serialization::Ros1 => head(&mut Ros1Reader::new(payload)),
+        }
     }
 
-    /// Reads the header and the encoding of an image message, without its pixels.
-    ///
-    /// # Errors
-    /// As [`Image::read`].
-    pub fn read_encoding(payload: &[u8]) -> Result<(Header, String), CdrError> {
-        let mut r = CdrReader::new(payload)?;
-        let (header, _, _) = Header::read_sized(&mut r)?;
-        Ok((header, r.string("encoding")?))
-    }
-
-    /// The CDR payload.
+    /// The CDR payload (ROS 2).
     pub fn to_cdr(&self) -> Vec<u8> {
         let mut w = CdrWriter::new();
-        self.header.write_sized(&mut w, self.height, self.width);
+        self.encode(&mut w);
+        w.into_bytes()
+    }
+
+    /// The ROS 1 payload.
+    pub fn to_ros1(&self) -> Vec<u8> {
+        let mut w = Ros1Writer::new();
+        self.encode(&mut w);
+        w.into_bytes()
+    }
+
+    /// Writes the fields to `w`.
+    pub fn encode(&self, w: &mut impl FieldWriter) {
+        w.sized_header(&self.header, self.height, self.width);
         w.string(&self.encoding);
         w.u8(self.is_bigendian);
         w.u32(self.step);
         w.byte_sequence(&self.data);
-        w.into_bytes()
     }
 
     /// An `rgb8` image (or `bgr8` when `bgr`) of `color`.
@@ -202,26 +269,65 @@ impl Image {
     /// The colour pixels.
     ///
     /// # Errors
-    /// [`ImageError::Encoding`] for an encoding other than `rgb8`/`bgr8`; [`ImageError::Size`]
+    /// [`ImageError::Encoding`] for an encoding other than `rgb8`/`bgr8`/`rgba8`/`bgra8`;
+    /// [`ImageError::Size`]
     /// when step, size and data disagree.
     pub fn to_color(&self) -> Result<ColorImage, ImageError> {
-        let bgr = match self.encoding.as_str() {
-            "rgb8" => false,
-            "bgr8" => true,
+        let (bgr, channels) = match self.encoding.as_str() {
+            "rgb8" => (false, 3),
+            "bgr8" => (true, 3),
+            "rgba8" => (false, 4),
+            "bgra8" => (true, 4),
             _ => {
                 return Err(ImageError::Encoding {
                     encoding: self.encoding.clone(),
                     role: "colour",
-                    supported: "rgb8, bgr8",
+                    supported: "rgb8, bgr8, rgba8, bgra8",
                 })
             }
         };
         let mut rgb = Vec::with_capacity(self.width as usize * self.height as usize * 3);
-        self.rows(3)?.for_each(|row| rgb.extend_from_slice(row));
+        for row in self.rows(channels)? {
+            if channels == 3 {
+                rgb.extend_from_slice(row);
+            } else {
+                // Alpha is dropped.
+                row.chunks_exact(4)
+                    .for_each(|p| rgb.extend_from_slice(&p[..3]));
+            }
+        }
         if bgr {
             rgb.chunks_exact_mut(3).for_each(|p| p.swap(0, 2));
         }
         Ok(ColorImage::from_rgb(self.width, self.height, rgb)?)
+    }
+
+    /// The 16-bit values of a `16UC1` or `mono16` image (RealSense raw depth units), row
+    /// padding dropped and `is_bigendian` honoured.
+    ///
+    /// # Errors
+    /// [`ImageError::Encoding`] for another encoding; [`ImageError::Size`].
+    pub fn to_raw_u16(&self) -> Result<Vec<u16>, ImageError> {
+        if !matches!(self.encoding.as_str(), "16UC1" | "mono16") {
+            return Err(ImageError::Encoding {
+                encoding: self.encoding.clone(),
+                role: "raw depth",
+                supported: "mono16, 16UC1",
+            });
+        }
+        let big = self.is_bigendian != 0;
+        let mut raw = Vec::with_capacity(self.width as usize * self.height as usize);
+        for row in self.rows(2)? {
+            raw.extend(row.chunks_exact(2).map(|b| {
+                let b = [b[0], b[1]];
+                if big {
+                    u16::from_be_bytes(b)
+                } else {
+                    u16::from_le_bytes(b)
+                }
+            }));
+        }
+        Ok(raw)
     }
 
     /// The depth in metres.
@@ -232,25 +338,12 @@ impl Image {
     pub fn to_depth(&self) -> Result<DepthImage, ImageError> {
         let big = self.is_bigendian != 0;
         match self.encoding.as_str() {
-            "16UC1" => {
-                let mut raw = Vec::with_capacity(self.width as usize * self.height as usize);
-                for row in self.rows(2)? {
-                    raw.extend(row.chunks_exact(2).map(|b| {
-                        let b = [b[0], b[1]];
-                        if big {
-                            u16::from_be_bytes(b)
-                        } else {
-                            u16::from_le_bytes(b)
-                        }
-                    }));
-                }
-                Ok(DepthImage::from_u16(
-                    self.width,
-                    self.height,
-                    &raw,
-                    DEPTH_16UC1_UNIT_M,
-                )?)
-            }
+            "16UC1" => Ok(DepthImage::from_u16(
+                self.width,
+                self.height,
+                &self.to_raw_u16()?,
+                DEPTH_16UC1_UNIT_M,
+            )?),
             "32FC1" => {
                 let mut depth_m = Vec::with_capacity(self.width as usize * self.height as usize);
                 for row in self.rows(4)? {
@@ -291,7 +384,20 @@ mod tests {
             let back = Image::read(&msg.to_cdr()).unwrap();
             assert_eq!(back, msg);
             assert_eq!(back.to_color().unwrap(), color);
+            let ros1 = Image::read_as(&msg.to_ros1(), Serialization::Ros1).unwrap();
+            assert_eq!(ros1, msg);
         }
+        // rgba8 / bgra8: alpha dropped.
+        let msg = Image::from_color(header(), &color, true);
+        let mut bgra = msg.clone();
+        bgra.encoding = "bgra8".into();
+        bgra.step = 3 * 4;
+        bgra.data = msg
+            .data
+            .chunks_exact(3)
+            .flat_map(|p| [p[0], p[1], p[2], 255])
+            .collect();
+        assert_eq!(bgra.to_color().unwrap(), color);
     }
 
     #[test]

@@ -1,4 +1,11 @@
-//! A ROS 2 MCAP recording opened as a sequence of synchronised RGB-D frames.
+//! A recording — a ROS 2 MCAP file, a ROS 1 bag, or a RealSense SDK bag — opened as a sequence
+//! of synchronised RGB-D frames.
+//!
+//! The format is chosen by the file's first bytes, not its name: `\x89MCAP0` is MCAP (messages
+//! in CDR), `#ROSBAG V2.0` a ROS 1 bag (ROS 1 serialisation; `bag_recording.rs`). A ROS 1 bag
+//! opened without topic choices whose RealSense-driver topics are absent but which has
+//! `/device_*` streams is read in the RealSense SDK layout (`realsense.rs`), whose raw depth is
+//! registered to the colour camera when a frame is loaded (`depth_registration.rs`).
 //!
 //! Opening reads the file once: every message of the colour, depth and camera-info topics is
 //! kept (its CDR payload, not yet decoded into pixels) with its header stamp, and the frames are
@@ -12,12 +19,39 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-use pomona_core::RgbdFrame;
+use pomona_core::{DepthImage, RgbdFrame};
 
+use crate::realsense::RealSenseCalibration;
 use crate::sync::{latest_at_or_before, nearest_within};
 use crate::{
-    CameraInfo, Header, Image, RecordingError, RecordingTopics, CAMERA_INFO_SCHEMA, IMAGE_SCHEMA,
+    CameraInfo, Header, Image, RecordingError, RecordingTopics, Serialization, TopicRequest,
+    CAMERA_INFO_SCHEMA, IMAGE_SCHEMA,
 };
+
+/// The first bytes of an MCAP file.
+const MCAP_MAGIC: &[u8] = b"\x89MCAP0\r\n";
+
+/// What kind of file a recording is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RecordingFormat {
+    /// ROS 2 MCAP (CDR messages).
+    Mcap,
+    /// ROS 1 bag with depth registered to colour (ROS 1 driver topics or chosen ones).
+    Ros1Bag,
+    /// RealSense SDK bag: raw depth, registered to colour on loading.
+    RealSenseBag,
+}
+
+impl RecordingFormat {
+    /// A short name for messages: `MCAP`, `ROS 1 bag`, `RealSense bag`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Mcap => "MCAP",
+            Self::Ros1Bag => "ROS 1 bag",
+            Self::RealSenseBag => "RealSense bag",
+        }
+    }
+}
 
 /// The default depth-to-colour stamp tolerance: 20 ms.
 pub const DEFAULT_SYNC_TOLERANCE_NS: u64 = 20_000_000;
@@ -25,8 +59,8 @@ pub const DEFAULT_SYNC_TOLERANCE_NS: u64 = 20_000_000;
 /// How a recording is read: which topics, and how far apart colour and depth stamps may be.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct RecordingOptions {
-    /// The topics.
-    pub topics: RecordingTopics,
+    /// The topics asked for; the others are the format's defaults.
+    pub topics: TopicRequest,
     /// Largest |depth stamp − colour stamp| of one frame, nanoseconds.
     pub sync_tolerance_ns: u64,
 }
@@ -34,7 +68,7 @@ pub struct RecordingOptions {
 impl Default for RecordingOptions {
     fn default() -> Self {
         Self {
-            topics: RecordingTopics::default(),
+            topics: TopicRequest::default(),
             sync_tolerance_ns: DEFAULT_SYNC_TOLERANCE_NS,
         }
     }
@@ -53,10 +87,10 @@ pub struct TopicSummary {
 
 /// One message kept from the file: its header stamp and its payload.
 #[derive(Debug, Clone)]
-struct Stamped {
-    stamp_ns: u64,
-    frame_id: String,
-    payload: Vec<u8>,
+pub(crate) struct Stamped {
+    pub(crate) stamp_ns: u64,
+    pub(crate) frame_id: String,
+    pub(crate) payload: Vec<u8>,
 }
 
 /// The messages one synchronised frame is made of.
@@ -83,6 +117,9 @@ pub struct SyncedFrame {
 pub struct Recording {
     path: PathBuf,
     options: RecordingOptions,
+    format: RecordingFormat,
+    topics_used: RecordingTopics,
+    realsense: Option<RealSenseCalibration>,
     color: Vec<Stamped>,
     depth: Vec<Stamped>,
     info: Vec<(u64, CameraInfo)>,
@@ -115,11 +152,14 @@ impl Recording {
         Self::open_with(path, &RecordingOptions::default())
     }
 
-    /// Opens `path`, reads the three topics' messages and synchronises them.
+    /// Opens `path` (MCAP or ROS 1 bag, by its first bytes), reads the three topics' messages
+    /// and synchronises them.
     ///
     /// # Errors
-    /// [`RecordingError::Io`] for an unreadable file; [`RecordingError::Mcap`] for a truncated
-    /// or corrupt one; [`RecordingError::MissingTopic`] (listing the recording's topics) when a
+    /// [`RecordingError::Io`] for an unreadable file; [`RecordingError::UnknownFormat`] for
+    /// neither format; [`RecordingError::Mcap`] / [`RecordingError::Bag`] for a truncated or
+    /// corrupt one; [`RecordingError::RealSense`] for a RealSense bag without usable
+    /// calibration; [`RecordingError::MissingTopic`] (listing the recording's topics) when a
     /// topic has no messages; [`RecordingError::WrongSchema`] for a topic of another type;
     /// [`RecordingError::Cdr`] / [`RecordingError::BadStamp`] for a header that cannot be read;
     /// [`RecordingError::CameraInfo`] for unsupported intrinsics.
@@ -132,12 +172,37 @@ impl Recording {
             path: path.clone(),
             source,
         })?;
-        let messages = TopicMessages::read(&path, &bytes, &options.topics)?;
+        let opened = if bytes.starts_with(b"#ROSBAG") {
+            crate::bag_recording::read(&path, &bytes, &options.topics)?
+        } else if bytes.starts_with(MCAP_MAGIC) {
+            let topics = options.topics.resolve(RecordingTopics::default());
+            OpenedMessages {
+                messages: TopicMessages::read(&path, &bytes, &topics)?,
+                format: RecordingFormat::Mcap,
+                topics,
+                realsense: None,
+            }
+        } else {
+            let start = &bytes[..bytes.len().min(12)];
+            return Err(RecordingError::UnknownFormat {
+                path,
+                start: String::from_utf8_lossy(start).into_owned(),
+            });
+        };
         drop(bytes);
-        messages.require_all(&path, &options.topics)?;
+        let OpenedMessages {
+            messages,
+            format,
+            topics,
+            realsense,
+        } = opened;
+        messages.require_all(&path, &topics)?;
         let mut recording = Self {
             path,
             options: options.clone(),
+            format,
+            topics_used: topics,
+            realsense,
             color: messages.color,
             depth: messages.depth,
             info: messages.info,
@@ -192,7 +257,7 @@ impl Recording {
             .to_camera()
             .map_err(|source| RecordingError::CameraInfo {
                 path: self.path.clone(),
-                topic: self.options.topics.camera_info.clone(),
+                topic: self.topics_used.camera_info.clone(),
                 stamp_ns: *stamp_ns,
                 source: Box::new(source),
             })
@@ -206,6 +271,22 @@ impl Recording {
     /// The topics and tolerance it was opened with.
     pub fn options(&self) -> &RecordingOptions {
         &self.options
+    }
+
+    /// The file's format.
+    pub fn format(&self) -> RecordingFormat {
+        self.format
+    }
+
+    /// The colour, depth and camera-info topics frames are read from (the requested ones, the
+    /// rest the format's defaults; a RealSense bag's colour, raw depth and colour info).
+    pub fn selected_topics(&self) -> &RecordingTopics {
+        &self.topics_used
+    }
+
+    /// The depth calibration of a RealSense bag (`None` for other formats).
+    pub fn realsense_calibration(&self) -> Option<&RealSenseCalibration> {
+        self.realsense.as_ref()
     }
 
     /// Every topic in the recording with its schema and message count, sorted by name.
@@ -269,9 +350,8 @@ impl Recording {
                 index,
                 count: self.frames.len(),
             })?;
-        let topics = &self.options.topics;
+        let topics = &self.topics_used;
         let color_msg = self.image(&self.color[parts.color], &topics.color)?;
-        let depth_msg = self.image(&self.depth[parts.depth], &topics.depth)?;
         let stamp_ns = self.color[parts.color].stamp_ns;
         let image_error = |topic: &str, stamp_ns, source| RecordingError::Image {
             path: self.path.clone(),
@@ -282,10 +362,8 @@ impl Recording {
         let color = color_msg
             .to_color()
             .map_err(|e| image_error(&topics.color, stamp_ns, e))?;
-        let depth = depth_msg
-            .to_depth()
-            .map_err(|e| image_error(&topics.depth, self.depth[parts.depth].stamp_ns, e))?;
         let camera = self.camera_of(parts.info)?;
+        let depth = self.depth_of(parts.depth, &camera)?;
         let frame =
             RgbdFrame::new(camera, depth, Some(color)).map_err(|source| RecordingError::Frame {
                 path: self.path.clone(),
@@ -299,12 +377,53 @@ impl Recording {
         })
     }
 
-    fn image(&self, message: &Stamped, topic: &str) -> Result<Image, RecordingError> {
-        Image::read(&message.payload).map_err(|source| RecordingError::Cdr {
+    fn serialization(&self) -> Serialization {
+        match self.format {
+            RecordingFormat::Mcap => Serialization::Cdr,
+            RecordingFormat::Ros1Bag | RecordingFormat::RealSenseBag => Serialization::Ros1,
+        }
+    }
+
+    /// Depth message `index` in metres on the colour camera `camera`'s pixels: as stored, or
+    /// registered to colour for a RealSense bag.
+    fn depth_of(
+        &self,
+        index: usize,
+        camera: &pomona_core::PinholeCamera,
+    ) -> Result<DepthImage, RecordingError> {
+        let message = &self.depth[index];
+        let topic = &self.topics_used.depth;
+        let image_error = |source| RecordingError::Image {
             path: self.path.clone(),
-            topic: topic.to_owned(),
-            log_time_ns: message.stamp_ns,
-            source,
+            topic: topic.clone(),
+            stamp_ns: message.stamp_ns,
+            source: Box::new(source),
+        };
+        match &self.realsense {
+            None => self.image(message, topic)?.to_depth().map_err(image_error),
+            Some(calibration) => {
+                crate::bag_recording::registered_depth(&message.payload, calibration, camera)
+                    .map_err(|e| match e {
+                        crate::bag_recording::RawDepthError::Cdr(source) => RecordingError::Cdr {
+                            path: self.path.clone(),
+                            topic: topic.clone(),
+                            log_time_ns: message.stamp_ns,
+                            source,
+                        },
+                        crate::bag_recording::RawDepthError::Image(source) => image_error(source),
+                    })
+            }
+        }
+    }
+
+    fn image(&self, message: &Stamped, topic: &str) -> Result<Image, RecordingError> {
+        Image::read_as(&message.payload, self.serialization()).map_err(|source| {
+            RecordingError::Cdr {
+                path: self.path.clone(),
+                topic: topic.to_owned(),
+                log_time_ns: message.stamp_ns,
+                source,
+            }
         })
     }
 
@@ -315,20 +434,11 @@ impl Recording {
     /// As [`Recording::load_frame`] for the depth images.
     pub fn max_depth_m(&self) -> Result<Option<f32>, RecordingError> {
         let mut max: Option<f32> = None;
-        let mut used: Vec<usize> = self.frames.iter().map(|f| f.depth).collect();
+        let mut used: Vec<(usize, usize)> = self.frames.iter().map(|f| (f.depth, f.info)).collect();
         used.dedup();
-        for i in used {
-            let message = &self.depth[i];
-            let depth = self
-                .image(message, &self.options.topics.depth)?
-                .to_depth()
-                .map_err(|source| RecordingError::Image {
-                    path: self.path.clone(),
-                    topic: self.options.topics.depth.clone(),
-                    stamp_ns: message.stamp_ns,
-                    source: Box::new(source),
-                })?;
-            if let Some((_, far)) = depth.range_m() {
+        for (depth, info) in used {
+            let camera = self.camera_of(info)?;
+            if let Some((_, far)) = self.depth_of(depth, &camera)?.range_m() {
                 max = Some(max.map_or(far, |m| m.max(far)));
             }
         }
@@ -336,17 +446,21 @@ impl Recording {
     }
 
     /// Whether every depth message of the frames is `16UC1` (millimetres), so a dataset with a
-    /// 1 mm unit holds it exactly.
+    /// 1 mm unit holds it exactly (never for a RealSense bag: registration moves depth off
+    /// whole millimetres).
     ///
     /// # Errors
     /// [`RecordingError::Cdr`] for a malformed depth message.
     pub fn depth_is_millimetres(&self) -> Result<bool, RecordingError> {
+        if self.realsense.is_some() {
+            return Ok(false);
+        }
         for f in &self.frames {
             let message = &self.depth[f.depth];
-            let (_, encoding) =
-                Image::read_encoding(&message.payload).map_err(|source| RecordingError::Cdr {
+            let (_, encoding) = Image::read_encoding(&message.payload, self.serialization())
+                .map_err(|source| RecordingError::Cdr {
                     path: self.path.clone(),
-                    topic: self.options.topics.depth.clone(),
+                    topic: self.topics_used.depth.clone(),
                     log_time_ns: message.stamp_ns,
                     source,
                 })?;
@@ -360,11 +474,19 @@ impl Recording {
 
 /// The messages of the colour, depth and camera-info topics in file order (image payloads kept
 /// undecoded, headers read), and what every topic of the file holds.
-struct TopicMessages {
-    color: Vec<Stamped>,
-    depth: Vec<Stamped>,
-    info: Vec<(u64, CameraInfo)>,
-    topics: Vec<TopicSummary>,
+pub(crate) struct TopicMessages {
+    pub(crate) color: Vec<Stamped>,
+    pub(crate) depth: Vec<Stamped>,
+    pub(crate) info: Vec<(u64, CameraInfo)>,
+    pub(crate) topics: Vec<TopicSummary>,
+}
+
+/// A file's messages with what was learnt opening it.
+pub(crate) struct OpenedMessages {
+    pub(crate) messages: TopicMessages,
+    pub(crate) format: RecordingFormat,
+    pub(crate) topics: RecordingTopics,
+    pub(crate) realsense: Option<RealSenseCalibration>,
 }
 
 impl TopicMessages {
@@ -405,6 +527,7 @@ impl TopicMessages {
                     schema: schema.to_owned(),
                     encoding: channel.message_encoding.clone(),
                     expected,
+                    expected_encoding: Serialization::Cdr,
                 });
             }
             let cdr_error = |source| RecordingError::Cdr {
@@ -421,7 +544,8 @@ impl TopicMessages {
                     info.push((stamp_ns, camera_info));
                 }
                 Role::Color | Role::Depth => {
-                    let header = Image::read_header(&payload).map_err(cdr_error)?;
+                    let (header, _) =
+                        Image::read_encoding(&payload, Serialization::Cdr).map_err(cdr_error)?;
                     let stamp_ns = stamp(path, &channel.topic, &header)?;
                     let list = if role == Role::Color {
                         &mut color
@@ -454,7 +578,11 @@ impl TopicMessages {
 
     /// [`RecordingError::MissingTopic`] (listing the file's topics) for the first of the three
     /// requested topics without messages.
-    fn require_all(&self, path: &Path, topics: &RecordingTopics) -> Result<(), RecordingError> {
+    pub(crate) fn require_all(
+        &self,
+        path: &Path,
+        topics: &RecordingTopics,
+    ) -> Result<(), RecordingError> {
         let requested = [
             (
                 "colour",
@@ -504,7 +632,7 @@ impl Role {
 }
 
 /// The header's stamp in nanoseconds, or an error naming the topic.
-fn stamp(path: &Path, topic: &str, header: &Header) -> Result<u64, RecordingError> {
+pub(crate) fn stamp(path: &Path, topic: &str, header: &Header) -> Result<u64, RecordingError> {
     header.stamp_ns().ok_or_else(|| RecordingError::BadStamp {
         path: path.to_owned(),
         topic: topic.to_owned(),

@@ -230,28 +230,9 @@ impl RecordingWriter {
         encodings: FrameEncodings,
     ) -> Result<(), RecordingError> {
         let header = Header::at(stamp_ns, frame_id);
-        let Some(color) = frame.color() else {
-            return Err(RecordingError::NoColor {
-                path: self.path.clone(),
-                stamp_ns,
-            });
-        };
-        let info = CameraInfo::from_camera(header.clone(), frame.camera());
+        let (info, color, depth) = frame_messages(&self.path, topics, header, frame, encodings)?;
         self.write_camera_info(&topics.camera_info, &info)?;
-        let color = Image::from_color(header.clone(), color, encodings.bgr);
         self.write_image(&topics.color, &color)?;
-        let depth = if encodings.float_depth {
-            Image::from_depth_32fc1(header, frame.depth())
-        } else {
-            Image::from_depth_16uc1(header, frame.depth()).map_err(|source| {
-                RecordingError::Image {
-                    path: self.path.clone(),
-                    topic: topics.depth.clone(),
-                    stamp_ns,
-                    source: Box::new(source),
-                }
-            })?
-        };
         self.write_image(&topics.depth, &depth)
     }
 
@@ -273,16 +254,55 @@ impl RecordingWriter {
             .map_err(|e| io(e.into_error()))?
             .sync_all()
             .map_err(io)?;
-        // Temporary files are created owner-only; a recording is ordinary output (rw-r--r--).
-        #[cfg(unix)]
-        {
-            use std::os::unix::fs::PermissionsExt;
-            self.temp
-                .as_file()
-                .set_permissions(std::fs::Permissions::from_mode(0o644))
-                .map_err(io)?;
-        }
-        self.temp.persist(&path).map_err(|e| io(e.error))?;
-        Ok(())
+        persist(self.temp, &path)
     }
+}
+
+/// The camera info, colour and depth messages of `frame`, all with `header`, as a driver
+/// publishes them (shared by the MCAP and the bag writer).
+pub(crate) fn frame_messages(
+    path: &Path,
+    topics: &RecordingTopics,
+    header: Header,
+    frame: &RgbdFrame,
+    encodings: FrameEncodings,
+) -> Result<(CameraInfo, Image, Image), RecordingError> {
+    let stamp_ns = header.stamp_ns().unwrap_or(0);
+    let Some(color) = frame.color() else {
+        return Err(RecordingError::NoColor {
+            path: path.to_owned(),
+            stamp_ns,
+        });
+    };
+    let info = CameraInfo::from_camera(header.clone(), frame.camera());
+    let color = Image::from_color(header.clone(), color, encodings.bgr);
+    let depth = if encodings.float_depth {
+        Image::from_depth_32fc1(header, frame.depth())
+    } else {
+        Image::from_depth_16uc1(header, frame.depth()).map_err(|source| RecordingError::Image {
+            path: path.to_owned(),
+            topic: topics.depth.clone(),
+            stamp_ns,
+            source: Box::new(source),
+        })?
+    };
+    Ok((info, color, depth))
+}
+
+/// Gives the finished temporary file ordinary permissions and renames it to `path`.
+pub(crate) fn persist(temp: NamedTempFile, path: &Path) -> Result<(), RecordingError> {
+    let io = |source| RecordingError::Io {
+        path: path.to_owned(),
+        source,
+    };
+    // Temporary files are created owner-only; a recording is ordinary output (rw-r--r--).
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        temp.as_file()
+            .set_permissions(std::fs::Permissions::from_mode(0o644))
+            .map_err(io)?;
+    }
+    temp.persist(path).map_err(|e| io(e.error))?;
+    Ok(())
 }

@@ -133,7 +133,8 @@ fn missing_topic_lists_what_the_recording_has() {
         topics: RecordingTopics {
             depth: "/depth/nope".into(),
             ..RecordingTopics::default()
-        },
+        }
+        .into(),
         ..RecordingOptions::default()
     };
     let e = Recording::open_with(&path, &options).unwrap_err();
@@ -153,7 +154,8 @@ fn missing_topic_lists_what_the_recording_has() {
         topics: RecordingTopics {
             color: "/camera/camera/color/camera_info".into(),
             ..RecordingTopics::default()
-        },
+        }
+        .into(),
         ..RecordingOptions::default()
     };
     let text = Recording::open_with(&path, &options)

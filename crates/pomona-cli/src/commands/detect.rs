@@ -1,5 +1,5 @@
 //! `pomona detect`: run a trained detector (any registered pipeline) over every frame of a
-//! dataset (or of a ROS 2 MCAP recording, `--recording`) and write one detection file per frame
+//! dataset (or of a recording, `--recording`: ROS 2 MCAP, ROS 1 bag or RealSense bag) and write one detection file per frame
 //! (`<out>/<frame>.json`, docs/formats.md).
 //!
 //! The model comes from `--model` or, without it, the pipeline's built-in model. Frames are
@@ -46,7 +46,7 @@ pub struct DetectArgs {
     /// Dataset folder; every frame is processed, with or without truth.
     #[arg(long, value_name = "DIR")]
     pub data: Option<PathBuf>,
-    /// A ROS 2 MCAP recording instead of a dataset: every synchronised colour/depth frame is
+    /// A recording (ROS 2 MCAP, ROS 1 bag or RealSense bag) instead of a dataset: every synchronised colour/depth frame is
     /// processed, its file named by the colour stamp (19-digit ns) and holding `stamp_ns` and
     /// `frame_id`. Topics and tolerance as for `pomona extract`.
     #[arg(long, value_name = "FILE")]

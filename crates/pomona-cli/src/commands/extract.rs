@@ -1,4 +1,4 @@
-//! `pomona extract`: a ROS 2 MCAP recording written out as a dataset folder (camera.json,
+//! `pomona extract`: a recording (ROS 2 MCAP, ROS 1 bag or RealSense bag) written out as a dataset folder (camera.json,
 //! `color/`, `depth/`; no truth), so every dataset command works on a recording.
 //!
 //! Frames are the recording's synchronised colour/depth pairs (see `pomona-recording`), named
@@ -21,7 +21,8 @@ use crate::robot_recording::RecordingArgs;
 /// Arguments of `pomona extract`.
 #[derive(Debug, Clone, clap::Args)]
 pub struct ExtractArgs {
-    /// The recording (ROS 2 MCAP, as `ros2 bag record` writes it).
+    /// The recording: ROS 2 MCAP (`ros2 bag record`), ROS 1 bag (`rosbag record`) or RealSense
+    /// Viewer `.bag`, told apart by the file's first bytes.
     #[arg(value_name = "FILE")]
     pub file: PathBuf,
     /// Dataset folder to write (created if missing).

@@ -224,6 +224,16 @@ pub struct WindowNormalParams {
     pub min_neighbors: usize,
     /// Normals are oriented towards this point (default: the camera origin).
     pub viewpoint: Point3<f64>,
+    /// The focal length, px, that `half_window` is meant for (default `None`, and in files
+    /// written before it existed: the window is the same number of pixels on every camera).
+    /// When set, [`WindowNormals::for_focal`] scales the window to a frame's focal length so
+    /// that it spans the same angle, and so the same surface patch at a given depth, on every
+    /// camera: 5×5 pixels at a Kinect v2's 365 px become 11×11 on a 1080p Azure Kinect (917 px)
+    /// and 3×3 on an SR4000 (220 px). A fixed pixel window on a high-resolution camera takes
+    /// its normals from a patch a few millimetres wide, where depth noise and quantisation
+    /// dominate the surface's shape.
+    #[serde(default)]
+    pub reference_focal_px: Option<f64>,
 }
 
 impl Default for WindowNormalParams {
@@ -233,9 +243,13 @@ impl Default for WindowNormalParams {
             max_neighbor_distance_m: 0.02,
             min_neighbors: 5,
             viewpoint: Point3::origin(),
+            reference_focal_px: None,
         }
     }
 }
+
+/// Largest half window [`WindowNormals::for_focal`] scales to (a 65×65 window).
+const MAX_SCALED_HALF_WINDOW: f64 = 32.0;
 
 impl WindowNormalParams {
     /// Validates into a [`WindowNormals`].
@@ -260,6 +274,9 @@ impl WindowNormalParams {
             });
         }
         check_viewpoint(&self.viewpoint)?;
+        if let Some(f) = self.reference_focal_px {
+            crate::consensus::check_positive("reference_focal_px", f)?;
+        }
         Ok(WindowNormals { params: self })
     }
 }
@@ -272,6 +289,42 @@ pub struct WindowNormals {
 }
 
 impl WindowNormals {
+    /// These normals for a camera of focal length `fx_px`: the half window scaled by
+    /// `fx_px / reference_focal_px` (rounded, at least 1, at most 32) when
+    /// [`WindowNormalParams::reference_focal_px`] is set; unchanged otherwise, or when `fx_px`
+    /// is not a positive number.
+    ///
+    /// ```
+    /// use pomona_consensus::WindowNormalParams;
+    /// let normals = WindowNormalParams {
+    ///     reference_focal_px: Some(365.0),
+    ///     ..WindowNormalParams::default()
+    /// }
+    /// .check()?;
+    /// assert_eq!(normals.for_focal(917.0).params().half_window, 5);
+    /// assert_eq!(normals.for_focal(220.0).params().half_window, 1);
+    /// # Ok::<(), pomona_consensus::ConsensusError>(())
+    /// ```
+    pub fn for_focal(&self, fx_px: f64) -> Self {
+        match self.params.reference_focal_px {
+            Some(reference) if fx_px.is_finite() && fx_px > 0.0 => {
+                let scaled = (f64::from(self.params.half_window) * fx_px / reference).round();
+                Self {
+                    params: WindowNormalParams {
+                        half_window: scaled.clamp(1.0, MAX_SCALED_HALF_WINDOW) as u32,
+                        ..self.params
+                    },
+                }
+            }
+            _ => *self,
+        }
+    }
+
+    /// The validated parameters.
+    pub fn params(&self) -> &WindowNormalParams {
+        &self.params
+    }
+
     /// One oriented normal per grid point, `NaN` where undefined, ready for
     /// [`PointCloud::with_normals`].
     ///
@@ -596,5 +649,53 @@ mod tests {
         }
         .check()
         .is_err());
+    }
+
+    #[test]
+    fn a_reference_focal_length_scales_the_window_to_the_camera() {
+        let fixed = WindowNormalParams::default().check().unwrap();
+        assert_eq!(
+            fixed.for_focal(917.0),
+            fixed,
+            "no reference: pixels stay pixels"
+        );
+        let scaled = WindowNormalParams {
+            reference_focal_px: Some(365.0),
+            ..WindowNormalParams::default()
+        }
+        .check()
+        .unwrap();
+        for (fx, want) in [
+            (365.0, 2),
+            (615.0, 3),
+            (917.0, 5),
+            (220.0, 1),
+            (10.0, 1),
+            (1e6, 32),
+        ] {
+            assert_eq!(scaled.for_focal(fx).params().half_window, want, "fx {fx}");
+        }
+        for bad in [0.0, -1.0, f64::NAN] {
+            assert_eq!(scaled.for_focal(bad), scaled, "fx {bad}");
+        }
+        for bad in [0.0, -3.0, f64::INFINITY] {
+            let p = WindowNormalParams {
+                reference_focal_px: Some(bad),
+                ..WindowNormalParams::default()
+            };
+            assert!(p.check().is_err(), "{bad}");
+        }
+    }
+
+    #[test]
+    fn parameters_written_before_the_reference_focal_length_read_as_fixed_pixels() {
+        let mut json = serde_json::to_value(WindowNormalParams {
+            reference_focal_px: Some(365.0),
+            ..WindowNormalParams::default()
+        })
+        .unwrap();
+        json.as_object_mut().unwrap().remove("reference_focal_px");
+        let old: WindowNormalParams = serde_json::from_value(json).unwrap();
+        assert_eq!(old, WindowNormalParams::default());
     }
 }

@@ -210,6 +210,13 @@ impl ColorContourDetector {
             name: name.into(),
             reason: reason.into(),
         };
+        if !(0.0..=1.0).contains(&p.color_grow_fraction) {
+            return Err(invalid("color_grow_fraction", "must lie in [0, 1]"));
+        }
+        let grow_threshold = quantise_probability(p.color_threshold * p.color_grow_fraction);
+        if p.edge_fit.merge_max_rms.is_nan() || p.edge_fit.merge_max_rms < 0.0 {
+            return Err(invalid("edge_fit.merge_max_rms", "must be 0 (off) or positive"));
+        }
         let (lo, hi) = p.radius_range_m;
         if !(lo > 0.0 && lo <= hi) {
             return Err(invalid("radius_range_m", "needs 0 < min ≤ max"));
@@ -222,7 +229,16 @@ impl ColorContourDetector {
             return Err(invalid("prior_radius_m", "must be positive"));
         }
         Ok(Self {
-            color: ColorClassStage { lut, threshold },
+            color: ColorClassStage {
+                lut,
+                threshold,
+                grow_threshold: if p.color_grow_fraction < 1.0 {
+                    grow_threshold.min(threshold)
+                } else {
+                    threshold
+                },
+                grow_seed_px: p.color_grow_seed_px,
+            },
             smoothing_half_window: p.edge_fit.smoothing_half_window,
             min_component_px: p.min_component_px,
             mask_closing_px: p.mask_closing_px,

@@ -307,6 +307,11 @@ fn weighted_mean(group: &[Estimate]) -> Option<(Point2<f64>, f64)> {
 /// Gauss–Newton steps of the geometric refinement of a group's circle.
 const REFINE_ITERATIONS: usize = 10;
 
+/// A least-squares radius more than this factor from the group's Eq. 8 mean radius (either
+/// way) is not trusted: on a short, noisy piece of outline the fit can run off to a much larger
+/// or smaller circle, while the mean of the window estimates stays bounded by them.
+const MAX_FIT_TO_MEAN_RADIUS: f64 = 1.5;
+
 fn arc_of_group(group: &[Estimate], table: &ArcTable, mode: GroupCircle) -> Option<ContourArc> {
     let (mean_center, mean_radius) = weighted_mean(group)?;
     // Arc covered: the union of the windows' steps (step i joins point i to point i + 1).
@@ -324,6 +329,10 @@ fn arc_of_group(group: &[Estimate], table: &ArcTable, mode: GroupCircle) -> Opti
             let points = step_points(table.points, &step_indices);
             fit_circle(&points)
                 .and_then(|start| refine_circle(&points, start, REFINE_ITERATIONS))
+                .filter(|&(_, r)| {
+                    r <= MAX_FIT_TO_MEAN_RADIUS * mean_radius
+                        && r * MAX_FIT_TO_MEAN_RADIUS >= mean_radius
+                })
                 .unwrap_or((mean_center, mean_radius))
         }
     };

@@ -109,7 +109,7 @@ fn squared_distances(points: &[Point2<f64>], center: Point2<f64>, radius: f64) -
 }
 
 /// Solves a 3×3 linear system by Cramer's rule; `None` when it is (nearly) singular.
-fn solve3(a: [[f64; 3]; 3], b: [f64; 3]) -> Option<[f64; 3]> {
+pub(crate) fn solve3(a: [[f64; 3]; 3], b: [f64; 3]) -> Option<[f64; 3]> {
     let det = |m: &[[f64; 3]; 3]| {
         m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
             - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])

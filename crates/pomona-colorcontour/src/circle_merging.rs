@@ -19,16 +19,73 @@
 use pomona_core::nalgebra::Point2;
 
 use crate::contour_circles::{step_points, step_support};
+use crate::circle_least_squares::solve3;
 use crate::{fit_circle, refine_circle, rms_distance, Contour, ContourArc, ContourCircle};
 
 /// Gauss–Newton steps of the geometric refinement of a merged circle.
 const REFINE_ITERATIONS: usize = 10;
+
+/// How far above `max_rms` the screening fit of a pair may lie and still be fitted: the
+/// algebraic circle's distances bound the geometric optimum's from above but can be several
+/// times larger on short arcs.
+const SCREEN: f64 = 3.0;
 
 /// A set of arcs (contour index, that contour's covered steps) with their common circle.
 #[derive(Debug, Clone)]
 struct Merged {
     pieces: Vec<(usize, Vec<usize>)>,
     circle: ContourCircle,
+    /// Sums over the pieces' points for the screening fit ([`Moments`]).
+    moments: Moments,
+}
+
+/// The sums that give a set's algebraic (Kåsa) circle and its residual without visiting the
+/// points again, so that a pair is screened in constant time: n, Σx, Σy, Σx², Σxy, Σy², Σxs,
+/// Σys, Σs, Σs² with s = x² + y², in coordinates relative to a common origin. Added over the
+/// pieces of a pair, points that two pieces of one contour share count twice (screening only).
+#[derive(Debug, Clone, Copy, Default)]
+struct Moments([f64; 10]);
+
+impl Moments {
+    fn of(points: &[Point2<f64>], origin: Point2<f64>) -> Self {
+        let mut m = [0.0; 10];
+        for p in points {
+            let (x, y) = (p.x - origin.x, p.y - origin.y);
+            let s = x * x + y * y;
+            for (acc, v) in m
+                .iter_mut()
+                .zip([1.0, x, y, x * x, x * y, y * y, x * s, y * s, s, s * s])
+            {
+                *acc += v;
+            }
+        }
+        Self(m)
+    }
+
+    fn plus(&self, other: &Self) -> Self {
+        Self(std::array::from_fn(|k| self.0[k] + other.0[k]))
+    }
+
+    /// The algebraic circle's radius and its root-mean-square distance, approximated from the
+    /// algebraic residual (|p − c|² − r² ≈ 2r (|p − c| − r) near the circle).
+    fn screen(&self) -> Option<(f64, f64)> {
+        let [n, sx, sy, sxx, sxy, syy, sxs, sys, ss, sss] = self.0;
+        if n < 3.0 {
+            return None;
+        }
+        let [d, e, f] = solve3(
+            [[sxx, sxy, sx], [sxy, syy, sy], [sx, sy, n]],
+            [-sxs, -sys, -ss],
+        )?;
+        let r2 = (d * d + e * e) / 4.0 - f;
+        if !(r2 > 0.0) {
+            return None;
+        }
+        let residual = sss + d * d * sxx + e * e * syy + f * f * n
+            + 2.0 * (d * sxs + e * sys + f * ss + d * e * sxy + d * f * sx + e * f * sy);
+        let r = r2.sqrt();
+        Some((r, (residual.max(0.0) / n).sqrt() / (2.0 * r)))
+    }
 }
 
 /// The circles of `arcs` (each with the index of its contour in `contours`) after merging those
@@ -39,44 +96,51 @@ pub fn merge_arcs(
     arcs: Vec<(usize, ContourArc)>,
     max_rms: f64,
 ) -> Vec<ContourCircle> {
-    let mut sets: Vec<Option<Merged>> = arcs
+    let arcs: Vec<(usize, ContourArc)> = arcs
         .into_iter()
         .filter(|(c, _)| *c < contours.len())
+        .collect();
+    let origin = arcs
+        .first()
+        .and_then(|(c, _)| contours[*c].points.first().copied())
+        .unwrap_or_else(Point2::origin);
+    let mut sets: Vec<Option<Merged>> = arcs
+        .into_iter()
         .map(|(c, a)| {
+            let points = step_points(&contours[c].points, &a.step_indices);
             Some(Merged {
+                moments: Moments::of(&points, origin),
                 pieces: vec![(c, a.step_indices)],
                 circle: a.circle,
             })
         })
         .collect();
     if max_rms > 0.0 {
-        let k = sets.len();
-        // fits[i][j] (i < j): the merged set and its relative distance, when it qualifies.
-        let mut fits: Vec<Vec<Option<(f64, Merged)>>> = vec![vec![None; k]; k];
-        for i in 0..k {
-            for j in i + 1..k {
-                fits[i][j] = pair_fit(contours, &sets, i, j, max_rms);
-            }
-        }
-        loop {
-            let best = (0..k)
-                .flat_map(|i| (i + 1..k).map(move |j| (i, j)))
-                .filter_map(|(i, j)| fits[i][j].as_ref().map(|(q, _)| (*q, i, j)))
-                .min_by(|a, b| a.0.total_cmp(&b.0));
-            let Some((_, i, j)) = best else { break };
-            let merged = fits[i][j].take().map(|(_, m)| m);
-            sets[i] = merged;
-            sets[j] = None;
-            for other in 0..k {
-                let (lo, hi) = (other.min(j), other.max(j));
-                if lo != hi {
-                    fits[lo][hi] = None;
+        // Qualifying pairs only (most pairs fail the centre test), as (quality, i, j, merged).
+        let mut candidates: Vec<(f64, usize, usize, Merged)> = Vec::new();
+        for i in 0..sets.len() {
+            for j in i + 1..sets.len() {
+                if let Some((q, m)) = pair_fit(contours, &sets, i, j, max_rms) {
+                    candidates.push((q, i, j, m));
                 }
             }
-            for other in 0..k {
+        }
+        while let Some(best) = candidates
+            .iter()
+            .enumerate()
+            .min_by(|a, b| a.1 .0.total_cmp(&b.1 .0).then(a.0.cmp(&b.0)))
+            .map(|(k, _)| k)
+        {
+            let (_, i, j, merged) = candidates.swap_remove(best);
+            sets[i] = Some(merged);
+            sets[j] = None;
+            candidates.retain(|c| c.1 != i && c.2 != i && c.1 != j && c.2 != j);
+            for other in 0..sets.len() {
                 if other != i {
                     let (lo, hi) = (other.min(i), other.max(i));
-                    fits[lo][hi] = pair_fit(contours, &sets, lo, hi, max_rms);
+                    if let Some((q, m)) = pair_fit(contours, &sets, lo, hi, max_rms) {
+                        candidates.push((q, lo, hi, m));
+                    }
                 }
             }
         }
@@ -99,6 +163,11 @@ fn pair_fit(
     if (ca.center_px - cb.center_px).norm() > ca.radius_px.max(cb.radius_px) {
         return None;
     }
+    // Screening on the summed moments (constant time) before the points are visited.
+    let (_, screen_rms) = a.moments.plus(&b.moments).screen()?;
+    if !(screen_rms <= SCREEN * max_rms) {
+        return None;
+    }
     let pieces = union_pieces(&a.pieces, &b.pieces);
     let points: Vec<Point2<f64>> = pieces
         .iter()
@@ -118,6 +187,7 @@ fn pair_fit(
     Some((
         quality,
         Merged {
+            moments: a.moments.plus(&b.moments),
             pieces,
             circle: ContourCircle {
                 center_px,
@@ -177,8 +247,8 @@ mod tests {
         let c = ring((50.0, 40.0), 30.0, 200);
         // Two arcs of the same circle whose own circles came out small and off-centre.
         let arcs = vec![
-            (0, arc(0..40, (60.0, 45.0), 18.0)),
-            (0, arc(90..130, (40.0, 35.0), 17.0)),
+            (0, arc(0..40, (55.0, 45.0), 18.0)),
+            (0, arc(90..130, (45.0, 38.0), 17.0)),
         ];
         let merged = merge_arcs(&[c.clone()], arcs.clone(), 0.04);
         assert_eq!(merged.len(), 1, "{merged:?}");
@@ -208,5 +278,38 @@ mod tests {
         ];
         let far_contours = [ring((30.0, 30.0), 20.0, 120), ring((30.0, 30.0), 20.0, 120)];
         assert_eq!(merge_arcs(&far_contours, far, 0.5).len(), 2);
+    }
+
+    #[test]
+    fn a_fruit_cut_in_two_by_a_branch_gives_one_circle() {
+        // A disc of radius 30 px crossed by a 6 px band (a branch): two components, two
+        // contours, each with a circle of part of the fruit.
+        let (w, h, cx, cy, r) = (140usize, 120usize, 70.0, 60.0, 30.0);
+        let mask: Vec<bool> = (0..w * h)
+            .map(|i| {
+                let (x, y) = ((i % w) as f64, (i / w) as f64);
+                (x - cx).powi(2) + (y - cy).powi(2) <= r * r && !(x - y - 10.0).abs().lt(&4.0)
+            })
+            .collect();
+        let params = crate::EdgeFitParams::default();
+        let contours: Vec<Contour> = crate::trace_contours(&crate::smooth_mask(&mask, w, h), w, h, 20)
+            .iter()
+            .map(|c| c.smoothed(params.smoothing_half_window))
+            .collect();
+        assert_eq!(contours.len(), 2);
+        let arcs: Vec<(usize, ContourArc)> = contours
+            .iter()
+            .enumerate()
+            .flat_map(|(k, c)| crate::contour_arcs(c, &params).into_iter().map(move |a| (k, a)))
+            .collect();
+        assert!(arcs.len() >= 2, "{arcs:?}");
+        let merged = merge_arcs(&contours, arcs, params.merge_max_rms);
+        let best = merged
+            .iter()
+            .max_by(|a, b| a.support.total_cmp(&b.support))
+            .unwrap();
+        assert!((best.center_px - Point2::new(cx, cy)).norm() < 0.1 * r, "{merged:?}");
+        assert!((best.radius_px - r).abs() < 0.1 * r, "{merged:?}");
+        assert!(best.support > 0.6, "{merged:?}");
     }
 }

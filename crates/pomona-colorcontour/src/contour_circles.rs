@@ -395,11 +395,19 @@ mod tests {
     }
 
     fn circles(mask: &[bool], w: usize, h: usize) -> Vec<ContourCircle> {
-        let params = EdgeFitParams::default();
+        circles_with(mask, w, h, &EdgeFitParams::default())
+    }
+
+    fn circles_with(
+        mask: &[bool],
+        w: usize,
+        h: usize,
+        params: &EdgeFitParams,
+    ) -> Vec<ContourCircle> {
         let smooth = smooth_mask(mask, w, h);
         trace_contours(&smooth, w, h, 20)
             .iter()
-            .flat_map(|c| contour_circles(&c.smoothed(params.smoothing_half_window), &params))
+            .flat_map(|c| contour_circles(&c.smoothed(params.smoothing_half_window), params))
             .collect()
     }
 
@@ -450,5 +458,37 @@ mod tests {
             });
             assert!(hit, "no circle at ({cx}, {cy}): {found:?}");
         }
+    }
+
+    #[test]
+    fn least_squares_circles_of_a_sunlit_half_are_the_fruit_and_the_paper_mode_stays() {
+        // The lower half of a fruit (the sunlit part; the shaded top is missing from the mask):
+        // its outline is a half circle closed by a straight terminator.
+        let (w, h) = (140, 120);
+        let (cx, cy, r) = (70.0, 50.0, 30.0);
+        let mask = partial_disc(w, h, (cx, cy, r), |_, y| y < cy);
+        let paper = EdgeFitParams {
+            group_circle: GroupCircle::WeightedMean,
+            merge_max_rms: 0.0,
+            ..EdgeFitParams::default()
+        };
+        let fitted = EdgeFitParams {
+            group_circle: GroupCircle::LeastSquares,
+            ..paper
+        };
+        let truth = Point2::new(cx, cy);
+        let mean = best(&circles_with(&mask, w, h, &paper));
+        let lsq = best(&circles_with(&mask, w, h, &fitted));
+        let (mean_err, lsq_err) = ((mean.center_px - truth).norm(), (lsq.center_px - truth).norm());
+        assert!(lsq_err < 0.1 * r, "least squares off by {lsq_err}: {lsq:?}");
+        assert!((lsq.radius_px - r).abs() < 0.1 * r, "{lsq:?}");
+        assert!(lsq_err < mean_err, "{lsq_err} vs {mean_err}: {lsq:?} {mean:?}");
+        // Model files without the new settings mean the paper's behaviour.
+        let old: EdgeFitParams = serde_json::from_value(serde_json::json!({
+            "arc_per_radius": 1.0, "arc_tolerance": 0.2, "max_adapt_steps": 4, "min_window": 6,
+            "jump_fraction": 0.3, "min_estimates": 4, "smoothing_half_window": 2
+        }))
+        .unwrap();
+        assert_eq!(old, paper);
     }
 }

@@ -66,8 +66,9 @@ impl Moments {
         Self(std::array::from_fn(|k| self.0[k] + other.0[k]))
     }
 
-    /// The algebraic circle's radius and its root-mean-square distance, approximated from the
-    /// algebraic residual (|p − c|² − r² ≈ 2r (|p − c| − r) near the circle).
+    /// The algebraic circle's radius and its root-mean-square distance over that radius,
+    /// approximated from the algebraic residual (|p − c|² − r² ≈ 2r (|p − c| − r) near the
+    /// circle).
     fn screen(&self) -> Option<(f64, f64)> {
         let [n, sx, sy, sxx, sxy, syy, sxs, sys, ss, sss] = self.0;
         if n < 3.0 {
@@ -84,7 +85,7 @@ impl Moments {
         let residual = sss + d * d * sxx + e * e * syy + f * f * n
             + 2.0 * (d * sxs + e * sys + f * ss + d * e * sxy + d * f * sx + e * f * sy);
         let r = r2.sqrt();
-        Some((r, (residual.max(0.0) / n).sqrt() / (2.0 * r)))
+        Some((r, (residual.max(0.0) / n).sqrt() / (2.0 * r * r)))
     }
 }
 
@@ -165,6 +166,7 @@ fn pair_fit(
     }
     // Screening on the summed moments (constant time) before the points are visited.
     let (_, screen_rms) = a.moments.plus(&b.moments).screen()?;
+    debug_assert!(screen_rms >= 0.0);
     if !(screen_rms <= SCREEN * max_rms) {
         return None;
     }

@@ -130,7 +130,6 @@ pub(crate) fn solve3(a: [[f64; 3]; 3], b: [f64; 3]) -> Option<[f64; 3]> {
     }))
 }
 
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -171,7 +170,10 @@ mod tests {
         let kasa = fit_circle(&noisy).unwrap();
         let geo = refine_circle(&noisy, kasa, 20).unwrap();
         assert!(rms_distance(&noisy, geo.0, geo.1) <= rms_distance(&noisy, kasa.0, kasa.1));
-        assert!((geo.0 - c).norm() < 1.5 && (geo.1 - r).abs() < 1.5, "{geo:?}");
+        assert!(
+            (geo.0 - c).norm() < 1.5 && (geo.1 - r).abs() < 1.5,
+            "{geo:?}"
+        );
         assert!(refine_circle(&noisy[..2], kasa, 5).is_none());
         assert!(refine_circle(&noisy, (c, f64::NAN), 5).is_none());
         assert_eq!(rms_distance(&[], c, r), 0.0);

@@ -18,8 +18,8 @@
 
 use pomona_core::nalgebra::Point2;
 
-use crate::contour_circles::{step_points, step_support};
 use crate::circle_least_squares::solve3;
+use crate::contour_circles::{step_points, step_support};
 use crate::{fit_circle, refine_circle, rms_distance, Contour, ContourArc, ContourCircle};
 
 /// Gauss–Newton steps of the geometric refinement of a merged circle.
@@ -52,9 +52,9 @@ impl Moments {
         for p in points {
             let (x, y) = (p.x - origin.x, p.y - origin.y);
             let s = x * x + y * y;
-            for (acc, v) in m
-                .iter_mut()
-                .zip([1.0, x, y, x * x, x * y, y * y, x * s, y * s, s, s * s])
+            for (acc, v) in
+                m.iter_mut()
+                    .zip([1.0, x, y, x * x, x * y, y * y, x * s, y * s, s, s * s])
             {
                 *acc += v;
             }
@@ -82,7 +82,10 @@ impl Moments {
         if !(r2 > 0.0) {
             return None;
         }
-        let residual = sss + d * d * sxx + e * e * syy + f * f * n
+        let residual = sss
+            + d * d * sxx
+            + e * e * syy
+            + f * f * n
             + 2.0 * (d * sxs + e * sys + f * ss + d * e * sxy + d * f * sx + e * f * sy);
         let r = r2.sqrt();
         Some((r, (residual.max(0.0) / n).sqrt() / (2.0 * r * r)))
@@ -175,8 +178,8 @@ fn pair_fit(
         .iter()
         .flat_map(|(c, steps)| step_points(&contours[*c].points, steps))
         .collect();
-    let (center_px, radius_px) = fit_circle(&points)
-        .and_then(|start| refine_circle(&points, start, REFINE_ITERATIONS))?;
+    let (center_px, radius_px) =
+        fit_circle(&points).and_then(|start| refine_circle(&points, start, REFINE_ITERATIONS))?;
     let quality = rms_distance(&points, center_px, radius_px) / radius_px;
     if !(quality <= max_rms) {
         return None;
@@ -255,7 +258,10 @@ mod tests {
         let merged = merge_arcs(&[c.clone()], arcs.clone(), 0.04);
         assert_eq!(merged.len(), 1, "{merged:?}");
         let m = merged[0];
-        assert!((m.center_px - Point2::new(50.0, 40.0)).norm() < 1e-6, "{m:?}");
+        assert!(
+            (m.center_px - Point2::new(50.0, 40.0)).norm() < 1e-6,
+            "{m:?}"
+        );
         assert!((m.radius_px - 30.0).abs() < 1e-6);
         assert!((m.support - 80.0 / 200.0).abs() < 0.01, "{}", m.support);
         // Off: the arcs stay as they were.
@@ -294,15 +300,20 @@ mod tests {
             })
             .collect();
         let params = crate::EdgeFitParams::default();
-        let contours: Vec<Contour> = crate::trace_contours(&crate::smooth_mask(&mask, w, h), w, h, 20)
-            .iter()
-            .map(|c| c.smoothed(params.smoothing_half_window))
-            .collect();
+        let contours: Vec<Contour> =
+            crate::trace_contours(&crate::smooth_mask(&mask, w, h), w, h, 20)
+                .iter()
+                .map(|c| c.smoothed(params.smoothing_half_window))
+                .collect();
         assert_eq!(contours.len(), 2);
         let arcs: Vec<(usize, ContourArc)> = contours
             .iter()
             .enumerate()
-            .flat_map(|(k, c)| crate::contour_arcs(c, &params).into_iter().map(move |a| (k, a)))
+            .flat_map(|(k, c)| {
+                crate::contour_arcs(c, &params)
+                    .into_iter()
+                    .map(move |a| (k, a))
+            })
             .collect();
         assert!(arcs.len() >= 2, "{arcs:?}");
         let merged = merge_arcs(&contours, arcs, params.merge_max_rms);
@@ -310,7 +321,10 @@ mod tests {
             .iter()
             .max_by(|a, b| a.support.total_cmp(&b.support))
             .unwrap();
-        assert!((best.center_px - Point2::new(cx, cy)).norm() < 0.1 * r, "{merged:?}");
+        assert!(
+            (best.center_px - Point2::new(cx, cy)).norm() < 0.1 * r,
+            "{merged:?}"
+        );
         assert!((best.radius_px - r).abs() < 0.1 * r, "{merged:?}");
         assert!(best.support > 0.6, "{merged:?}");
     }

@@ -479,10 +479,16 @@ mod tests {
         let truth = Point2::new(cx, cy);
         let mean = best(&circles_with(&mask, w, h, &paper));
         let lsq = best(&circles_with(&mask, w, h, &fitted));
-        let (mean_err, lsq_err) = ((mean.center_px - truth).norm(), (lsq.center_px - truth).norm());
+        let (mean_err, lsq_err) = (
+            (mean.center_px - truth).norm(),
+            (lsq.center_px - truth).norm(),
+        );
         assert!(lsq_err < 0.1 * r, "least squares off by {lsq_err}: {lsq:?}");
         assert!((lsq.radius_px - r).abs() < 0.1 * r, "{lsq:?}");
-        assert!(lsq_err < mean_err, "{lsq_err} vs {mean_err}: {lsq:?} {mean:?}");
+        assert!(
+            lsq_err < mean_err,
+            "{lsq_err} vs {mean_err}: {lsq:?} {mean:?}"
+        );
         // Model files without the new settings mean the paper's behaviour.
         let old: EdgeFitParams = serde_json::from_value(serde_json::json!({
             "arc_per_radius": 1.0, "arc_tolerance": 0.2, "max_adapt_steps": 4, "min_window": 6,

@@ -19,7 +19,11 @@
 //! ([`Contour`]); concave and straight windows, the jump rule, wrap-around joining and the
 //! support score ([`contour_circles`]); overlap relative to the smaller circle
 //! ([`prune_overlapping`]); the size test before the overlap test, and 3D from depth instead of
-//! stereo ([`stages::FruitStage`], [`sphere_from_depth`]). Not built here: stereo matching (§4).
+//! stereo ([`stages::FruitStage`], [`sphere_from_depth`]). Four more, each a parameter whose
+//! paper value restores the paper's step: hysteresis on the colour table ([`hysteresis_mask`]),
+//! a closing of the mask ([`close_mask`]), least-squares circles of each group's contour points
+//! ([`GroupCircle`], [`refine_circle`]) and merging of arcs that lie on one circle
+//! ([`merge_arcs`]). Not built here: stereo matching (§4).
 //!
 //! Tracking during the arm's approach (§3.3) is [`ApproachTracker`]: a 5×5 colour check at the
 //! expected position, a four-direction edge scan and circle fit ([`scan_four_directions`],
@@ -58,8 +62,7 @@ pub use contour_circles::{
     contour_arcs, contour_circles, ContourArc, ContourCircle, EdgeFitParams, GroupCircle,
 };
 pub use edge_scan::{
-    circle_from_boundaries, scan_four_directions, EdgeScanParams, ScanEnd,
-    SCAN_DIRECTIONS,
+    circle_from_boundaries, scan_four_directions, EdgeScanParams, ScanEnd, SCAN_DIRECTIONS,
 };
 pub use hsigma::{hsigma, hsigma_integers, hsigma_of_integers};
 pub use hsigma_lut::{quantise_probability, HSigmaLut};

@@ -70,8 +70,9 @@ pub fn hysteresis_mask(
 /// own test).
 fn neighbours(i: usize, width: usize, height: usize) -> impl Iterator<Item = usize> {
     let (x, y) = (i % width, i / width);
-    (y.saturating_sub(1)..=(y + 1).min(height - 1))
-        .flat_map(move |ny| (x.saturating_sub(1)..=(x + 1).min(width - 1)).map(move |nx| ny * width + nx))
+    (y.saturating_sub(1)..=(y + 1).min(height - 1)).flat_map(move |ny| {
+        (x.saturating_sub(1)..=(x + 1).min(width - 1)).map(move |nx| ny * width + nx)
+    })
 }
 
 #[cfg(test)]

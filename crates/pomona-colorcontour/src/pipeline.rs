@@ -215,7 +215,10 @@ impl ColorContourDetector {
         }
         let grow_threshold = quantise_probability(p.color_threshold * p.color_grow_fraction);
         if p.edge_fit.merge_max_rms.is_nan() || p.edge_fit.merge_max_rms < 0.0 {
-            return Err(invalid("edge_fit.merge_max_rms", "must be 0 (off) or positive"));
+            return Err(invalid(
+                "edge_fit.merge_max_rms",
+                "must be 0 (off) or positive",
+            ));
         }
         let (lo, hi) = p.radius_range_m;
         if !(lo > 0.0 && lo <= hi) {

@@ -6,9 +6,9 @@ use pomona_core::{Detection, PixelBox, RgbdFrame};
 use pomona_pipeline::{PipelineError, Stage};
 
 use crate::{
-    close_mask, contour_arcs, hysteresis_mask, merge_arcs, prune_overlapping, smooth_mask, sphere_from_depth,
-    sphere_from_size, trace_contours, ColorContourParams, Contour, ContourArc, ContourCircle, EdgeFitParams,
-    HSigmaLut, PIPELINE_NAME,
+    close_mask, contour_arcs, hysteresis_mask, merge_arcs, prune_overlapping, smooth_mask,
+    sphere_from_depth, sphere_from_size, trace_contours, ColorContourParams, Contour, ContourArc,
+    ContourCircle, EdgeFitParams, HSigmaLut, PIPELINE_NAME,
 };
 
 /// Per pixel: the lookup table's value at or above the threshold (§3.1), or, with a lower
@@ -96,7 +96,11 @@ impl Stage<&[Contour], Vec<ContourCircle>> for EdgeFitStage {
         let arcs: Vec<(usize, ContourArc)> = contours
             .iter()
             .enumerate()
-            .flat_map(|(k, c)| contour_arcs(c, &self.params).into_iter().map(move |a| (k, a)))
+            .flat_map(|(k, c)| {
+                contour_arcs(c, &self.params)
+                    .into_iter()
+                    .map(move |a| (k, a))
+            })
             .collect();
         Ok(merge_arcs(contours, arcs, self.params.merge_max_rms))
     }

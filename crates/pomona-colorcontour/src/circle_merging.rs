@@ -79,7 +79,7 @@ impl Moments {
             [-sxs, -sys, -ss],
         )?;
         let r2 = (d * d + e * e) / 4.0 - f;
-        if !(r2 > 0.0) {
+        if r2.is_nan() || r2 <= 0.0 {
             return None;
         }
         let residual = sss
@@ -170,7 +170,7 @@ fn pair_fit(
     // Screening on the summed moments (constant time) before the points are visited.
     let (_, screen_rms) = a.moments.plus(&b.moments).screen()?;
     debug_assert!(screen_rms >= 0.0);
-    if !(screen_rms <= SCREEN * max_rms) {
+    if screen_rms.is_nan() || screen_rms > SCREEN * max_rms {
         return None;
     }
     let pieces = union_pieces(&a.pieces, &b.pieces);
@@ -181,7 +181,7 @@ fn pair_fit(
     let (center_px, radius_px) =
         fit_circle(&points).and_then(|start| refine_circle(&points, start, REFINE_ITERATIONS))?;
     let quality = rms_distance(&points, center_px, radius_px) / radius_px;
-    if !(quality <= max_rms) {
+    if quality.is_nan() || quality > max_rms {
         return None;
     }
     let support = pieces
@@ -255,7 +255,7 @@ mod tests {
             (0, arc(0..40, (55.0, 45.0), 18.0)),
             (0, arc(90..130, (45.0, 38.0), 17.0)),
         ];
-        let merged = merge_arcs(&[c.clone()], arcs.clone(), 0.04);
+        let merged = merge_arcs(std::slice::from_ref(&c), arcs.clone(), 0.04);
         assert_eq!(merged.len(), 1, "{merged:?}");
         let m = merged[0];
         assert!(

@@ -277,3 +277,55 @@ impl Detector for ColorContourDetector {
         )
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn built_in() -> ColorContourStageParams {
+        let text = ColorContourPipeline::default()
+            .default_model()
+            .expect("the crate ships a built-in model");
+        let model: ModelFile = serde_json::from_str(text).unwrap();
+        ColorContourStageParams::from_model(&model).unwrap()
+    }
+
+    #[test]
+    fn the_built_in_model_runs_the_documented_defaults_and_bad_settings_are_named() {
+        let stage = built_in();
+        let defaults = ColorContourParams::default();
+        assert_eq!(
+            stage.params.color_grow_fraction,
+            defaults.color_grow_fraction
+        );
+        assert_eq!(stage.params.color_grow_seed_px, defaults.color_grow_seed_px);
+        assert_eq!(
+            stage.params.edge_fit.group_circle,
+            defaults.edge_fit.group_circle
+        );
+        assert_eq!(
+            stage.params.edge_fit.merge_max_rms,
+            defaults.edge_fit.merge_max_rms
+        );
+        assert!(ColorContourDetector::new(&stage).is_ok());
+        for (name, change) in [
+            (
+                "color_grow_fraction",
+                (|p: &mut ColorContourParams| p.color_grow_fraction = 1.5)
+                    as fn(&mut ColorContourParams),
+            ),
+            ("color_grow_fraction", |p| p.color_grow_fraction = f64::NAN),
+            ("edge_fit.merge_max_rms", |p| {
+                p.edge_fit.merge_max_rms = -0.1
+            }),
+        ] {
+            let mut bad = stage.clone();
+            change(&mut bad.params);
+            match ColorContourDetector::new(&bad) {
+                Err(PipelineError::InvalidParameter { name: n, .. }) => assert_eq!(n, name),
+                Err(e) => panic!("{name}: wrong error {e}"),
+                Ok(_) => panic!("{name}: accepted"),
+            }
+        }
+    }
+}

@@ -17,11 +17,19 @@
 //! when they continue each other; a group needs `min_estimates` estimates; and its score is its
 //! *support fraction* — the arc length it spans over 2πr, capped at 1 — which the pruning and the
 //! detector's score use (the paper's "score accumulated during the edge-fitting process").
+//!
+//! Two further departures, each off by a setting: the group's circle may be the least-squares
+//! circle of the contour points its windows cover ([`GroupCircle::LeastSquares`]: algebraic fit
+//! refined geometrically, [`crate::refine_circle`]) instead of the weighted mean of its Eq. 8
+//! estimates ([`GroupCircle::WeightedMean`], the paper's). The windows at the ends of a piece of
+//! outline straddle its corners and give small circles, which pull the mean radius down and the
+//! centre towards the piece; a fit on the points themselves does not. Groups whose points fit one
+//! circle together are then merged ([`crate::merge_arcs`]).
 
 use pomona_core::nalgebra::{Point2, Vector2};
 use serde::{Deserialize, Serialize};
 
-use crate::{arc_half_angle, Contour};
+use crate::{arc_half_angle, fit_circle, refine_circle, Contour};
 
 /// Settings of the adaptive edge fitting.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -41,6 +49,28 @@ pub struct EdgeFitParams {
     pub min_estimates: usize,
     /// Half-width of the moving average applied to contour points before fitting.
     pub smoothing_half_window: usize,
+    /// How a group of estimates becomes a circle (see [`GroupCircle`]; model files from before
+    /// this setting mean the paper's weighted mean).
+    #[serde(default)]
+    pub group_circle: GroupCircle,
+    /// Arcs (groups, on one contour or on neighbouring ones) are merged when their points fit one
+    /// circle with a root-mean-square distance of at most this fraction of its radius
+    /// ([`crate::merge_arcs`]); 0 = never (the paper's behaviour, and what model files from
+    /// before this setting mean).
+    #[serde(default)]
+    pub merge_max_rms: f64,
+}
+
+/// How the estimates of one group become its circle.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum GroupCircle {
+    /// Centre and radius are the means of the Eq. 8 estimates, weighted by window size (§3.2).
+    #[default]
+    WeightedMean,
+    /// The geometric least-squares circle of the contour points the group's windows cover,
+    /// started from the algebraic (Kåsa) fit; the weighted mean where the fit fails.
+    LeastSquares,
 }
 
 impl Default for EdgeFitParams {
@@ -53,6 +83,8 @@ impl Default for EdgeFitParams {
             jump_fraction: 0.3,
             min_estimates: 4,
             smoothing_half_window: 2,
+            group_circle: GroupCircle::LeastSquares,
+            merge_max_rms: 0.04,
         }
     }
 }
@@ -66,6 +98,16 @@ pub struct ContourCircle {
     pub radius_px: f64,
     /// Arc length the group spans divided by the circumference, in (0, 1].
     pub support: f64,
+}
+
+/// A circle with the piece of contour it was fitted on, what [`crate::merge_arcs`] merges.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ContourArc {
+    /// The group's circle.
+    pub circle: ContourCircle,
+    /// The contour steps covered by the group's windows, increasing (step `i` joins point `i`
+    /// to point `i + 1`, the last one back to point 0).
+    pub step_indices: Vec<usize>,
 }
 
 /// One centre estimate of a window.
@@ -151,6 +193,15 @@ fn window_estimate(t: &ArcTable, i: usize, len: usize, orientation: f64) -> Opti
 
 /// Every circle the adaptive edge fitting finds on `contour` (already smoothed).
 pub fn contour_circles(contour: &Contour, params: &EdgeFitParams) -> Vec<ContourCircle> {
+    contour_arcs(contour, params)
+        .into_iter()
+        .map(|a| a.circle)
+        .collect()
+}
+
+/// Every circle the adaptive edge fitting finds on `contour` (already smoothed), with the
+/// piece of contour each was fitted on.
+pub fn contour_arcs(contour: &Contour, params: &EdgeFitParams) -> Vec<ContourArc> {
     let n = contour.points.len();
     let min_window = params.min_window.max(2);
     if n < 2 * min_window {
@@ -188,7 +239,7 @@ pub fn contour_circles(contour: &Contour, params: &EdgeFitParams) -> Vec<Contour
     groups
         .iter()
         .filter(|g| g.len() >= params.min_estimates.max(1))
-        .filter_map(|g| circle_of_group(g, &table))
+        .filter_map(|g| arc_of_group(g, &table, params.group_circle))
         .collect()
 }
 
@@ -253,9 +304,17 @@ fn weighted_mean(group: &[Estimate]) -> Option<(Point2<f64>, f64)> {
     Some((Point2::from(c), r))
 }
 
-fn circle_of_group(group: &[Estimate], table: &ArcTable) -> Option<ContourCircle> {
-    let (center_px, radius_px) = weighted_mean(group)?;
-    // Arc covered: union of the windows, as the sum of point steps each covers at most once.
+/// Gauss–Newton steps of the geometric refinement of a group's circle.
+const REFINE_ITERATIONS: usize = 10;
+
+/// A least-squares radius more than this factor from the group's Eq. 8 mean radius (either
+/// way) is not trusted: on a short, noisy piece of outline the fit can run off to a much larger
+/// or smaller circle, while the mean of the window estimates stays bounded by them.
+const MAX_FIT_TO_MEAN_RADIUS: f64 = 1.5;
+
+fn arc_of_group(group: &[Estimate], table: &ArcTable, mode: GroupCircle) -> Option<ContourArc> {
+    let (mean_center, mean_radius) = weighted_mean(group)?;
+    // Arc covered: the union of the windows' steps (step i joins point i to point i + 1).
     let n = table.points.len();
     let mut covered = vec![false; n];
     for e in group {
@@ -263,16 +322,56 @@ fn circle_of_group(group: &[Estimate], table: &ArcTable) -> Option<ContourCircle
             covered[(e.start + k) % n] = true;
         }
     }
-    let arc: f64 = (0..n)
-        .filter(|&i| covered[i])
-        .map(|i| table.arc(i, 1))
-        .sum();
-    let support = (arc / (2.0 * std::f64::consts::PI * radius_px)).min(1.0);
-    (radius_px.is_finite() && radius_px > 0.0).then_some(ContourCircle {
-        center_px,
-        radius_px,
-        support,
+    let step_indices: Vec<usize> = (0..n).filter(|&i| covered[i]).collect();
+    let (center_px, radius_px) = match mode {
+        GroupCircle::WeightedMean => (mean_center, mean_radius),
+        GroupCircle::LeastSquares => {
+            let points = step_points(table.points, &step_indices);
+            fit_circle(&points)
+                .and_then(|start| refine_circle(&points, start, REFINE_ITERATIONS))
+                .filter(|&(_, r)| {
+                    r <= MAX_FIT_TO_MEAN_RADIUS * mean_radius
+                        && r * MAX_FIT_TO_MEAN_RADIUS >= mean_radius
+                })
+                .unwrap_or((mean_center, mean_radius))
+        }
+    };
+    let support = step_support(table.points, &step_indices, radius_px);
+    (radius_px.is_finite() && radius_px > 0.0).then_some(ContourArc {
+        circle: ContourCircle {
+            center_px,
+            radius_px,
+            support,
+        },
+        step_indices,
     })
+}
+
+/// The contour points at either end of the steps `steps` (sorted, distinct), each once.
+pub(crate) fn step_points(points: &[Point2<f64>], steps: &[usize]) -> Vec<Point2<f64>> {
+    let n = points.len();
+    let mut out = Vec::with_capacity(steps.len() + 1);
+    for (k, &i) in steps.iter().enumerate() {
+        out.push(points[i]);
+        let next = (i + 1) % n;
+        let next_listed =
+            steps.get(k + 1) == Some(&next) || (next == 0 && steps.first() == Some(&0));
+        if !next_listed {
+            out.push(points[next]);
+        }
+    }
+    out
+}
+
+/// Length of the steps `steps` of the closed contour `points` over the circumference
+/// `2π radius`, capped at 1 (the support fraction).
+pub(crate) fn step_support(points: &[Point2<f64>], steps: &[usize], radius: f64) -> f64 {
+    let n = points.len();
+    let arc: f64 = steps
+        .iter()
+        .map(|&i| (points[(i + 1) % n] - points[i]).norm())
+        .sum();
+    (arc / (2.0 * std::f64::consts::PI * radius)).min(1.0)
 }
 
 #[cfg(test)]
@@ -296,11 +395,19 @@ mod tests {
     }
 
     fn circles(mask: &[bool], w: usize, h: usize) -> Vec<ContourCircle> {
-        let params = EdgeFitParams::default();
+        circles_with(mask, w, h, &EdgeFitParams::default())
+    }
+
+    fn circles_with(
+        mask: &[bool],
+        w: usize,
+        h: usize,
+        params: &EdgeFitParams,
+    ) -> Vec<ContourCircle> {
         let smooth = smooth_mask(mask, w, h);
         trace_contours(&smooth, w, h, 20)
             .iter()
-            .flat_map(|c| contour_circles(&c.smoothed(params.smoothing_half_window), &params))
+            .flat_map(|c| contour_circles(&c.smoothed(params.smoothing_half_window), params))
             .collect()
     }
 
@@ -351,5 +458,43 @@ mod tests {
             });
             assert!(hit, "no circle at ({cx}, {cy}): {found:?}");
         }
+    }
+
+    #[test]
+    fn least_squares_circles_of_a_sunlit_half_are_the_fruit_and_the_paper_mode_stays() {
+        // The lower half of a fruit (the sunlit part; the shaded top is missing from the mask):
+        // its outline is a half circle closed by a straight terminator.
+        let (w, h) = (140, 120);
+        let (cx, cy, r) = (70.0, 50.0, 30.0);
+        let mask = partial_disc(w, h, (cx, cy, r), |_, y| y < cy);
+        let paper = EdgeFitParams {
+            group_circle: GroupCircle::WeightedMean,
+            merge_max_rms: 0.0,
+            ..EdgeFitParams::default()
+        };
+        let fitted = EdgeFitParams {
+            group_circle: GroupCircle::LeastSquares,
+            ..paper
+        };
+        let truth = Point2::new(cx, cy);
+        let mean = best(&circles_with(&mask, w, h, &paper));
+        let lsq = best(&circles_with(&mask, w, h, &fitted));
+        let (mean_err, lsq_err) = (
+            (mean.center_px - truth).norm(),
+            (lsq.center_px - truth).norm(),
+        );
+        assert!(lsq_err < 0.1 * r, "least squares off by {lsq_err}: {lsq:?}");
+        assert!((lsq.radius_px - r).abs() < 0.1 * r, "{lsq:?}");
+        assert!(
+            lsq_err < mean_err,
+            "{lsq_err} vs {mean_err}: {lsq:?} {mean:?}"
+        );
+        // Model files without the new settings mean the paper's behaviour.
+        let old: EdgeFitParams = serde_json::from_value(serde_json::json!({
+            "arc_per_radius": 1.0, "arc_tolerance": 0.2, "max_adapt_steps": 4, "min_window": 6,
+            "jump_fraction": 0.3, "min_estimates": 4, "smoothing_half_window": 2
+        }))
+        .unwrap();
+        assert_eq!(old, paper);
     }
 }

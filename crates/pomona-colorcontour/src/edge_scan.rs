@@ -11,7 +11,7 @@
 //! point lies inside the fruit's circle, never outside it. The circle is therefore the smallest
 //! circumcircle of three of the points that contains the fourth (within a pixel and a half);
 //! for four points on one circle that is their circle, and with one scan cut short it is the
-//! circle of the other three. Three points give their circumcircle. [`fit_circle`] is the plain
+//! circle of the other three. Three points give their circumcircle. [`crate::fit_circle`] is the plain
 //! algebraic least-squares circle (Kåsa), the fallback.
 //!
 //! Choices where the paper is silent, documented in [`EdgeScanParams`]: a boundary is the first
@@ -22,6 +22,8 @@
 
 use pomona_core::nalgebra::Point2;
 use serde::{Deserialize, Serialize};
+
+use crate::fit_circle;
 
 /// How the four-direction scan decides it has left the fruit.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -119,58 +121,6 @@ pub fn circle_from_boundaries(points: &[Point2<f64>]) -> Option<(Point2<f64>, f6
         .or_else(|| fit_circle(points))
 }
 
-/// The algebraic least-squares circle through `points` (at least three, not collinear):
-/// `(centre, radius)`, or `None` when they do not determine one.
-pub fn fit_circle(points: &[Point2<f64>]) -> Option<(Point2<f64>, f64)> {
-    if points.len() < 3 {
-        return None;
-    }
-    // Centre the points for conditioning, then solve x² + y² + D x + E y + F = 0.
-    let n = points.len() as f64;
-    let mean = points
-        .iter()
-        .fold(Point2::origin(), |m, p| m + p.coords / n);
-    let mut a = [[0.0f64; 3]; 3];
-    let mut b = [0.0f64; 3];
-    for p in points {
-        let (x, y) = (p.x - mean.x, p.y - mean.y);
-        let row = [x, y, 1.0];
-        let rhs = -(x * x + y * y);
-        for i in 0..3 {
-            for j in 0..3 {
-                a[i][j] += row[i] * row[j];
-            }
-            b[i] += row[i] * rhs;
-        }
-    }
-    let [d, e, f] = solve3(a, b)?;
-    let (cx, cy) = (-0.5 * d, -0.5 * e);
-    let r2 = cx * cx + cy * cy - f;
-    (r2 > 0.0 && r2.is_finite()).then(|| (Point2::new(cx + mean.x, cy + mean.y), r2.sqrt()))
-}
-
-/// Solves a 3×3 linear system by Cramer's rule; `None` when it is (nearly) singular.
-fn solve3(a: [[f64; 3]; 3], b: [f64; 3]) -> Option<[f64; 3]> {
-    let det = |m: &[[f64; 3]; 3]| {
-        m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
-            - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
-            + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
-    };
-    let d = det(&a);
-    let scale = a.iter().flatten().fold(0.0f64, |s, v| s.max(v.abs()));
-    // Also refuses a NaN determinant.
-    if d.is_nan() || d.abs() <= 1e-12 * scale.powi(3) {
-        return None;
-    }
-    Some(std::array::from_fn(|k| {
-        let mut m = a;
-        for (row, rhs) in m.iter_mut().zip(b) {
-            row[k] = rhs;
-        }
-        det(&m) / d
-    }))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -247,20 +197,5 @@ mod tests {
             let (lc, _) = fit_circle(&pts).unwrap();
             assert!((lc - c).norm() > 1.0);
         }
-    }
-
-    #[test]
-    fn circle_fit_is_exact_for_three_points_and_refuses_collinear_ones() {
-        let (c, r) = (Point2::new(3.0, -2.0), 5.0);
-        let on = |a: f64| Point2::new(c.x + r * a.cos(), c.y + r * a.sin());
-        let (fc, fr) = fit_circle(&[on(0.1), on(1.9), on(4.0)]).unwrap();
-        assert!((fc - c).norm() < 1e-9 && (fr - r).abs() < 1e-9);
-        let line = [
-            Point2::new(0.0, 0.0),
-            Point2::new(1.0, 1.0),
-            Point2::new(2.0, 2.0),
-        ];
-        assert!(fit_circle(&line).is_none());
-        assert!(fit_circle(&line[..2]).is_none());
     }
 }

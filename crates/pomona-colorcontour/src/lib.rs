@@ -19,7 +19,11 @@
 //! ([`Contour`]); concave and straight windows, the jump rule, wrap-around joining and the
 //! support score ([`contour_circles`]); overlap relative to the smaller circle
 //! ([`prune_overlapping`]); the size test before the overlap test, and 3D from depth instead of
-//! stereo ([`stages::FruitStage`], [`sphere_from_depth`]). Not built here: stereo matching (§4).
+//! stereo ([`stages::FruitStage`], [`sphere_from_depth`]). Four more, each a parameter whose
+//! paper value restores the paper's step: hysteresis on the colour table ([`hysteresis_mask`]),
+//! a closing of the mask ([`close_mask`]), least-squares circles of each group's contour points
+//! ([`GroupCircle`], [`refine_circle`]) and merging of arcs that lie on one circle
+//! ([`merge_arcs`]). Not built here: stereo matching (§4).
 //!
 //! Tracking during the arm's approach (§3.3) is [`ApproachTracker`]: a 5×5 colour check at the
 //! expected position, a four-direction edge scan and circle fit ([`scan_four_directions`],
@@ -29,6 +33,8 @@
 
 mod arc_half_angle;
 mod circle_in_space;
+mod circle_least_squares;
+mod circle_merging;
 mod circle_pruning;
 mod contour;
 mod contour_circles;
@@ -36,6 +42,7 @@ mod edge_scan;
 mod hsigma;
 mod hsigma_lut;
 mod mask_closing;
+mod mask_hysteresis;
 mod mlp;
 mod params;
 mod pipeline;
@@ -47,16 +54,20 @@ mod training_pixels;
 
 pub use arc_half_angle::{arc_half_angle, arc_radius};
 pub use circle_in_space::{sphere_from_depth, sphere_from_size, SphereFromCircle};
+pub use circle_least_squares::{fit_circle, refine_circle, rms_distance};
+pub use circle_merging::merge_arcs;
 pub use circle_pruning::{disc_overlap_area, prune_overlapping};
 pub use contour::{smooth_mask, trace_contours, Contour};
-pub use contour_circles::{contour_circles, ContourCircle, EdgeFitParams};
+pub use contour_circles::{
+    contour_arcs, contour_circles, ContourArc, ContourCircle, EdgeFitParams, GroupCircle,
+};
 pub use edge_scan::{
-    circle_from_boundaries, fit_circle, scan_four_directions, EdgeScanParams, ScanEnd,
-    SCAN_DIRECTIONS,
+    circle_from_boundaries, scan_four_directions, EdgeScanParams, ScanEnd, SCAN_DIRECTIONS,
 };
 pub use hsigma::{hsigma, hsigma_integers, hsigma_of_integers};
 pub use hsigma_lut::{quantise_probability, HSigmaLut};
 pub use mask_closing::close_mask;
+pub use mask_hysteresis::hysteresis_mask;
 pub use mlp::{HSigmaSample, Mlp, MlpParams};
 pub use params::ColorContourParams;
 pub use pipeline::{

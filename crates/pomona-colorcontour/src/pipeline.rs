@@ -210,6 +210,16 @@ impl ColorContourDetector {
             name: name.into(),
             reason: reason.into(),
         };
+        if !(0.0..=1.0).contains(&p.color_grow_fraction) {
+            return Err(invalid("color_grow_fraction", "must lie in [0, 1]"));
+        }
+        let grow_threshold = quantise_probability(p.color_threshold * p.color_grow_fraction);
+        if p.edge_fit.merge_max_rms.is_nan() || p.edge_fit.merge_max_rms < 0.0 {
+            return Err(invalid(
+                "edge_fit.merge_max_rms",
+                "must be 0 (off) or positive",
+            ));
+        }
         let (lo, hi) = p.radius_range_m;
         if !(lo > 0.0 && lo <= hi) {
             return Err(invalid("radius_range_m", "needs 0 < min ≤ max"));
@@ -222,7 +232,16 @@ impl ColorContourDetector {
             return Err(invalid("prior_radius_m", "must be positive"));
         }
         Ok(Self {
-            color: ColorClassStage { lut, threshold },
+            color: ColorClassStage {
+                lut,
+                threshold,
+                grow_threshold: if p.color_grow_fraction < 1.0 {
+                    grow_threshold.min(threshold)
+                } else {
+                    threshold
+                },
+                grow_seed_px: p.color_grow_seed_px,
+            },
             smoothing_half_window: p.edge_fit.smoothing_half_window,
             min_component_px: p.min_component_px,
             mask_closing_px: p.mask_closing_px,
@@ -256,5 +275,57 @@ impl Detector for ColorContourDetector {
             (frame, fruit.as_slice(), circles.as_slice()),
             timings,
         )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn built_in() -> ColorContourStageParams {
+        let text = ColorContourPipeline::default()
+            .default_model()
+            .expect("the crate ships a built-in model");
+        let model: ModelFile = serde_json::from_str(text).unwrap();
+        ColorContourStageParams::from_model(&model).unwrap()
+    }
+
+    #[test]
+    fn the_built_in_model_runs_the_documented_defaults_and_bad_settings_are_named() {
+        let stage = built_in();
+        let defaults = ColorContourParams::default();
+        assert_eq!(
+            stage.params.color_grow_fraction,
+            defaults.color_grow_fraction
+        );
+        assert_eq!(stage.params.color_grow_seed_px, defaults.color_grow_seed_px);
+        assert_eq!(
+            stage.params.edge_fit.group_circle,
+            defaults.edge_fit.group_circle
+        );
+        assert_eq!(
+            stage.params.edge_fit.merge_max_rms,
+            defaults.edge_fit.merge_max_rms
+        );
+        assert!(ColorContourDetector::new(&stage).is_ok());
+        for (name, change) in [
+            (
+                "color_grow_fraction",
+                (|p: &mut ColorContourParams| p.color_grow_fraction = 1.5)
+                    as fn(&mut ColorContourParams),
+            ),
+            ("color_grow_fraction", |p| p.color_grow_fraction = f64::NAN),
+            ("edge_fit.merge_max_rms", |p| {
+                p.edge_fit.merge_max_rms = -0.1
+            }),
+        ] {
+            let mut bad = stage.clone();
+            change(&mut bad.params);
+            match ColorContourDetector::new(&bad) {
+                Err(PipelineError::InvalidParameter { name: n, .. }) => assert_eq!(n, name),
+                Err(e) => panic!("{name}: wrong error {e}"),
+                Ok(_) => panic!("{name}: accepted"),
+            }
+        }
     }
 }

@@ -6,17 +6,22 @@ use pomona_core::{Detection, PixelBox, RgbdFrame};
 use pomona_pipeline::{PipelineError, Stage};
 
 use crate::{
-    close_mask, contour_circles, prune_overlapping, smooth_mask, sphere_from_depth,
-    sphere_from_size, trace_contours, ColorContourParams, Contour, ContourCircle, EdgeFitParams,
-    HSigmaLut, PIPELINE_NAME,
+    close_mask, contour_arcs, hysteresis_mask, merge_arcs, prune_overlapping, smooth_mask,
+    sphere_from_depth, sphere_from_size, trace_contours, ColorContourParams, Contour, ContourArc,
+    ContourCircle, EdgeFitParams, HSigmaLut, PIPELINE_NAME,
 };
 
-/// Per pixel: the lookup table's value at or above the threshold (§3.1).
+/// Per pixel: the lookup table's value at or above the threshold (§3.1), or, with a lower
+/// `grow_threshold`, grown into weaker neighbours by [`crate::hysteresis_mask`].
 pub struct ColorClassStage {
     /// The compiled perceptron.
     pub lut: HSigmaLut,
     /// Table value (0–255) from which a pixel is fruit.
     pub threshold: u8,
+    /// Table value from which a pixel joined to fruit is fruit too (`>= threshold`: off).
+    pub grow_threshold: u8,
+    /// Smallest confident region, pixels, from which the mask grows.
+    pub grow_seed_px: usize,
 }
 
 impl Stage<&RgbdFrame, Vec<bool>> for ColorClassStage {
@@ -28,10 +33,21 @@ impl Stage<&RgbdFrame, Vec<bool>> for ColorClassStage {
         let color = frame.color().ok_or(PipelineError::MissingColor {
             pipeline: PIPELINE_NAME,
         })?;
-        Ok(color
-            .pixels()
-            .map(|rgb| self.lut.value(rgb) >= self.threshold)
-            .collect())
+        if self.grow_threshold >= self.threshold {
+            return Ok(color
+                .pixels()
+                .map(|rgb| self.lut.value(rgb) >= self.threshold)
+                .collect());
+        }
+        let values: Vec<u8> = color.pixels().map(|rgb| self.lut.value(rgb)).collect();
+        let camera = frame.camera();
+        Ok(hysteresis_mask(
+            &values,
+            camera.width as usize,
+            camera.height as usize,
+            (self.threshold, self.grow_threshold),
+            self.grow_seed_px,
+        ))
     }
 }
 
@@ -64,7 +80,8 @@ impl Stage<&[bool], Vec<Contour>> for ContourStage {
     }
 }
 
-/// Circles from every contour (Eq. 8, adaptive windows, grouping at centre jumps).
+/// Circles from every contour (Eq. 8, adaptive windows, grouping at centre jumps), then arcs of
+/// one circle merged ([`crate::merge_arcs`]).
 pub struct EdgeFitStage {
     /// Fitting parameters.
     pub params: EdgeFitParams,
@@ -76,10 +93,16 @@ impl Stage<&[Contour], Vec<ContourCircle>> for EdgeFitStage {
     }
 
     fn run(&self, contours: &[Contour]) -> Result<Vec<ContourCircle>, PipelineError> {
-        Ok(contours
+        let arcs: Vec<(usize, ContourArc)> = contours
             .iter()
-            .flat_map(|c| contour_circles(c, &self.params))
-            .collect())
+            .enumerate()
+            .flat_map(|(k, c)| {
+                contour_arcs(c, &self.params)
+                    .into_iter()
+                    .map(move |a| (k, a))
+            })
+            .collect();
+        Ok(merge_arcs(contours, arcs, self.params.merge_max_rms))
     }
 }
 

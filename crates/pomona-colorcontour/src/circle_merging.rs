@@ -1,0 +1,331 @@
+//! Merging arcs that belong to one circle (not in seed 004).
+//!
+//! The paper closes a group of centre estimates "when a sharp variation in the position of the
+//! estimated center is detected". Where the colour mask follows only part of a fruit — its
+//! sunlit side, with the shaded side or a highlight left out, or an outline broken by a leaf or
+//! a twig — one fruit gives several groups, each a circle of part of it, often smaller than the
+//! fruit and off its centre; the overlap pruning then keeps one of them. Here two arcs are merged
+//! when their contour points, together, lie on one circle: the geometric least-squares circle of
+//! the union ([`crate::fit_circle`] refined by [`crate::refine_circle`]) has a root-mean-square
+//! distance of at most `max_rms` times its radius. Candidates are pairs of which one circle's
+//! centre lies inside the other circle (pieces of one fruit give circles around its centre;
+//! neighbouring fruit give circles about two radii apart); the pair that fits best is merged
+//! first, and merging repeats until no pair fits.
+//!
+//! Two touching fruit do not merge: the union of their outer arcs is not one circle (for two
+//! equal fruit side by side the best circle through both arcs misses them by about a fifth of
+//! its radius). `max_rms = 0` merges nothing (the paper's behaviour).
+
+use pomona_core::nalgebra::Point2;
+
+use crate::circle_least_squares::solve3;
+use crate::contour_circles::{step_points, step_support};
+use crate::{fit_circle, refine_circle, rms_distance, Contour, ContourArc, ContourCircle};
+
+/// Gauss–Newton steps of the geometric refinement of a merged circle.
+const REFINE_ITERATIONS: usize = 10;
+
+/// How far above `max_rms` the screening fit of a pair may lie and still be fitted: the
+/// algebraic circle's distances bound the geometric optimum's from above but can be several
+/// times larger on short arcs.
+const SCREEN: f64 = 3.0;
+
+/// A set of arcs (contour index, that contour's covered steps) with their common circle.
+#[derive(Debug, Clone)]
+struct Merged {
+    pieces: Vec<(usize, Vec<usize>)>,
+    circle: ContourCircle,
+    /// Sums over the pieces' points for the screening fit ([`Moments`]).
+    moments: Moments,
+}
+
+/// The sums that give a set's algebraic (Kåsa) circle and its residual without visiting the
+/// points again, so that a pair is screened in constant time: n, Σx, Σy, Σx², Σxy, Σy², Σxs,
+/// Σys, Σs, Σs² with s = x² + y², in coordinates relative to a common origin. Added over the
+/// pieces of a pair, points that two pieces of one contour share count twice (screening only).
+#[derive(Debug, Clone, Copy, Default)]
+struct Moments([f64; 10]);
+
+impl Moments {
+    fn of(points: &[Point2<f64>], origin: Point2<f64>) -> Self {
+        let mut m = [0.0; 10];
+        for p in points {
+            let (x, y) = (p.x - origin.x, p.y - origin.y);
+            let s = x * x + y * y;
+            for (acc, v) in
+                m.iter_mut()
+                    .zip([1.0, x, y, x * x, x * y, y * y, x * s, y * s, s, s * s])
+            {
+                *acc += v;
+            }
+        }
+        Self(m)
+    }
+
+    fn plus(&self, other: &Self) -> Self {
+        Self(std::array::from_fn(|k| self.0[k] + other.0[k]))
+    }
+
+    /// The algebraic circle's radius and its root-mean-square distance over that radius,
+    /// approximated from the algebraic residual (|p − c|² − r² ≈ 2r (|p − c| − r) near the
+    /// circle).
+    fn screen(&self) -> Option<(f64, f64)> {
+        let [n, sx, sy, sxx, sxy, syy, sxs, sys, ss, sss] = self.0;
+        if n < 3.0 {
+            return None;
+        }
+        let [d, e, f] = solve3(
+            [[sxx, sxy, sx], [sxy, syy, sy], [sx, sy, n]],
+            [-sxs, -sys, -ss],
+        )?;
+        let r2 = (d * d + e * e) / 4.0 - f;
+        if r2.is_nan() || r2 <= 0.0 {
+            return None;
+        }
+        let residual = sss
+            + d * d * sxx
+            + e * e * syy
+            + f * f * n
+            + 2.0 * (d * sxs + e * sys + f * ss + d * e * sxy + d * f * sx + e * f * sy);
+        let r = r2.sqrt();
+        Some((r, (residual.max(0.0) / n).sqrt() / (2.0 * r * r)))
+    }
+}
+
+/// The circles of `arcs` (each with the index of its contour in `contours`) after merging those
+/// that lie on one circle (see the module docs). Arcs are returned unchanged, in their order,
+/// when `max_rms <= 0`; merged circles take the place of the first of their arcs.
+pub fn merge_arcs(
+    contours: &[Contour],
+    arcs: Vec<(usize, ContourArc)>,
+    max_rms: f64,
+) -> Vec<ContourCircle> {
+    let arcs: Vec<(usize, ContourArc)> = arcs
+        .into_iter()
+        .filter(|(c, _)| *c < contours.len())
+        .collect();
+    let origin = arcs
+        .first()
+        .and_then(|(c, _)| contours[*c].points.first().copied())
+        .unwrap_or_else(Point2::origin);
+    let mut sets: Vec<Option<Merged>> = arcs
+        .into_iter()
+        .map(|(c, a)| {
+            let points = step_points(&contours[c].points, &a.step_indices);
+            Some(Merged {
+                moments: Moments::of(&points, origin),
+                pieces: vec![(c, a.step_indices)],
+                circle: a.circle,
+            })
+        })
+        .collect();
+    if max_rms > 0.0 {
+        // Qualifying pairs only (most pairs fail the centre test), as (quality, i, j, merged).
+        let mut candidates: Vec<(f64, usize, usize, Merged)> = Vec::new();
+        for i in 0..sets.len() {
+            for j in i + 1..sets.len() {
+                if let Some((q, m)) = pair_fit(contours, &sets, i, j, max_rms) {
+                    candidates.push((q, i, j, m));
+                }
+            }
+        }
+        while let Some(best) = candidates
+            .iter()
+            .enumerate()
+            .min_by(|a, b| a.1 .0.total_cmp(&b.1 .0).then(a.0.cmp(&b.0)))
+            .map(|(k, _)| k)
+        {
+            let (_, i, j, merged) = candidates.swap_remove(best);
+            sets[i] = Some(merged);
+            sets[j] = None;
+            candidates.retain(|c| c.1 != i && c.2 != i && c.1 != j && c.2 != j);
+            for other in 0..sets.len() {
+                if other != i {
+                    let (lo, hi) = (other.min(i), other.max(i));
+                    if let Some((q, m)) = pair_fit(contours, &sets, lo, hi, max_rms) {
+                        candidates.push((q, lo, hi, m));
+                    }
+                }
+            }
+        }
+    }
+    sets.into_iter().flatten().map(|m| m.circle).collect()
+}
+
+/// The merged set of `sets[i]` and `sets[j]` and its root-mean-square distance over its radius,
+/// when both exist, one's centre lies inside the other's circle, and that distance is at most
+/// `max_rms`.
+fn pair_fit(
+    contours: &[Contour],
+    sets: &[Option<Merged>],
+    i: usize,
+    j: usize,
+    max_rms: f64,
+) -> Option<(f64, Merged)> {
+    let (a, b) = (sets[i].as_ref()?, sets[j].as_ref()?);
+    let (ca, cb) = (&a.circle, &b.circle);
+    if (ca.center_px - cb.center_px).norm() > ca.radius_px.max(cb.radius_px) {
+        return None;
+    }
+    // Screening on the summed moments (constant time) before the points are visited.
+    let (_, screen_rms) = a.moments.plus(&b.moments).screen()?;
+    debug_assert!(screen_rms >= 0.0);
+    if screen_rms.is_nan() || screen_rms > SCREEN * max_rms {
+        return None;
+    }
+    let pieces = union_pieces(&a.pieces, &b.pieces);
+    let points: Vec<Point2<f64>> = pieces
+        .iter()
+        .flat_map(|(c, steps)| step_points(&contours[*c].points, steps))
+        .collect();
+    let (center_px, radius_px) =
+        fit_circle(&points).and_then(|start| refine_circle(&points, start, REFINE_ITERATIONS))?;
+    let quality = rms_distance(&points, center_px, radius_px) / radius_px;
+    if quality.is_nan() || quality > max_rms {
+        return None;
+    }
+    let support = pieces
+        .iter()
+        .map(|(c, steps)| step_support(&contours[*c].points, steps, radius_px))
+        .sum::<f64>()
+        .min(1.0);
+    Some((
+        quality,
+        Merged {
+            moments: a.moments.plus(&b.moments),
+            pieces,
+            circle: ContourCircle {
+                center_px,
+                radius_px,
+                support,
+            },
+        },
+    ))
+}
+
+/// The pieces of both sets, steps of one contour joined into one sorted list without repeats.
+fn union_pieces(a: &[(usize, Vec<usize>)], b: &[(usize, Vec<usize>)]) -> Vec<(usize, Vec<usize>)> {
+    let mut out: Vec<(usize, Vec<usize>)> = a.to_vec();
+    for (c, steps) in b {
+        match out.iter_mut().find(|(oc, _)| oc == c) {
+            Some((_, existing)) => {
+                existing.extend_from_slice(steps);
+                existing.sort_unstable();
+                existing.dedup();
+            }
+            None => out.push((*c, steps.clone())),
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A closed contour: `n` points on a circle.
+    fn ring(c: (f64, f64), r: f64, n: usize) -> Contour {
+        Contour {
+            points: (0..n)
+                .map(|i| {
+                    let a = i as f64 * std::f64::consts::TAU / n as f64;
+                    Point2::new(c.0 + r * a.cos(), c.1 + r * a.sin())
+                })
+                .collect(),
+            area_px: 0,
+        }
+    }
+
+    fn arc(steps: std::ops::Range<usize>, center: (f64, f64), r: f64) -> ContourArc {
+        ContourArc {
+            circle: ContourCircle {
+                center_px: Point2::new(center.0, center.1),
+                radius_px: r,
+                support: 0.1,
+            },
+            step_indices: steps.collect(),
+        }
+    }
+
+    #[test]
+    fn two_pieces_of_one_circle_merge_into_it() {
+        let c = ring((50.0, 40.0), 30.0, 200);
+        // Two arcs of the same circle whose own circles came out small and off-centre.
+        let arcs = vec![
+            (0, arc(0..40, (55.0, 45.0), 18.0)),
+            (0, arc(90..130, (45.0, 38.0), 17.0)),
+        ];
+        let merged = merge_arcs(std::slice::from_ref(&c), arcs.clone(), 0.04);
+        assert_eq!(merged.len(), 1, "{merged:?}");
+        let m = merged[0];
+        assert!(
+            (m.center_px - Point2::new(50.0, 40.0)).norm() < 1e-6,
+            "{m:?}"
+        );
+        assert!((m.radius_px - 30.0).abs() < 1e-6);
+        assert!((m.support - 80.0 / 200.0).abs() < 0.01, "{}", m.support);
+        // Off: the arcs stay as they were.
+        let kept = merge_arcs(&[c], arcs, 0.0);
+        assert_eq!(kept.len(), 2);
+        assert_eq!(kept[0].radius_px, 18.0);
+    }
+
+    #[test]
+    fn arcs_of_two_touching_circles_stay_apart() {
+        let (a, b) = (ring((30.0, 30.0), 20.0, 120), ring((70.0, 30.0), 20.0, 120));
+        // The left half of a and the right half of b, each with its own circle.
+        let mut right = arc(0..30, (70.0, 30.0), 20.0);
+        right.step_indices.extend(90..120);
+        let arcs = vec![(0, arc(30..90, (30.0, 30.0), 20.0)), (1, right)];
+        let merged = merge_arcs(&[a, b], arcs, 0.04);
+        assert_eq!(merged.len(), 2, "{merged:?}");
+        // Circles that neither touch nor overlap are never candidates.
+        let far = vec![
+            (0, arc(0..40, (30.0, 30.0), 20.0)),
+            (1, arc(0..40, (300.0, 30.0), 20.0)),
+        ];
+        let far_contours = [ring((30.0, 30.0), 20.0, 120), ring((30.0, 30.0), 20.0, 120)];
+        assert_eq!(merge_arcs(&far_contours, far, 0.5).len(), 2);
+    }
+
+    #[test]
+    fn a_fruit_cut_in_two_by_a_branch_gives_one_circle() {
+        // A disc of radius 30 px crossed by a 6 px band (a branch): two components, two
+        // contours, each with a circle of part of the fruit.
+        let (w, h, cx, cy, r) = (140usize, 120usize, 70.0, 60.0, 30.0);
+        let mask: Vec<bool> = (0..w * h)
+            .map(|i| {
+                let (x, y) = ((i % w) as f64, (i / w) as f64);
+                (x - cx).powi(2) + (y - cy).powi(2) <= r * r && !(x - y - 10.0).abs().lt(&4.0)
+            })
+            .collect();
+        let params = crate::EdgeFitParams::default();
+        let contours: Vec<Contour> =
+            crate::trace_contours(&crate::smooth_mask(&mask, w, h), w, h, 20)
+                .iter()
+                .map(|c| c.smoothed(params.smoothing_half_window))
+                .collect();
+        assert_eq!(contours.len(), 2);
+        let arcs: Vec<(usize, ContourArc)> = contours
+            .iter()
+            .enumerate()
+            .flat_map(|(k, c)| {
+                crate::contour_arcs(c, &params)
+                    .into_iter()
+                    .map(move |a| (k, a))
+            })
+            .collect();
+        assert!(arcs.len() >= 2, "{arcs:?}");
+        let merged = merge_arcs(&contours, arcs, params.merge_max_rms);
+        let best = merged
+            .iter()
+            .max_by(|a, b| a.support.total_cmp(&b.support))
+            .unwrap();
+        assert!(
+            (best.center_px - Point2::new(cx, cy)).norm() < 0.1 * r,
+            "{merged:?}"
+        );
+        assert!((best.radius_px - r).abs() < 0.1 * r, "{merged:?}");
+        assert!(best.support > 0.6, "{merged:?}");
+    }
+}

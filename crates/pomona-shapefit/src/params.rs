@@ -24,6 +24,11 @@ pub struct ShapeFitParams {
     /// Region growing on the masked depth image.
     pub regions: RegionGrowingParams,
     /// Normals for the cylinder estimator and the angular descriptor (PCA over an image window).
+    /// New models scale the 5×5 window with the camera's focal length from Kinect v2's 365 px
+    /// (`normals.reference_focal_px`, not in the paper), as the minimum cluster size already
+    /// does: on the real 1080p Azure Kinect frames a fixed 5×5 window spans about 7 mm of fruit,
+    /// where 1 mm depth steps and noise decide the normal. Models written before it keep fixed
+    /// pixels.
     pub normals: WindowNormalParams,
     /// Repeated MSAC shape extraction per cluster (Algorithm 1).
     pub shapes: ShapeExtractionParams,
@@ -91,7 +96,10 @@ impl Default for ShapeFitParams {
             color: ColorBayesParams::default(),
             max_depth_m: 1.5,
             regions: RegionGrowingParams::default(),
-            normals: WindowNormalParams::default(),
+            normals: WindowNormalParams {
+                reference_focal_px: Some(RegionGrowingParams::default().reference_focal_px),
+                ..WindowNormalParams::default()
+            },
             shapes: default_shapes(),
             gpcd: GpcdParams::default(),
             positive_tolerance_m: 0.05,
@@ -239,6 +247,24 @@ mod tests {
         json["shapes"]["shapes"] = "cylinder".into();
         let p: ShapeFitParams = serde_json::from_value(json).unwrap();
         assert_eq!(p.shapes.shapes, ShapeChoice::Cylinder);
+    }
+
+    #[test]
+    fn new_models_scale_the_normal_window_with_the_camera_and_older_files_do_not() {
+        let fresh = ShapeFitParams::default();
+        assert_eq!(fresh.normals.reference_focal_px, Some(365.0));
+        assert_eq!(
+            fresh.normals.reference_focal_px,
+            Some(fresh.regions.reference_focal_px),
+            "the normal window and the minimum cluster scale from the same camera"
+        );
+        let mut json = serde_json::to_value(&fresh).unwrap();
+        let normals = json["normals"].as_object_mut().unwrap();
+        assert!(normals.remove("reference_focal_px").is_some());
+        let old: ShapeFitParams = serde_json::from_value(json).unwrap();
+        assert_eq!(old.normals.reference_focal_px, None);
+        let window = old.normals.check().unwrap();
+        assert_eq!(window.for_focal(917.0), window, "fixed pixels, as trained");
     }
 
     #[test]

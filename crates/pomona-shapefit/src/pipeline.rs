@@ -367,14 +367,18 @@ impl Stages {
         let keep = run_stage(mask, frame, t)?;
         let clusters = run_stage(&self.regions, (frame, keep.as_slice()), t)?;
         let cloud = run_stage(&BackProjectionStage, frame, t)?;
-        let mut candidates = run_stage(&self.shapes, (&cloud, clusters.as_slice()), t)?;
+        let mut candidates = run_stage(&self.shapes, (frame, &cloud, clusters.as_slice()), t)?;
         let first_proposal = candidates.len();
         if let Some(proposals) = proposals {
             let mut clusters = run_stage(proposals, (frame, keep.as_slice()), t)?;
             if let Some(screen) = &self.screen {
                 clusters = run_stage(screen, (frame, &cloud, clusters.as_slice()), t)?;
             }
-            candidates.extend(run_stage(&self.shapes, (&cloud, clusters.as_slice()), t)?);
+            candidates.extend(run_stage(
+                &self.shapes,
+                (frame, &cloud, clusters.as_slice()),
+                t,
+            )?);
         }
         let features = run_stage(&self.descriptor, (frame, candidates.as_slice()), t)?;
         Ok(CandidateSet {

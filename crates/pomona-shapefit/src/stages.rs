@@ -116,7 +116,7 @@ impl<'a> Stage<(&'a RgbdFrame, &'a [bool]), Vec<Vec<usize>>> for DepthProposalSt
 /// `gpcd.max_points` evenly strided pixels of the whole cluster, with their normals, scored by
 /// the detector's own SVM. Clusters scoring below `min_score` are dropped.
 pub struct ProposalScreenStage {
-    /// Normal estimation, as in the shape stage.
+    /// Normal estimation, as in the shape stage (scaled to each frame's focal length).
     pub normals: WindowNormals,
     /// The descriptor, with the screen's (smaller) point budget.
     pub gpcd: GpcdParams,
@@ -140,12 +140,13 @@ impl<'a> Stage<(&'a RgbdFrame, &'a PointCloud, &'a [Vec<usize>]), Vec<Vec<usize>
         (frame, cloud, clusters): (&'a RgbdFrame, &'a PointCloud, &'a [Vec<usize>]),
     ) -> Result<Vec<Vec<usize>>, PipelineError> {
         let color = if self.use_color { frame.color() } else { None };
+        let normals = self.normals.for_focal(frame.camera().fx);
         let features: Result<Vec<Vec<f64>>, PipelineError> = clusters
             .par_iter()
             .map(|cluster| {
                 let stride = self.gpcd.stride_for(cluster.len());
                 let pixels: Vec<usize> = cluster.iter().copied().step_by(stride).collect();
-                let normals = self.normals.estimate_at(cloud, &pixels).map_err(err)?;
+                let normals = normals.estimate_at(cloud, &pixels).map_err(err)?;
                 let points: Vec<Point3<f64>> = pixels
                     .iter()
                     .map(|&i| cloud.points()[i].cast::<f64>())
@@ -184,7 +185,8 @@ impl<'a> Stage<&'a RgbdFrame, PointCloud> for BackProjectionStage {
 /// run in parallel; each uses its own seed derived from the base seed and its index, so the
 /// result does not depend on the number of threads.
 pub struct ShapeStage {
-    /// Normal estimation.
+    /// Normal estimation, scaled to each frame's focal length
+    /// ([`WindowNormals::for_focal`]).
     pub normals: WindowNormals,
     /// MSAC, estimators, limits and base seed.
     pub shapes: ShapeExtractionParams,
@@ -200,11 +202,12 @@ fn err(e: pomona_consensus::ConsensusError) -> PipelineError {
 impl ShapeStage {
     fn cluster_candidates(
         &self,
+        normals: &WindowNormals,
         cloud: &PointCloud,
         k: usize,
         cluster: &[usize],
     ) -> Result<Vec<Candidate>, PipelineError> {
-        let normals = self.normals.estimate_at(cloud, cluster).map_err(err)?;
+        let normals = normals.estimate_at(cloud, cluster).map_err(err)?;
         let positions: Vec<Point3<f64>> = cluster
             .iter()
             .map(|&i| cloud.points()[i].cast::<f64>())
@@ -231,19 +234,20 @@ impl ShapeStage {
     }
 }
 
-impl<'a> Stage<(&'a PointCloud, &'a [Vec<usize>]), Vec<Candidate>> for ShapeStage {
+impl<'a> Stage<(&'a RgbdFrame, &'a PointCloud, &'a [Vec<usize>]), Vec<Candidate>> for ShapeStage {
     fn name(&self) -> &'static str {
         "msac-shapes"
     }
 
     fn run(
         &self,
-        (cloud, clusters): (&'a PointCloud, &'a [Vec<usize>]),
+        (frame, cloud, clusters): (&'a RgbdFrame, &'a PointCloud, &'a [Vec<usize>]),
     ) -> Result<Vec<Candidate>, PipelineError> {
+        let normals = self.normals.for_focal(frame.camera().fx);
         let per_cluster: Result<Vec<Vec<Candidate>>, PipelineError> = clusters
             .par_iter()
             .enumerate()
-            .map(|(k, c)| self.cluster_candidates(cloud, k, c))
+            .map(|(k, c)| self.cluster_candidates(&normals, cloud, k, c))
             .collect();
         Ok(per_cluster?.into_iter().flatten().collect())
     }

@@ -15,6 +15,7 @@ use pomona_core::RgbdFrame;
 use tempfile::NamedTempFile;
 
 use crate::bag::BAG_MAGIC;
+use crate::recording_writer::{partial_file_beside, persist};
 use crate::{CameraInfo, FrameEncodings, Header, Image, RecordingError, RecordingTopics};
 
 /// How chunks are compressed.
@@ -264,20 +265,7 @@ impl BagWriter {
         compression: BagCompression,
     ) -> Result<Self, RecordingError> {
         let path = path.as_ref().to_owned();
-        let dir = match path.parent() {
-            Some(p) if !p.as_os_str().is_empty() => p.to_owned(),
-            _ => PathBuf::from("."),
-        };
-        let io = |source| RecordingError::Io {
-            path: path.clone(),
-            source,
-        };
-        let temp = tempfile::Builder::new()
-            .prefix(".pomona-")
-            .suffix(".partial")
-            .tempfile_in(&dir)
-            .map_err(io)?;
-        let file = temp.as_file().try_clone().map_err(io)?;
+        let (temp, file) = partial_file_beside(&path)?;
         let mut writer = Self {
             path: path.clone(),
             temp,
@@ -530,6 +518,6 @@ impl BagWriter {
             .map_err(|e| io(e.into_error()))?
             .sync_all()
             .map_err(io)?;
-        crate::recording_writer::persist(self.temp, &path)
+        persist(self.temp, &path)
     }
 }

@@ -108,20 +108,7 @@ impl RecordingWriter {
     /// [`RecordingError::Mcap`] when the MCAP header cannot be written.
     pub fn create(path: impl AsRef<Path>) -> Result<Self, RecordingError> {
         let path = path.as_ref().to_owned();
-        let dir = match path.parent() {
-            Some(p) if !p.as_os_str().is_empty() => p.to_owned(),
-            _ => PathBuf::from("."),
-        };
-        let io = |source| RecordingError::Io {
-            path: path.clone(),
-            source,
-        };
-        let temp = tempfile::Builder::new()
-            .prefix(".pomona-")
-            .suffix(".partial")
-            .tempfile_in(&dir)
-            .map_err(io)?;
-        let file = temp.as_file().try_clone().map_err(io)?;
+        let (temp, file) = partial_file_beside(&path)?;
         let writer = mcap::WriteOptions::new()
             .profile("ros2")
             .create(BufWriter::new(file))
@@ -290,6 +277,26 @@ pub(crate) fn frame_messages(
 }
 
 /// Gives the finished temporary file ordinary permissions and renames it to `path`.
+/// A temporary `.pomona-*.partial` file in `path`'s folder and a second handle to write it
+/// through (shared by the MCAP and the bag writer); [`persist`] renames it to `path`.
+pub(crate) fn partial_file_beside(path: &Path) -> Result<(NamedTempFile, File), RecordingError> {
+    let dir = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_owned(),
+        _ => PathBuf::from("."),
+    };
+    let io = |source| RecordingError::Io {
+        path: path.to_owned(),
+        source,
+    };
+    let temp = tempfile::Builder::new()
+        .prefix(".pomona-")
+        .suffix(".partial")
+        .tempfile_in(&dir)
+        .map_err(io)?;
+    let file = temp.as_file().try_clone().map_err(io)?;
+    Ok((temp, file))
+}
+
 pub(crate) fn persist(temp: NamedTempFile, path: &Path) -> Result<(), RecordingError> {
     let io = |source| RecordingError::Io {
         path: path.to_owned(),

@@ -55,6 +55,9 @@ enum Command {
     /// color-contour circles in both, matched by the seed's relaxation, located by Eq. 18 or
     /// triangulation; writes one detection file per frame.
     Stereo(commands::stereo::StereoArgs),
+    /// Run a detector as a ROS 2 node: colour, aligned depth and camera info in,
+    /// vision_msgs/Detection3DArray and RViz markers out (pure Rust DDS, no ROS installation).
+    Ros(commands::ros::RosArgs),
 }
 
 fn main() -> ExitCode {
@@ -74,6 +77,7 @@ fn main() -> ExitCode {
         Command::Experiment(args) => commands::experiment::run(args),
         Command::Demo(args) => commands::demo::run(args),
         Command::Track(args) => commands::track::run(args).map(|_| ()),
+        Command::Ros(args) => commands::ros::run(args),
     };
     if let Err(err) = &result {
         eprintln!("error: {}", pomona_cli::error_line::error_line(err));

@@ -53,6 +53,13 @@ pub struct FrameTiming {
     pub detections: usize,
 }
 
+impl NodeStats {
+    /// Medians of [`NodeStats::recent`] (`None` before the first published frame).
+    pub fn latency_summary(&self) -> Option<crate::LatencySummary> {
+        crate::LatencySummary::of(&self.recent)
+    }
+}
+
 /// What the node has done so far.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct NodeStats {

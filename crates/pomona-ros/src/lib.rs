@@ -26,6 +26,7 @@ pub mod detection_messages;
 mod error;
 mod fruit_node;
 pub mod geometry_msgs;
+mod latency_summary;
 pub mod latest_frame;
 pub mod live_sync;
 mod node_config;
@@ -35,5 +36,6 @@ pub mod visualization_msgs;
 
 pub use error::RosError;
 pub use fruit_node::{decode_frame, FrameTiming, FruitNode, NodeStats, NodeTopics};
+pub use latency_summary::LatencySummary;
 pub use node_config::{NodeConfig, MAX_DOMAIN_ID};
 pub use topic_name::resolve_topic;

@@ -10,6 +10,7 @@ pub mod experiment;
 pub mod extract;
 pub mod info;
 pub mod plan;
+pub mod ros;
 pub mod stereo;
 pub mod stereo_report;
 pub mod synth;

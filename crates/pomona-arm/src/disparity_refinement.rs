@@ -161,13 +161,21 @@ impl DisparityRefinement {
             return bad("search_px", self.search_px, "must be finite and positive");
         }
         if !(self.step_px > 0.0 && self.step_px <= self.search_px) {
-            return bad("step_px", self.step_px, "must be positive and at most search_px");
+            return bad(
+                "step_px",
+                self.step_px,
+                "must be positive and at most search_px",
+            );
         }
         if !(-1.0..=1.0).contains(&self.min_ncc) {
             return bad("min_ncc", self.min_ncc, "must be in [-1, 1]");
         }
         if !(self.min_patch_std.is_finite() && self.min_patch_std >= 0.0) {
-            return bad("min_patch_std", self.min_patch_std, "must be finite and non-negative");
+            return bad(
+                "min_patch_std",
+                self.min_patch_std,
+                "must be finite and non-negative",
+            );
         }
         Ok(())
     }
@@ -205,9 +213,7 @@ impl DisparityRefinement {
                 });
             }
         }
-        let fallback = |reason, ncc| {
-            Ok(RefinementOutcome::Fallback { reason, ncc })
-        };
+        let fallback = |reason, ncc| Ok(RefinementOutcome::Fallback { reason, ncc });
         let Ok(start) = rig.triangulate(primary_center_px, stereo_center_px) else {
             return fallback(FallbackReason::NoStartingPoint, None);
         };
@@ -223,7 +229,8 @@ impl DisparityRefinement {
             return fallback(FallbackReason::FlatPatch, None);
         }
         let stereo_from_camera = rig.stereo_from_camera();
-        let centre_px = |w: f64| camera.project(&(stereo_from_camera * Point3::from(axis.into_inner() / w)));
+        let centre_px =
+            |w: f64| camera.project(&(stereo_from_camera * Point3::from(axis.into_inner() / w)));
         // Pixels of stereo-view motion per unit of inverse distance, at the start.
         let w0 = 1.0 / rho0;
         let dw = 1e-3 * w0;
@@ -293,8 +300,12 @@ impl DisparityRefinement {
         let lo = |c: f64| (c - reach).ceil().max(0.0) as u32;
         let (u0, v0) = (lo(center_px.x), lo(center_px.y));
         let (u1, v1) = (
-            (center_px.x + reach).floor().min(f64::from(primary.width()) - 1.0),
-            (center_px.y + reach).floor().min(f64::from(primary.height()) - 1.0),
+            (center_px.x + reach)
+                .floor()
+                .min(f64::from(primary.width()) - 1.0),
+            (center_px.y + reach)
+                .floor()
+                .min(f64::from(primary.height()) - 1.0),
         );
         let mut pixels = Vec::new();
         if u1 < 0.0 || v1 < 0.0 {
@@ -443,10 +454,18 @@ mod tests {
                     let colour = if disc >= 0.0 {
                         let hit = origin + dir * (-b - disc.sqrt());
                         let normal = (hit - centre) / RADIUS_M;
-                        let shade = 0.55 + 0.45 * normal.dot(&Vector3::new(-0.3, -0.5, -0.8).normalize()).max(0.0);
+                        let shade = 0.55
+                            + 0.45
+                                * normal
+                                    .dot(&Vector3::new(-0.3, -0.5, -0.8).normalize())
+                                    .max(0.0);
                         if sphere_texture {
                             let pattern = (hit.x * 500.0).sin() * (hit.y * 420.0).cos();
-                            [230.0 * shade + 20.0 * pattern, 120.0 * shade + 15.0 * pattern, 20.0]
+                            [
+                                230.0 * shade + 20.0 * pattern,
+                                120.0 * shade + 15.0 * pattern,
+                                20.0,
+                            ]
                         } else {
                             [230.0, 120.0, 20.0]
                         }
@@ -466,9 +485,17 @@ mod tests {
         image
     }
 
-    fn views(centre: &Point3<f64>, sphere_texture: bool) -> (RotatedStereo, ColorImage, ColorImage) {
+    fn views(
+        centre: &Point3<f64>,
+        sphere_texture: bool,
+    ) -> (RotatedStereo, ColorImage, ColorImage) {
         let rig = rig();
-        let primary = render(&rig, &nalgebra::Isometry3::identity(), centre, sphere_texture);
+        let primary = render(
+            &rig,
+            &nalgebra::Isometry3::identity(),
+            centre,
+            sphere_texture,
+        );
         let stereo = render(&rig, &rig.stereo_from_camera(), centre, sphere_texture);
         (rig, primary, stereo)
     }
@@ -490,14 +517,22 @@ mod tests {
                 let outcome = DisparityRefinement::default()
                     .refine(&rig, (&primary, &stereo), &p, r, &circle)
                     .unwrap();
-                let RefinementOutcome::Refined { stereo_center_px, ncc, .. } = outcome else {
+                let RefinementOutcome::Refined {
+                    stereo_center_px,
+                    ncc,
+                    ..
+                } = outcome
+                else {
                     panic!("{centre} shift {shift}: {outcome:?}");
                 };
                 assert!(ncc > 0.9, "{ncc}");
                 let error_px = (stereo_center_px - s).norm();
                 assert!(error_px < 0.15, "{centre} shift {shift}: {error_px} px");
                 let after = (rig.triangulate(&p, &stereo_center_px).unwrap() - centre).norm();
-                assert!(after < 0.3 * before, "{centre} shift {shift}: {after} m vs {before} m");
+                assert!(
+                    after < 0.3 * before,
+                    "{centre} shift {shift}: {after} m vs {before} m"
+                );
             }
         }
     }
@@ -513,9 +548,14 @@ mod tests {
         let outcome = DisparityRefinement::default()
             .refine(&rig, (&primary, &stereo), &off, r, &circle)
             .unwrap();
-        let located = rig.triangulate(&off, &outcome.stereo_center_px(&circle)).unwrap();
+        let located = rig
+            .triangulate(&off, &outcome.stereo_center_px(&circle))
+            .unwrap();
         let before = rig.triangulate(&off, &circle).unwrap();
-        assert!(matches!(outcome, RefinementOutcome::Refined { .. }), "{outcome:?}");
+        assert!(
+            matches!(outcome, RefinementOutcome::Refined { .. }),
+            "{outcome:?}"
+        );
         assert!((located.z - centre.z).abs() < 0.01, "{located} vs {centre}");
         assert!((before.z - centre.z).abs() > 0.03, "{before} vs {centre}");
     }
@@ -528,17 +568,35 @@ mod tests {
         let r = radius_px(&rig, &centre);
         let refinement = DisparityRefinement::default();
         // Another fruit's image in the stereo view: a different texture.
-        let other = render(&rig, &rig.stereo_from_camera(), &Point3::new(-0.2, 0.1, 1.6), true);
-        let outcome = refinement.refine(&rig, (&primary, &other), &p, r, &s).unwrap();
+        let other = render(
+            &rig,
+            &rig.stereo_from_camera(),
+            &Point3::new(-0.2, 0.1, 1.6),
+            true,
+        );
+        let outcome = refinement
+            .refine(&rig, (&primary, &other), &p, r, &s)
+            .unwrap();
         assert!(
-            matches!(outcome, RefinementOutcome::Fallback { reason: FallbackReason::LowNcc, .. }),
+            matches!(
+                outcome,
+                RefinementOutcome::Fallback {
+                    reason: FallbackReason::LowNcc,
+                    ..
+                }
+            ),
             "{outcome:?}"
         );
         assert_eq!(outcome.stereo_center_px(&s), s);
         // A circle further off than the search range: no peak inside it.
         let far = Point2::new(s.x + 7.0, s.y);
-        let outcome = refinement.refine(&rig, (&primary, &stereo), &p, r, &far).unwrap();
-        assert!(matches!(outcome, RefinementOutcome::Fallback { .. }), "{outcome:?}");
+        let outcome = refinement
+            .refine(&rig, (&primary, &stereo), &p, r, &far)
+            .unwrap();
+        assert!(
+            matches!(outcome, RefinementOutcome::Fallback { .. }),
+            "{outcome:?}"
+        );
         assert_eq!(outcome.stereo_center_px(&far), far);
         // A flat patch (an untextured, unshaded fruit, inside its rim) has nothing to match.
         let flat = DisparityRefinement {
@@ -548,7 +606,13 @@ mod tests {
         let (rig, primary, stereo) = views(&centre, false);
         let outcome = flat.refine(&rig, (&primary, &stereo), &p, r, &s).unwrap();
         assert!(
-            matches!(outcome, RefinementOutcome::Fallback { reason: FallbackReason::FlatPatch, ncc: None }),
+            matches!(
+                outcome,
+                RefinementOutcome::Fallback {
+                    reason: FallbackReason::FlatPatch,
+                    ncc: None
+                }
+            ),
             "{outcome:?}"
         );
     }
@@ -559,13 +623,25 @@ mod tests {
         let (p, s) = rig.project_pair(&Point3::new(0.0, 0.0, 1.0)).unwrap();
         let d = DisparityRefinement::default();
         for bad in [
-            DisparityRefinement { patch_scale: 0.0, ..d },
-            DisparityRefinement { search_px: f64::NAN, ..d },
+            DisparityRefinement {
+                patch_scale: 0.0,
+                ..d
+            },
+            DisparityRefinement {
+                search_px: f64::NAN,
+                ..d
+            },
             DisparityRefinement { step_px: 5.0, ..d },
             DisparityRefinement { min_ncc: 1.5, ..d },
-            DisparityRefinement { min_patch_std: -1.0, ..d },
+            DisparityRefinement {
+                min_patch_std: -1.0,
+                ..d
+            },
         ] {
-            assert!(bad.refine(&rig, (&primary, &stereo), &p, 10.0, &s).is_err(), "{bad:?}");
+            assert!(
+                bad.refine(&rig, (&primary, &stereo), &p, 10.0, &s).is_err(),
+                "{bad:?}"
+            );
         }
         assert!(d.refine(&rig, (&primary, &stereo), &p, 0.0, &s).is_err());
         let small = ColorImage::filled(10, 10, [0, 0, 0]);

@@ -274,7 +274,11 @@ impl StereoReport {
             s.push_str(&format!(
                 "refined by appearance: {} pairs; circle centres kept: {}\n\n",
                 r.refined,
-                if kept.is_empty() { "none".to_owned() } else { kept.join(", ") }
+                if kept.is_empty() {
+                    "none".to_owned()
+                } else {
+                    kept.join(", ")
+                }
             ));
         }
         s.push_str(&format!(

@@ -53,14 +53,15 @@ pub struct DisparityRefinement {
 }
 
 impl Default for DisparityRefinement {
-    /// Patch 1.2 r (the silhouette included), ±4 px in 0.5 px steps, NCC ≥ 0.8, patch standard
-    /// deviation ≥ 2 levels.
+    /// Patch 1.2 r (the silhouette included), ±6 px in 0.5 px steps, NCC ≥ 0.5, patch standard
+    /// deviation ≥ 2 levels: chosen on a tuning set (orchard oranges, seed 2, β = 4°) apart from
+    /// the measured one (seed 1); a patch inside the rim (0.8 r) matched worse than the circles.
     fn default() -> Self {
         Self {
             patch_scale: 1.2,
-            search_px: 4.0,
+            search_px: 6.0,
             step_px: 0.5,
-            min_ncc: 0.8,
+            min_ncc: 0.5,
             min_patch_std: 2.0,
         }
     }
@@ -589,7 +590,7 @@ mod tests {
         );
         assert_eq!(outcome.stereo_center_px(&s), s);
         // A circle further off than the search range: no peak inside it.
-        let far = Point2::new(s.x + 7.0, s.y);
+        let far = Point2::new(s.x + 10.0, s.y);
         let outcome = refinement
             .refine(&rig, (&primary, &stereo), &p, r, &far)
             .unwrap();

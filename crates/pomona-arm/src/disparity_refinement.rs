@@ -632,7 +632,10 @@ mod tests {
                 search_px: f64::NAN,
                 ..d
             },
-            DisparityRefinement { step_px: 5.0, ..d },
+            DisparityRefinement {
+                step_px: d.search_px + 1.0,
+                ..d
+            },
             DisparityRefinement { min_ncc: 1.5, ..d },
             DisparityRefinement {
                 min_patch_std: -1.0,

@@ -7,10 +7,12 @@
 //! detector sees exactly what a 2D camera gives); the circles are matched by the seed's relaxation
 //! ([`pomona_arm::match_centres`], Eq. 10 windows derived from the rig and the working volume
 //! `--reach-m`), and each matched pair is located by Eq. 18 (`--method paper`) or by
-//! triangulation (`--method triangulate`) in the primary camera frame. Unless `--no-refine`, each
-//! pair's stereo-view centre is first refined by appearance ([`pomona_arm::DisparityRefinement`],
-//! an improvement over the seed: the primary view's patch of the fruit is found in the stereo
-//! image to sub-pixel; the circle centres are kept where it does not match well). The detection files have
+//! triangulation (`--method triangulate`) in the primary camera frame. With `--refine` (opt-in),
+//! each pair's stereo-view centre is first refined by appearance
+//! ([`pomona_arm::DisparityRefinement`], beyond the seed: the primary view's patch of the fruit is
+//! found in the stereo image to sub-pixel; the circle centres are kept where it does not match
+//! well). It is off by default: it helped at β = 2° and 8° and not at 4° (docs/results.md), and on
+//! flat, textureless discs it can accept a wrong peak. The detection files have
 //! the format of `pomona detect`, so `pomona eval --data DIR` scores them against the primary
 //! view's truth. A fruit's diameter is its primary circle's radius scaled to the located depth.
 //!
@@ -67,10 +69,10 @@ pub struct StereoArgs {
     /// Pixels added to every disparity window (detector centre error, lens effects).
     #[arg(long, value_name = "PX", default_value_t = 4.0)]
     pub margin_px: f64,
-    /// Locate from the two circle centres only, as the seed does: no refinement of the
-    /// stereo-view centre by appearance.
+    /// Refine each pair's stereo-view centre by appearance before locating it (beyond the seed;
+    /// off: the two circle centres only, as the seed does).
     #[arg(long)]
-    pub no_refine: bool,
+    pub refine: bool,
     /// Refinement: radius of the matched patch as a multiple of the primary circle's radius
     /// (above 1 the silhouette is included).
     #[arg(long, value_name = "S", default_value_t = DisparityRefinement::default().patch_scale)]
@@ -320,7 +322,8 @@ pub fn run(args: &StereoArgs) -> Result<()> {
         .context("bad --reach-m or --margin-px")?;
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create {}", args.out.display()))?;
-    let refinement = (!args.no_refine)
+    let refinement = args
+        .refine
         .then(|| -> Result<DisparityRefinement> {
             let r = DisparityRefinement {
                 patch_scale: args.refine_patch_scale,
@@ -366,10 +369,10 @@ pub fn run(args: &StereoArgs) -> Result<()> {
             StereoMethod::Paper => "Eq. 18",
             StereoMethod::Triangulate => "triangulation",
         },
-        if args.no_refine {
-            String::new()
-        } else {
+        if args.refine {
             format!(", {refined} of them refined by appearance")
+        } else {
+            String::new()
         },
         rig.beta_rad.to_degrees(),
         d,

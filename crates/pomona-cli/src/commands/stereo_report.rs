@@ -51,7 +51,7 @@ pub struct LocatedPair {
     pub stereo_circle_px: Point2<f64>,
     /// The stereo pixel the fruit was located with (refined or the circle centre).
     pub stereo_px: Point2<f64>,
-    /// The refinement's outcome (`None` with `--no-refine`).
+    /// The refinement's outcome (`None` without `--refine`).
     pub refinement: Option<RefinementOutcome>,
     /// The located centre, primary camera frame.
     pub center_m: Point3<f64>,
@@ -146,7 +146,7 @@ pub struct PixelError {
 pub struct StereoReport {
     /// `paper` or `triangulate`.
     pub method: StereoMethod,
-    /// The appearance refinement's counts; `null` with `--no-refine`.
+    /// The appearance refinement's counts; `null` without `--refine`.
     pub refinement: Option<RefinementCounts>,
     /// Half-angle between the shots, degrees.
     pub beta_deg: f64,

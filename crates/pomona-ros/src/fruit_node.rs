@@ -387,7 +387,8 @@ async fn receive_loops(
         match message {
             Ok((camera_info, _)) => {
                 count(2);
-                lock(&shared.sync).push_info(camera_info);
+                let frame = lock(&shared.sync).push_info(camera_info);
+                deliver(frame);
             }
             Err(e) => shared.fail(format!("camera info message: {e:?}")),
         }

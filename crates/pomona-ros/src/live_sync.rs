@@ -7,7 +7,9 @@
 //! waiting longer than needed: a colour image is decided as soon as a depth image with its exact
 //! stamp, or any later one, has arrived — no nearer depth can come after that. Drivers that stamp
 //! aligned depth with the colour stamp (the RealSense driver does) are therefore paired on
-//! arrival. The camera info is the latest received.
+//! arrival. The camera info is the latest received; until the first one arrives, colour and depth
+//! images wait (a driver may start its camera-info topic after its image topics, and a frame
+//! decided without it could not be detected).
 //!
 //! Only the newest frame matters to a robot: when a colour image is paired, older colour images
 //! still waiting are dropped (counted), as are depth images older than the one used.
@@ -42,8 +44,6 @@ pub struct SyncCounts {
     /// Colour images dropped because a newer one was paired first, arrived after it, or too many
     /// were waiting.
     pub stale_color: u64,
-    /// Frames that had depth but no camera info had arrived yet.
-    pub without_info: u64,
     /// Messages whose header stamp is before the epoch or malformed.
     pub bad_stamp: u64,
 }
@@ -110,9 +110,15 @@ impl<T> LiveSync<T> {
         self.pair()
     }
 
-    /// Replaces the camera info.
-    pub fn push_info(&mut self, info: CameraInfo) {
+    /// Replaces the camera info; returns the frame the first camera info completes, if any.
+    pub fn push_info(&mut self, info: CameraInfo) -> Option<FrameMessages<T>> {
+        let first = self.info.is_none();
         self.info = Some(info);
+        if first {
+            self.pair()
+        } else {
+            None
+        }
     }
 
     /// The index of the depth image paired with colour stamp `stamp`: `Some(None)` when decided
@@ -134,8 +140,10 @@ impl<T> LiveSync<T> {
         Some(nearest)
     }
 
-    /// Pairs the newest decidable colour image, dropping older ones.
+    /// Pairs the newest decidable colour image, dropping older ones (nothing is decided before
+    /// the first camera info).
     fn pair(&mut self) -> Option<FrameMessages<T>> {
+        let info = self.info.clone()?;
         let (newest, depth_index) = (0..self.color.len()).rev().find_map(|i| {
             let stamp = self.color[i].0;
             match self.decide(stamp) {
@@ -157,10 +165,6 @@ impl<T> LiveSync<T> {
         let depth = self.depth.get(depth_index)?.1.clone();
         self.depth.drain(..depth_index);
         self.last_paired_ns = Some(stamp);
-        let Some(info) = self.info.clone() else {
-            self.counts.without_info += 1;
-            return None;
-        };
         self.counts.paired += 1;
         Some(FrameMessages {
             color,
@@ -245,12 +249,15 @@ mod tests {
     }
 
     #[test]
-    fn without_camera_info_frames_are_counted_not_paired_and_bad_stamps_ignored() {
+    fn frames_wait_for_the_first_camera_info_and_bad_stamps_are_ignored() {
         let mut sync = LiveSync::new(20 * MS);
         sync.push_color(image(100), 1);
         assert_eq!(stamps(sync.push_depth(image(100))), None);
-        assert_eq!(sync.counts().without_info, 1);
-        sync.push_info(CameraInfo::default());
+        assert_eq!(
+            stamps(sync.push_info(CameraInfo::default())),
+            Some((100, 100, 1))
+        );
+        assert_eq!(stamps(sync.push_info(CameraInfo::default())), None);
         let mut bad = image(0);
         bad.header.stamp_sec = -1;
         assert_eq!(stamps(sync.push_color(bad.clone(), 9)), None);

@@ -51,6 +51,16 @@ pub enum ArmError {
         /// The pixel in the stereo view.
         stereo: [f64; 2],
     },
+    /// An image handed to the stereo refinement is not the size of the rig's camera.
+    #[error("{view} view image is {found:?} pixels, the rig camera {expected:?}")]
+    ImageSize {
+        /// `primary` or `stereo`.
+        view: &'static str,
+        /// The image's width and height.
+        found: [u32; 2],
+        /// The camera's width and height.
+        expected: [u32; 2],
+    },
     /// An arm model file could not be read.
     #[error("{path}: cannot read the arm model: {source}")]
     ModelRead {

@@ -16,7 +16,10 @@
 //!
 //! Each arm's camera takes two shots turned by ±β about the hub ([`RotatedStereo`]): fruit
 //! centres are paired between them by the seed's relaxation ([`match_centres`] within the
-//! Eq. 10 windows of [`MatchingWindows`]) and located by Eq. 18 or by triangulation.
+//! Eq. 10 windows of [`MatchingWindows`]) and located by Eq. 18 or by triangulation. Beyond
+//! the seed, [`DisparityRefinement`] refines a matched pair's stereo-view centre to sub-pixel
+//! by finding the primary view's patch of the fruit in the stereo image (NCC over a sphere
+//! sweep), since the two circle centres' independent errors dominate the depth error.
 //!
 //! Seeing and reaching (§4.2): [`ArmSimulation`] is the robot in numbers — the camera on the
 //! arm takes two shots rotated ±β about the hub, a target projects to pixel coordinates in both,
@@ -36,6 +39,7 @@ mod arm_limits;
 mod arm_model_file;
 mod arm_simulation;
 mod calibration_errors;
+mod disparity_refinement;
 mod end_position_error;
 mod error;
 mod exact_planner;
@@ -56,6 +60,7 @@ pub use arm_limits::ArmLimits;
 pub use arm_model_file::{ArmModelFile, ARM_MODEL_FORMAT, ARM_MODEL_VERSION};
 pub use arm_simulation::{ArmRig, ArmSample, ArmSimulation, Shot, ShotPixels};
 pub use calibration_errors::{CalibrationErrors, CalibrationMagnitudes};
+pub use disparity_refinement::{DisparityRefinement, FallbackReason, RefinementOutcome};
 pub use end_position_error::EndPositionError;
 pub use error::ArmError;
 pub use exact_planner::{plan_exact, MAX_EXACT_TARGETS};

@@ -7,7 +7,12 @@
 //! detector sees exactly what a 2D camera gives); the circles are matched by the seed's relaxation
 //! ([`pomona_arm::match_centres`], Eq. 10 windows derived from the rig and the working volume
 //! `--reach-m`), and each matched pair is located by Eq. 18 (`--method paper`) or by
-//! triangulation (`--method triangulate`) in the primary camera frame. The detection files have
+//! triangulation (`--method triangulate`) in the primary camera frame. With `--refine` (opt-in),
+//! each pair's stereo-view centre is first refined by appearance
+//! ([`pomona_arm::DisparityRefinement`], beyond the seed: the primary view's patch of the fruit is
+//! found in the stereo image to sub-pixel; the circle centres are kept where it does not match
+//! well). It is off by default: it helped at β = 2° and 8° and not at 4° (docs/results.md), and on
+//! flat, textureless discs it can accept a wrong peak. The detection files have
 //! the format of `pomona detect`, so `pomona eval --data DIR` scores them against the primary
 //! view's truth. A fruit's diameter is its primary circle's radius scaled to the located depth.
 //!
@@ -19,14 +24,17 @@ use std::path::{Path, PathBuf};
 use anyhow::{bail, Context, Result};
 use clap::ValueEnum;
 use pomona::{Detection, Detector};
-use pomona_arm::{match_centres, MatchingWindows, RelaxationParams, RotatedStereo, StereoMatching};
+use pomona_arm::{
+    match_centres, DisparityRefinement, MatchingWindows, RefinementOutcome, RelaxationParams,
+    RotatedStereo, StereoMatching,
+};
 use pomona_core::nalgebra::{Point2, Point3};
-use pomona_core::{DepthImage, RgbdFrame};
+use pomona_core::{ColorImage, DepthImage, RgbdFrame};
 use pomona_io::Dataset;
 use pomona_synth::RigFile;
 use rayon::prelude::*;
 
-use crate::commands::stereo_report::{StereoFrameOutcome, StereoReport};
+use crate::commands::stereo_report::{LocatedPair, StereoFrameOutcome, StereoReport};
 use crate::detection_run::{load_detector, min_confidence, thread_pool};
 use crate::number_pair::parse_number_pair;
 
@@ -61,6 +69,22 @@ pub struct StereoArgs {
     /// Pixels added to every disparity window (detector centre error, lens effects).
     #[arg(long, value_name = "PX", default_value_t = 4.0)]
     pub margin_px: f64,
+    /// Refine each pair's stereo-view centre by appearance before locating it (beyond the seed;
+    /// off: the two circle centres only, as the seed does).
+    #[arg(long)]
+    pub refine: bool,
+    /// Refinement: radius of the matched patch as a multiple of the primary circle's radius
+    /// (above 1 the silhouette is included).
+    #[arg(long, value_name = "S", default_value_t = DisparityRefinement::default().patch_scale)]
+    pub refine_patch_scale: f64,
+    /// Refinement: how far the stereo-view centre is searched either side of the circles'
+    /// prediction along the epipolar line, pixels.
+    #[arg(long, value_name = "PX", default_value_t = DisparityRefinement::default().search_px)]
+    pub refine_search_px: f64,
+    /// Refinement: lowest normalised cross-correlation accepted; below it the circle centres
+    /// are kept.
+    #[arg(long, value_name = "NCC", default_value_t = DisparityRefinement::default().min_ncc)]
+    pub refine_min_ncc: f64,
     /// Also measure matching and 3D error against the truth of both views; write them here.
     #[arg(long, value_name = "R.json")]
     pub report: Option<PathBuf>,
@@ -175,20 +199,35 @@ fn located(
     }
 }
 
+/// How a frame is located: the rig, the Eq. 10 windows, the method and the refinement (`None`:
+/// the circle centres, as in the seed).
+struct Locating<'a> {
+    rig: &'a RotatedStereo,
+    windows: &'a MatchingWindows,
+    method: StereoMethod,
+    refinement: Option<DisparityRefinement>,
+}
+
 /// Detects, matches and locates the fruit of frame `stem`.
 fn run_frame(
     stem: &str,
     views: (&Dataset, &Dataset),
     detector: &Detector,
     threshold: Option<f64>,
-    rig: &RotatedStereo,
-    windows: &MatchingWindows,
-    method: StereoMethod,
+    how: &Locating,
 ) -> Result<FrameRun> {
-    let detect = |dataset: &Dataset| -> Result<Vec<Detection>> {
+    let load = |dataset: &Dataset| -> Result<ColorImage> {
+        let where_ = || format!("frame {stem} of {}", dataset.root().display());
+        dataset
+            .load_color(stem)
+            .with_context(where_)?
+            .with_context(|| format!("{} has no colour image", where_()))
+    };
+    let images = (load(views.0)?, load(views.1)?);
+    let detect = |dataset: &Dataset, color: &ColorImage| -> Result<Vec<Detection>> {
         // The colour view only: depth, if the dataset has any, is not read.
         let where_ = || format!("frame {stem} of {}", dataset.root().display());
-        let color = dataset.load_color(stem).with_context(where_)?;
+        let color = Some(color.clone());
         let camera = *dataset.camera();
         let frame = RgbdFrame::new(
             camera,
@@ -204,25 +243,40 @@ fn run_frame(
             .filter(|d| threshold.is_none_or(|c| d.confidence_at_least(c)))
             .collect())
     };
-    let primary = detect(views.0)?;
-    let stereo = detect(views.1)?;
+    let primary = detect(views.0, &images.0)?;
+    let stereo = detect(views.1, &images.1)?;
     let (pc, sc) = (circles(&primary), circles(&stereo));
     let centres = |c: &[(Point2<f64>, f64, usize)]| c.iter().map(|x| x.0).collect::<Vec<_>>();
     let matching: StereoMatching = match_centres(
         &centres(&pc),
         &centres(&sc),
-        windows,
+        how.windows,
         &RelaxationParams::default(),
     );
+    let rig = how.rig;
     let mut detections = Vec::new();
     let mut pairs = Vec::new();
     for pair in &matching.pairs {
         let (p, s) = (pc[pair.primary], sc[pair.stereo]);
-        let Ok(center_m) = method.locate(rig, &p.0, &s.0) else {
+        let refinement = match &how.refinement {
+            Some(r) => Some(
+                r.refine(rig, (&images.0, &images.1), &p.0, p.1, &s.0)
+                    .with_context(|| format!("refining a pair of frame {stem}"))?,
+            ),
+            None => None,
+        };
+        let stereo_px = refinement.map_or(s.0, |r| r.stereo_center_px(&s.0));
+        let Ok(center_m) = how.method.locate(rig, &p.0, &stereo_px) else {
             continue;
         };
         detections.push(located(rig, center_m, &primary[p.2], &stereo[s.2], p.1));
-        pairs.push((p.0, s.0, center_m));
+        pairs.push(LocatedPair {
+            primary_px: p.0,
+            stereo_circle_px: s.0,
+            stereo_px,
+            refinement,
+            center_m,
+        });
     }
     Ok(FrameRun {
         detections,
@@ -268,21 +322,32 @@ pub fn run(args: &StereoArgs) -> Result<()> {
         .context("bad --reach-m or --margin-px")?;
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create {}", args.out.display()))?;
+    let refinement = args
+        .refine
+        .then(|| -> Result<DisparityRefinement> {
+            let r = DisparityRefinement {
+                patch_scale: args.refine_patch_scale,
+                search_px: args.refine_search_px,
+                min_ncc: args.refine_min_ncc,
+                ..DisparityRefinement::default()
+            };
+            r.validate().context("bad --refine-* option")?;
+            Ok(r)
+        })
+        .transpose()?;
+    let how = Locating {
+        rig: &rig,
+        windows: &windows,
+        method: args.method,
+        refinement,
+    };
     let pool = thread_pool(args.threads.map(|n| n as usize))?;
     let runs: Vec<FrameRun> = pool.install(|| {
         dataset
             .frames()
             .par_iter()
             .map(|stem| -> Result<FrameRun> {
-                let run = run_frame(
-                    stem,
-                    (&dataset, &stereo),
-                    &detector,
-                    threshold,
-                    &rig,
-                    &windows,
-                    args.method,
-                )?;
+                let run = run_frame(stem, (&dataset, &stereo), &detector, threshold, &how)?;
                 let mut record = detector.frame_record(stem, true, &run.detections, None);
                 record.pipeline = STEREO_RECORD_PIPELINE.to_owned();
                 pomona_io::write_json(&args.out.join(format!("{stem}.json")), &record)?;
@@ -291,13 +356,23 @@ pub fn run(args: &StereoArgs) -> Result<()> {
             .collect::<Result<Vec<FrameRun>>>()
     })?;
     let located: usize = runs.iter().map(|r| r.detections.len()).sum();
+    let refined = runs
+        .iter()
+        .flat_map(|r| &r.outcome.pairs)
+        .filter(|p| matches!(p.refinement, Some(RefinementOutcome::Refined { .. })))
+        .count();
     println!(
-        "{} frames: {located} fruit located by {} (β = {:.2}°, pivot {:.3} m, disparity window \
+        "{} frames: {located} fruit located by {}{} (β = {:.2}°, pivot {:.3} m, disparity window \
          {:.1}–{:.1} px, |Δv| ≤ {:.1} px) into {}",
         runs.len(),
         match args.method {
             StereoMethod::Paper => "Eq. 18",
             StereoMethod::Triangulate => "triangulation",
+        },
+        if args.refine {
+            format!(", {refined} of them refined by appearance")
+        } else {
+            String::new()
         },
         rig.beta_rad.to_degrees(),
         d,
@@ -308,7 +383,13 @@ pub fn run(args: &StereoArgs) -> Result<()> {
     );
     if let Some(path) = &args.report {
         let outcomes: Vec<StereoFrameOutcome> = runs.into_iter().map(|r| r.outcome).collect();
-        let report = StereoReport::measure(&rig, args.method, (&dataset, &stereo), &outcomes)?;
+        let report = StereoReport::measure(
+            &rig,
+            args.method,
+            refinement.is_some(),
+            (&dataset, &stereo),
+            &outcomes,
+        )?;
         pomona_io::write_json(path, &report)?;
         print!("{}", report.to_markdown());
     }

@@ -16,7 +16,7 @@
 use std::collections::{BTreeMap, HashSet};
 
 use anyhow::{Context, Result};
-use pomona_arm::RotatedStereo;
+use pomona_arm::{RefinementOutcome, RotatedStereo};
 use pomona_core::nalgebra::{Point2, Point3};
 use pomona_core::{FrameTruth, ImageCircle, PinholeCamera};
 use pomona_io::Dataset;
@@ -38,8 +38,33 @@ pub struct StereoFrameOutcome {
     pub primary_centres: Vec<Point2<f64>>,
     /// Centres detected in the stereo view.
     pub stereo_centres: Vec<Point2<f64>>,
-    /// Matched pairs that were located: primary centre, stereo centre, located point.
-    pub pairs: Vec<(Point2<f64>, Point2<f64>, Point3<f64>)>,
+    /// Matched pairs that were located.
+    pub pairs: Vec<LocatedPair>,
+}
+
+/// A matched pair and where it was located.
+#[derive(Debug, Clone)]
+pub struct LocatedPair {
+    /// Primary circle centre.
+    pub primary_px: Point2<f64>,
+    /// Stereo circle centre (the fruit's identity in the stereo view).
+    pub stereo_circle_px: Point2<f64>,
+    /// The stereo pixel the fruit was located with (refined or the circle centre).
+    pub stereo_px: Point2<f64>,
+    /// The refinement's outcome (`None` without `--refine`).
+    pub refinement: Option<RefinementOutcome>,
+    /// The located centre, primary camera frame.
+    pub center_m: Point3<f64>,
+}
+
+/// How many located pairs the appearance refinement moved and why the others kept their
+/// circle centres.
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct RefinementCounts {
+    /// Pairs whose stereo centre was refined.
+    pub refined: usize,
+    /// Pairs that kept the circle centres, by reason (`low_ncc`, `flat_patch`, ...).
+    pub fallback: BTreeMap<&'static str, usize>,
 }
 
 /// Matching scores.
@@ -121,6 +146,8 @@ pub struct PixelError {
 pub struct StereoReport {
     /// `paper` or `triangulate`.
     pub method: StereoMethod,
+    /// The appearance refinement's counts; `null` without `--refine`.
+    pub refinement: Option<RefinementCounts>,
     /// Half-angle between the shots, degrees.
     pub beta_deg: f64,
     /// Pivot distance, metres.
@@ -188,10 +215,21 @@ impl StereoReport {
     pub fn measure(
         rig: &RotatedStereo,
         method: StereoMethod,
+        refine: bool,
         views: (&Dataset, &Dataset),
         outcomes: &[StereoFrameOutcome],
     ) -> Result<Self> {
         let mut tally = Tally::default();
+        let mut counts = RefinementCounts::default();
+        for pair in outcomes.iter().flat_map(|o| &o.pairs) {
+            match pair.refinement {
+                Some(RefinementOutcome::Refined { .. }) => counts.refined += 1,
+                Some(RefinementOutcome::Fallback { reason, .. }) => {
+                    *counts.fallback.entry(reason.name()).or_default() += 1;
+                }
+                None => {}
+            }
+        }
         for outcome in outcomes {
             let load = |d: &Dataset| {
                 d.load_truth(&outcome.stem).with_context(|| {
@@ -205,7 +243,9 @@ impl StereoReport {
             tally.pairs(rig, (&tp, &ts), outcome);
             tally.exact(rig, method, (&tp, &ts));
         }
-        Ok(tally.report(rig, method))
+        let mut report = tally.report(rig, method);
+        report.refinement = refine.then_some(counts);
+        Ok(report)
     }
 
     /// A short Markdown summary.
@@ -229,6 +269,18 @@ impl StereoReport {
             f(self.centre_error.median_far_mm, 1),
             self.centre_error.n_far,
         );
+        if let Some(r) = &self.refinement {
+            let kept: Vec<String> = r.fallback.iter().map(|(k, n)| format!("{k} {n}")).collect();
+            s.push_str(&format!(
+                "refined by appearance: {} pairs; circle centres kept: {}\n\n",
+                r.refined,
+                if kept.is_empty() {
+                    "none".to_owned()
+                } else {
+                    kept.join(", ")
+                }
+            ));
+        }
         s.push_str(&format!(
             "pixel errors of {} correct pairs: primary centre median {} px, disparity median {} px \
              (signed), {} px (absolute)\n\n",
@@ -291,9 +343,11 @@ impl Tally {
         self.matching.both_detected += both.len();
         let centre_of = truth_centres(tp);
         let mut paired = HashSet::new();
-        for (p, s, located) in &outcome.pairs {
+        for pair in &outcome.pairs {
+            let (p, s, located) = (&pair.primary_px, &pair.stereo_px, &pair.center_m);
             self.matching.pairs += 1;
-            let (Some(a), Some(b)) = (identity(&cp, p), identity(&cs, s)) else {
+            let (Some(a), Some(b)) = (identity(&cp, p), identity(&cs, &pair.stereo_circle_px))
+            else {
                 continue;
             };
             self.matching.pairs_of_fruit += 1;
@@ -377,6 +431,7 @@ impl Tally {
             .collect();
         StereoReport {
             method,
+            refinement: None,
             beta_deg: rig.beta_rad.to_degrees(),
             pivot_m: rig.pivot_distance_m,
             frames: self.frames,

@@ -165,3 +165,64 @@ fn stereo_without_a_rig_names_the_missing_file() {
     assert!(!out.status.success());
     assert!(stderr(&out).contains("rig.json"), "{}", stderr(&out));
 }
+
+/// `--refine` end to end on rendered (shaded) oranges: every located pair is either refined or
+/// kept with a named reason, some are refined, and the detection files are written.
+#[test]
+fn refine_accounts_for_every_pair_on_rendered_oranges() {
+    let tmp = tempfile::tempdir().unwrap();
+    let ds = tmp.path().join("ds");
+    let out = pomona(&[
+        "synth",
+        "--out",
+        ds.to_str().unwrap(),
+        "--frames",
+        "3",
+        "--seed",
+        "1",
+        "--domain",
+        "orchard",
+        "--fruit",
+        "orange",
+        "--camera",
+        "d435",
+        "--noise",
+        "none",
+        "--stereo",
+        "--stereo-beta-deg",
+        "8",
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let det = tmp.path().join("det");
+    let report = tmp.path().join("report.json");
+    let out = stereo(
+        &ds,
+        &det,
+        &[
+            "--method",
+            "triangulate",
+            "--refine",
+            "--report",
+            report.to_str().unwrap(),
+        ],
+    );
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(
+        stdout(&out).contains("refined by appearance"),
+        "{}",
+        stdout(&out)
+    );
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+    let refined = report["refinement"]["refined"].as_u64().unwrap();
+    let kept: u64 = report["refinement"]["fallback"]
+        .as_object()
+        .unwrap()
+        .values()
+        .map(|v| v.as_u64().unwrap())
+        .sum();
+    let pairs = report["matching"]["pairs"].as_u64().unwrap();
+    assert!(refined > 0, "{report}");
+    assert_eq!(refined + kept, pairs, "{report}");
+    assert!(std::fs::read_dir(&det).unwrap().count() >= 3);
+}

@@ -242,6 +242,7 @@ impl DisparityRefinement {
         if !(px_per_w.is_finite() && px_per_w > 0.0) {
             return fallback(FallbackReason::NoStartingPoint, None);
         }
+        let template: Vec<[f64; 3]> = patch.iter().map(|p| p.rgb).collect();
         let steps = (self.search_px / self.step_px).floor() as i64;
         let w_at = |k: f64| w0 + k * self.step_px / px_per_w;
         let scores: Vec<Option<f64>> = (-steps..=steps)
@@ -251,7 +252,14 @@ impl DisparityRefinement {
                     return None;
                 }
                 let centre = Point3::from(axis.into_inner() / w);
-                self.score(rig, stereo, &patch, &axis, &centre, sin_alpha / w)
+                self.score(
+                    rig,
+                    stereo,
+                    (&patch, &template),
+                    &axis,
+                    &centre,
+                    sin_alpha / w,
+                )
             })
             .collect();
         let Some((best, best_ncc)) = scores
@@ -331,14 +339,14 @@ impl DisparityRefinement {
         pixels
     }
 
-    /// Zero-mean NCC of the patch against the stereo image warped by the sphere hypothesis
-    /// (`centre` on `axis`, radius `radius_m`); `None` when the warp leaves the image or the
-    /// warped samples are flat.
+    /// Zero-mean NCC of the patch (its pixels and their colours, `template`, built once per
+    /// pair) against the stereo image warped by the sphere hypothesis (`centre` on `axis`,
+    /// radius `radius_m`); `None` when the warp leaves the image or the warped samples are flat.
     fn score(
         &self,
         rig: &RotatedStereo,
         stereo: &ColorImage,
-        patch: &[PatchPixel],
+        (patch, template): (&[PatchPixel], &[[f64; 3]]),
         axis: &Unit<Vector3<f64>>,
         centre: &Point3<f64>,
         radius_m: f64,
@@ -359,8 +367,7 @@ impl DisparityRefinement {
             let px = rig.camera.project(&(stereo_from_camera * point))?;
             sampled.push(bilinear(stereo, &px)?);
         }
-        let template: Vec<[f64; 3]> = patch.iter().map(|p| p.rgb).collect();
-        ncc(&template, &sampled)
+        ncc(template, &sampled)
     }
 }
 

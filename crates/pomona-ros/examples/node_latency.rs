@@ -19,10 +19,8 @@ use std::time::{Duration, Instant};
 use pomona_io::Dataset;
 use pomona_recording::{CameraInfo, Header, Image, RecordingTopics};
 use pomona_ros::vision_msgs::Detection3DArray;
-use pomona_ros::{FruitNode, NodeConfig};
-use ros2_client::{
-    qos::History, Context, ContextOptions, MessageTypeName, Name, NodeName, NodeOptions, QosProfile,
-};
+use pomona_ros::{FruitNode, NodeConfig, RosMessage};
+use ros2_client::{qos::History, Context, ContextOptions, Name, NodeName, NodeOptions, QosProfile};
 
 fn flag<T: std::str::FromStr>(args: &[String], name: &str, default: T) -> Result<T, String> {
     match args.iter().position(|a| a == name) {
@@ -72,24 +70,22 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     let mut camera = context.new_node(name, NodeOptions::new())?;
     let qos = QosProfile::publisher_default().history(History::KeepLast { depth: 5 });
     let topics = RecordingTopics::default();
-    let publisher = |topic: &str, kind: &str| -> Result<_, Box<dyn std::error::Error>> {
-        Ok(camera.create_topic(
-            &Name::parse(topic).map_err(|e| format!("{topic}: {e:?}"))?,
-            MessageTypeName::new("sensor_msgs", kind),
-            &qos,
-        )?)
-    };
-    let info_topic = publisher(&topics.camera_info, "CameraInfo")?;
-    let color_topic = publisher(&topics.color, "Image")?;
-    let depth_topic = publisher(&topics.depth, "Image")?;
+    // The topic `topic` carrying `M`.
+    fn topic<M: RosMessage>(
+        node: &ros2_client::Node,
+        topic: &str,
+        qos: &QosProfile,
+    ) -> Result<ros2_client::dds::rustdds::Topic, Box<dyn std::error::Error>> {
+        let name = Name::parse(topic).map_err(|e| format!("{topic}: {e:?}"))?;
+        Ok(node.create_topic(&name, M::type_name(), qos)?)
+    }
+    let info_topic = topic::<CameraInfo>(&camera, &topics.camera_info, &qos)?;
+    let color_topic = topic::<Image>(&camera, &topics.color, &qos)?;
+    let depth_topic = topic::<Image>(&camera, &topics.depth, &qos)?;
     let info_pub = camera.create_publisher::<CameraInfo>(&info_topic, Some(qos.clone()))?;
     let color_pub = camera.create_publisher::<Image>(&color_topic, Some(qos.clone()))?;
     let depth_pub = camera.create_publisher::<Image>(&depth_topic, Some(qos.clone()))?;
-    let detections_topic = camera.create_topic(
-        &Name::parse(&node.topics().detections).map_err(|e| format!("{e:?}"))?,
-        MessageTypeName::new("vision_msgs", "Detection3DArray"),
-        &qos,
-    )?;
+    let detections_topic = topic::<Detection3DArray>(&camera, &node.topics().detections, &qos)?;
     let listener =
         camera.create_subscription::<Detection3DArray>(&detections_topic, Some(qos.clone()))?;
     let spinner = camera.spinner()?;

@@ -25,10 +25,9 @@ use pomona::Detector;
 use pomona_core::{Detection, RgbdFrame};
 use pomona_recording::{CameraInfo, Image};
 use ros2_client::{
-    qos::History, Context, ContextOptions, MessageTypeName, Name, Node, NodeName, NodeOptions,
-    Publisher, QosProfile, Subscription,
+    qos::History, Context, ContextOptions, Name, Node, NodeName, NodeOptions, Publisher,
+    QosProfile, Subscription,
 };
-use serde::{de::DeserializeOwned, Serialize};
 
 use crate::detection_messages::{detection_array, marker_array};
 use crate::latest_frame::LatestFrame;
@@ -36,7 +35,7 @@ use crate::live_sync::{FrameMessages, LiveSync, SyncCounts};
 use crate::topic_name::resolve_topic;
 use crate::vision_msgs::Detection3DArray;
 use crate::visualization_msgs::MarkerArray;
-use crate::{NodeConfig, RosError};
+use crate::{NodeConfig, RosError, RosMessage};
 
 /// Time spent on one published frame.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -145,40 +144,29 @@ fn output_qos() -> QosProfile {
     QosProfile::publisher_default().history(History::KeepLast { depth: 10 })
 }
 
-fn subscribe<M: Serialize + DeserializeOwned + 'static>(
+/// Creates the topic `name` carrying `M` with `qos`; `what` names the endpoint in errors.
+fn topic_for<M: RosMessage>(
     node: &mut Node,
     name: &Name,
-    package: &str,
-    type_name: &str,
-) -> Result<Subscription<M>, RosError> {
-    let what = || format!("subscription to {name}");
-    let topic = node
-        .create_topic(
-            name,
-            MessageTypeName::new(package, type_name),
-            &sensor_data_qos(),
-        )
-        .map_err(|e| RosError::dds(what(), e))?;
-    node.create_subscription::<M>(&topic, Some(sensor_data_qos()))
-        .map_err(|e| RosError::dds(what(), e))
+    qos: &QosProfile,
+    what: &str,
+) -> Result<ros2_client::dds::rustdds::Topic, RosError> {
+    node.create_topic(name, M::type_name(), qos)
+        .map_err(|e| RosError::dds(what, e))
 }
 
-fn advertise<M: Serialize + 'static>(
-    node: &mut Node,
-    name: &Name,
-    package: &str,
-    type_name: &str,
-) -> Result<Publisher<M>, RosError> {
-    let what = || format!("publisher on {name}");
-    let topic = node
-        .create_topic(
-            name,
-            MessageTypeName::new(package, type_name),
-            &output_qos(),
-        )
-        .map_err(|e| RosError::dds(what(), e))?;
+fn subscribe<M: RosMessage>(node: &mut Node, name: &Name) -> Result<Subscription<M>, RosError> {
+    let what = format!("subscription to {name}");
+    let topic = topic_for::<M>(node, name, &sensor_data_qos(), &what)?;
+    node.create_subscription::<M>(&topic, Some(sensor_data_qos()))
+        .map_err(|e| RosError::dds(what, e))
+}
+
+fn advertise<M: RosMessage>(node: &mut Node, name: &Name) -> Result<Publisher<M>, RosError> {
+    let what = format!("publisher on {name}");
+    let topic = topic_for::<M>(node, name, &output_qos(), &what)?;
     node.create_publisher::<M>(&topic, Some(output_qos()))
-        .map_err(|e| RosError::dds(what(), e))
+        .map_err(|e| RosError::dds(what, e))
 }
 
 struct Outputs {
@@ -230,19 +218,14 @@ impl FruitNode {
             .new_node(node_name, NodeOptions::new())
             .map_err(|e| RosError::dds("node", e))?;
         let [color_name, depth_name, info_name] = &input;
-        let color_sub = subscribe::<Image>(&mut node, color_name, "sensor_msgs", "Image")?;
-        let depth_sub = subscribe::<Image>(&mut node, depth_name, "sensor_msgs", "Image")?;
-        let info_sub = subscribe::<CameraInfo>(&mut node, info_name, "sensor_msgs", "CameraInfo")?;
+        let color_sub = subscribe::<Image>(&mut node, color_name)?;
+        let depth_sub = subscribe::<Image>(&mut node, depth_name)?;
+        let info_sub = subscribe::<CameraInfo>(&mut node, info_name)?;
         let outputs = Outputs {
-            detections: advertise(
-                &mut node,
-                &detections_name,
-                "vision_msgs",
-                "Detection3DArray",
-            )?,
+            detections: advertise(&mut node, &detections_name)?,
             markers: markers_name
                 .as_ref()
-                .map(|name| advertise(&mut node, name, "visualization_msgs", "MarkerArray"))
+                .map(|name| advertise(&mut node, name))
                 .transpose()?,
         };
         let spinner = node.spinner().map_err(|e| RosError::dds("spinner", e))?;

@@ -15,6 +15,7 @@
 //! still waiting are dropped (counted), as are depth images older than the one used.
 
 use std::collections::VecDeque;
+use std::sync::Arc;
 
 use pomona_recording::{CameraInfo, Image};
 
@@ -26,8 +27,8 @@ pub const PENDING_LIMIT: usize = 16;
 pub struct FrameMessages<T> {
     /// The colour image (its header names the frame).
     pub color: Image,
-    /// The depth image nearest in time.
-    pub depth: Image,
+    /// The depth image nearest in time (shared: a later colour image may pair with it too).
+    pub depth: Arc<Image>,
     /// The camera info.
     pub info: CameraInfo,
     /// What the caller attached to the colour message (e.g. when it arrived).
@@ -53,7 +54,7 @@ pub struct SyncCounts {
 pub struct LiveSync<T> {
     tolerance_ns: u64,
     color: VecDeque<(u64, Image, T)>,
-    depth: VecDeque<(u64, Image)>,
+    depth: VecDeque<(u64, Arc<Image>)>,
     info: Option<CameraInfo>,
     last_paired_ns: Option<u64>,
     counts: SyncCounts,
@@ -103,7 +104,7 @@ impl<T> LiveSync<T> {
             return None;
         };
         let at = self.depth.partition_point(|(s, _)| *s <= stamp);
-        self.depth.insert(at, (stamp, image));
+        self.depth.insert(at, (stamp, Arc::new(image)));
         if self.depth.len() > PENDING_LIMIT {
             self.depth.pop_front();
         }
@@ -143,7 +144,7 @@ impl<T> LiveSync<T> {
     /// Pairs the newest decidable colour image, dropping older ones (nothing is decided before
     /// the first camera info).
     fn pair(&mut self) -> Option<FrameMessages<T>> {
-        let info = self.info.clone()?;
+        self.info.as_ref()?;
         let (newest, depth_index) = (0..self.color.len()).rev().find_map(|i| {
             let stamp = self.color[i].0;
             match self.decide(stamp) {
@@ -162,7 +163,8 @@ impl<T> LiveSync<T> {
             }
         }
         let (stamp, color, color_tag) = self.color.pop_front()?;
-        let depth = self.depth.get(depth_index)?.1.clone();
+        let depth = Arc::clone(&self.depth.get(depth_index)?.1);
+        let info = self.info.clone()?;
         self.depth.drain(..depth_index);
         self.last_paired_ns = Some(stamp);
         self.counts.paired += 1;

@@ -16,13 +16,13 @@ use pomona_recording::{
 use pomona_ros::detection_messages::detection_array;
 use pomona_ros::vision_msgs::Detection3DArray;
 use pomona_ros::visualization_msgs::{Marker, MarkerArray};
-use pomona_ros::{FruitNode, NodeConfig, RosError};
+use pomona_ros::{FruitNode, NodeConfig, RosError, RosMessage};
 use pomona_synth::{
     generate_dataset, CameraPreset, DatasetSpec, FruitChoice, FruitKind, SceneSpec,
 };
 use ros2_client::{
-    qos::History, Context, ContextOptions, MessageTypeName, Name, NodeName, NodeOptions, Publisher,
-    QosProfile, Subscription,
+    qos::History, Context, ContextOptions, Name, NodeName, NodeOptions, Publisher, QosProfile,
+    Subscription,
 };
 
 const T0: u64 = 1_700_000_000_000_000_000;
@@ -78,39 +78,21 @@ impl Participant {
         Self { node, _stop: stop }
     }
 
-    fn publisher<M: serde::Serialize + 'static>(
-        &mut self,
-        topic: &str,
-        package: &str,
-        kind: &str,
-    ) -> Publisher<M> {
-        let topic = self
-            .node
-            .create_topic(
-                &Name::parse(topic).unwrap(),
-                MessageTypeName::new(package, kind),
-                &reliable(),
-            )
-            .unwrap();
+    fn topic<M: RosMessage>(&mut self, topic: &str) -> ros2_client::dds::rustdds::Topic {
+        self.node
+            .create_topic(&Name::parse(topic).unwrap(), M::type_name(), &reliable())
+            .unwrap()
+    }
+
+    fn publisher<M: RosMessage>(&mut self, topic: &str) -> Publisher<M> {
+        let topic = self.topic::<M>(topic);
         self.node
             .create_publisher(&topic, Some(reliable()))
             .unwrap()
     }
 
-    fn subscription<M: serde::de::DeserializeOwned + 'static>(
-        &mut self,
-        topic: &str,
-        package: &str,
-        kind: &str,
-    ) -> Subscription<M> {
-        let topic = self
-            .node
-            .create_topic(
-                &Name::parse(topic).unwrap(),
-                MessageTypeName::new(package, kind),
-                &reliable(),
-            )
-            .unwrap();
+    fn subscription<M: RosMessage>(&mut self, topic: &str) -> Subscription<M> {
+        let topic = self.topic::<M>(topic);
         self.node
             .create_subscription(&topic, Some(reliable()))
             .unwrap()
@@ -130,9 +112,9 @@ impl Camera {
         let mut p = Participant::new(domain_id, "test_camera");
         let topics = RecordingTopics::default();
         Self {
-            info: p.publisher(&topics.camera_info, "sensor_msgs", "CameraInfo"),
-            color: p.publisher(&topics.color, "sensor_msgs", "Image"),
-            depth: p.publisher(&topics.depth, "sensor_msgs", "Image"),
+            info: p.publisher(&topics.camera_info),
+            color: p.publisher(&topics.color),
+            depth: p.publisher(&topics.depth),
             _participant: p,
         }
     }
@@ -155,8 +137,8 @@ impl Listener {
     fn new(domain_id: u16) -> Self {
         let mut p = Participant::new(domain_id, "test_listener");
         Self {
-            detections: p.subscription("/pomona/detections", "vision_msgs", "Detection3DArray"),
-            markers: p.subscription("/pomona/markers", "visualization_msgs", "MarkerArray"),
+            detections: p.subscription("/pomona/detections"),
+            markers: p.subscription("/pomona/markers"),
             _participant: p,
         }
     }

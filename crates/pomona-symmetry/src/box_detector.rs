@@ -113,10 +113,11 @@ impl BoxDetector {
         let highlights: Option<Highlights> = run_stage(&s.highlight, frame, timings)?;
         let pruning = self.pruning_state(highlights.as_ref());
         // Normals only where some box reads them (exact; see `scene_cloud.rs`).
-        let (points, mut cloud) = run_stage(&CloudStage(&s.normals), frame, timings)?;
+        let mut cloud = run_stage(&CloudStage(&s.normals), frame, timings)?;
         let mask = highlights.as_ref().map(|h| &h.mask);
         let candidates = run_stage(&s.boxes, (&cloud, mask), timings)?;
-        cloud.normals = run_stage(&s.normals, (&points, candidates.as_slice()), timings)?;
+        let normals = run_stage(&s.normals, (&cloud, candidates.as_slice()), timings)?;
+        cloud.set_normals(normals);
         let patches = run_stage(&BoxCut(&s.boxes), (&cloud, candidates.as_slice()), timings)?;
         let boxes = patches.len();
         let patches = match (&self.cascade, &s.cascade_features) {

@@ -219,7 +219,7 @@ impl CentreRefinement {
         let mut points = Vec::new();
         for v in (v0..=v1).step_by(step) {
             for u in (u0..=u1).step_by(step) {
-                let p = cloud.points[v * cloud.width() + u];
+                let p = cloud.point(v * cloud.width() + u);
                 if (p - center).norm_squared() <= r2 {
                     points.push(p); // NaN fails the test above
                 }
@@ -289,7 +289,7 @@ impl Stage<(&SceneCloud, &[ScoredBox]), Vec<RefinedBox>> for CentreRefinement {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use pomona_core::PinholeCamera;
+    use pomona_core::{PinholeCamera, PointCloud};
 
     /// A scene of one sphere of radius `r_m` at `c` in front of a far wall, ray-cast exactly.
     fn scene(c: Point3<f64>, r_m: f64) -> SceneCloud {
@@ -309,14 +309,11 @@ mod tests {
                 } else {
                     2.0 / d.z
                 };
-                points.push(Point3::from(d * t));
+                points.push(Point3::from(d * t).cast::<f32>());
             }
         }
-        SceneCloud {
-            normals: vec![None; points.len()],
-            camera,
-            points,
-        }
+        let cloud = PointCloud::organized(320, 240, points).unwrap();
+        SceneCloud::new(camera, cloud).unwrap()
     }
 
     fn boxed(center: Point3<f64>) -> ScoredBox {

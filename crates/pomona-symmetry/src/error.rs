@@ -17,6 +17,16 @@ pub enum SymmetryError {
         /// What is wrong with it.
         reason: &'static str,
     },
+    /// A scene cloud needs an organised cloud of its camera's size.
+    #[error(
+        "the scene cloud must be organised as the camera's {expected:?} pixels, found {found:?}"
+    )]
+    NotOrganized {
+        /// The camera's `(width, height)`.
+        expected: (u32, u32),
+        /// The cloud's grid, `None` when unorganised.
+        found: Option<(u32, u32)>,
+    },
     /// Normal estimation failed (for example the cloud is not organised).
     #[error("normal estimation: {0}")]
     Normals(#[from] ConsensusError),

@@ -67,7 +67,7 @@ pub use params::{
 pub use reference_frame::{
     plane_frame, up, FixedFrame, FrameStage, LocalFrame, ReferenceFrame, SymmetryFrame, ViewerFrame,
 };
-pub use scene_cloud::{NormalStage, SceneCloud};
+pub use scene_cloud::{NormalStage, PixelNormals, SceneCloud};
 pub use sliding_box::{BoxCandidate, BoxPatch, SlidingBox};
 pub use stages::Stages;
 pub use symmetry_pipeline::{SymmetryPipeline, SYMMETRY};

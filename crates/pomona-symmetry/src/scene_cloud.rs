@@ -1,4 +1,5 @@
-//! The frame as the detectors see it: an organised cloud in `f64` with one PCA normal per pixel.
+//! The frame as the detectors see it: an organised cloud with a PCA normal at the pixels that
+//! need one.
 //!
 //! Normals come from `pomona-consensus`'s [`WindowNormals`] (plane fit over an image window,
 //! oriented towards the camera). On organised clouds the window search is O(1) per point, while a
@@ -12,6 +13,12 @@
 //! [`NormalStage::normals_at`] on the union of the boxes' pixels). Each normal is the same
 //! window fit as for the whole frame (`WindowNormals::estimate_at`), so every box and every
 //! detection is unchanged (unit test `on_demand_normals_give_the_same_patches`).
+//!
+//! Memory is per pixel, and at 1920×1080 every byte per pixel is 2 MB that the kernel must
+//! hand out zeroed, frame after frame. So the points stay in the frame's `f32` cloud and are
+//! widened to `f64` when read (the values the detectors saw before, when a second `f64` copy was
+//! kept), and normals live in a compact list with a 4-byte slot per pixel ([`PixelNormals`])
+//! rather than a 32-byte `Option` per pixel.
 
 use nalgebra::{Point3, Unit, Vector3};
 use pomona_consensus::{WindowNormalParams, WindowNormals};
@@ -21,18 +28,94 @@ use rayon::prelude::*;
 
 use crate::{BoxCandidate, SymmetryError};
 
+/// Unit normals at some pixels of an organised cloud: a slot per pixel into a compact list.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct PixelNormals {
+    /// Index into `normals` per pixel, [`PixelNormals::NONE`] where there is no normal.
+    slot: Vec<u32>,
+    normals: Vec<Unit<Vector3<f64>>>,
+}
+
+impl PixelNormals {
+    const NONE: u32 = u32::MAX;
+
+    /// No normal at any pixel.
+    pub fn none() -> Self {
+        Self::default()
+    }
+
+    /// The normals of `pixels` (row-major indices into a grid of `len` pixels), one estimate per
+    /// listed pixel; `None` estimates and pixels outside the grid are left without a normal.
+    pub(crate) fn from_estimates(
+        len: usize,
+        pixels: &[usize],
+        estimates: impl IntoIterator<Item = Option<Unit<Vector3<f64>>>>,
+    ) -> Self {
+        let mut slot = vec![Self::NONE; len];
+        let mut normals = Vec::new();
+        for (&i, n) in pixels.iter().zip(estimates) {
+            if let (Some(n), Some(s)) = (n, slot.get_mut(i)) {
+                *s = normals.len() as u32;
+                normals.push(n);
+            }
+        }
+        Self { slot, normals }
+    }
+
+    /// The normal at pixel `i` (row-major), if estimated and defined.
+    pub fn get(&self, i: usize) -> Option<Unit<Vector3<f64>>> {
+        match self.slot.get(i) {
+            Some(&s) if s != Self::NONE => self.normals.get(s as usize).copied(),
+            _ => None,
+        }
+    }
+
+    /// Number of pixels with a normal.
+    pub fn count(&self) -> usize {
+        self.normals.len()
+    }
+}
+
 /// An organised cloud with normals.
 #[derive(Debug, Clone)]
 pub struct SceneCloud {
     /// Camera of the frame.
     pub camera: PinholeCamera,
-    /// Points in row-major pixel order, camera frame, metres; non-finite where depth is missing.
-    pub points: Vec<Point3<f64>>,
-    /// Unit normals oriented towards the camera, `None` where undefined.
-    pub normals: Vec<Option<Unit<Vector3<f64>>>>,
+    /// The organised points (row-major pixel order, camera frame, metres; `NaN` where depth is
+    /// missing), as back-projected from the frame.
+    cloud: PointCloud,
+    /// Normals oriented towards the camera where estimated.
+    normals: PixelNormals,
 }
 
 impl SceneCloud {
+    /// A scene cloud without normals from an organised cloud of `camera`'s size.
+    ///
+    /// # Errors
+    /// [`SymmetryError::NotOrganized`] when `cloud` is not a grid of the camera's size.
+    pub fn new(camera: PinholeCamera, cloud: PointCloud) -> Result<Self, SymmetryError> {
+        if cloud.grid() != Some((camera.width, camera.height)) {
+            return Err(SymmetryError::NotOrganized {
+                expected: (camera.width, camera.height),
+                found: cloud.grid(),
+            });
+        }
+        Ok(Self {
+            camera,
+            cloud,
+            normals: PixelNormals::none(),
+        })
+    }
+
+    /// The frame's scene cloud without normals.
+    fn of_frame(frame: &RgbdFrame) -> Self {
+        Self {
+            camera: *frame.camera(),
+            cloud: frame.to_cloud(),
+            normals: PixelNormals::none(),
+        }
+    }
+
     /// Grid width.
     pub fn width(&self) -> usize {
         self.camera.width as usize
@@ -43,14 +126,59 @@ impl SceneCloud {
         self.camera.height as usize
     }
 
+    /// Number of pixels.
+    pub fn len(&self) -> usize {
+        self.cloud.len()
+    }
+
+    /// Whether the grid is empty.
+    pub fn is_empty(&self) -> bool {
+        self.cloud.is_empty()
+    }
+
+    /// The point of pixel `i` (row-major), non-finite where depth is missing.
+    ///
+    /// # Panics
+    /// When `i` is outside the grid.
+    pub fn point(&self, i: usize) -> Point3<f64> {
+        self.cloud.points()[i].cast::<f64>()
+    }
+
+    /// Every point in row-major pixel order (non-finite where depth is missing).
+    pub fn points(&self) -> impl Iterator<Item = Point3<f64>> + '_ {
+        self.cloud.points().iter().map(|p| p.cast::<f64>())
+    }
+
     /// The observed point at pixel `(u, v)` when valid.
-    pub fn point_at(&self, u: usize, v: usize) -> Option<&Point3<f64>> {
+    pub fn point_at(&self, u: usize, v: usize) -> Option<Point3<f64>> {
         if u >= self.width() || v >= self.height() {
             return None;
         }
-        self.points
+        self.cloud
+            .points()
             .get(v * self.width() + u)
             .filter(|p| p.z.is_finite())
+            .map(|p| p.cast::<f64>())
+    }
+
+    /// The normal at pixel `i` (row-major), if estimated and defined.
+    pub fn normal(&self, i: usize) -> Option<Unit<Vector3<f64>>> {
+        self.normals.get(i)
+    }
+
+    /// The normals.
+    pub fn normals(&self) -> &PixelNormals {
+        &self.normals
+    }
+
+    /// Replaces the normals.
+    pub fn set_normals(&mut self, normals: PixelNormals) {
+        self.normals = normals;
+    }
+
+    /// The underlying `f32` cloud.
+    pub fn cloud(&self) -> &PointCloud {
+        &self.cloud
     }
 }
 
@@ -73,74 +201,38 @@ impl NormalStage {
         })
     }
 
-    /// Builds the scene cloud of `frame`.
+    /// Builds the scene cloud of `frame`, with normals at every lattice pixel.
     ///
     /// # Errors
     /// [`SymmetryError::Normals`] (only if the cloud were not organised, which frames always are).
     pub fn cloud(&self, frame: &RgbdFrame) -> Result<SceneCloud, SymmetryError> {
-        let cloud = frame.to_cloud();
-        let normals = if self.lattice == 1 {
-            self.normals.estimate(&cloud)?
-        } else {
-            // Only lattice pixels (rows and columns multiple of `lattice`), in parallel rows.
-            let (w, h) = (
-                frame.camera().width as usize,
-                frame.camera().height as usize,
-            );
-            let g = self.lattice;
-            let rows: Vec<Vec<Option<Unit<Vector3<f64>>>>> = (0..h)
-                .into_par_iter()
-                .map(|v| {
-                    if v % g != 0 {
-                        return Ok(Vec::new());
-                    }
-                    let idx: Vec<usize> = (0..w).step_by(g).map(|u| v * w + u).collect();
-                    self.normals.estimate_at(&cloud, &idx)
-                })
-                .collect::<Result<_, _>>()?;
-            let mut out = vec![None; w * h];
-            for (v, row) in rows.into_iter().enumerate() {
-                for (k, n) in row.into_iter().enumerate() {
-                    out[v * w + k * g] = n;
-                }
-            }
-            out
-        };
-        let points = cloud.points().iter().map(|p| p.cast::<f64>()).collect();
-        Ok(SceneCloud {
-            camera: *frame.camera(),
-            points,
-            normals,
-        })
-    }
-}
-
-impl NormalStage {
-    /// The frame as a point cloud and as a [`SceneCloud`] with no normals yet (stage `cloud`
-    /// of detection).
-    pub fn points(&self, frame: &RgbdFrame) -> (PointCloud, SceneCloud) {
-        let cloud = frame.to_cloud();
-        let points: Vec<Point3<f64>> = cloud.points().iter().map(|p| p.cast::<f64>()).collect();
-        let normals = vec![None; points.len()];
-        let scene = SceneCloud {
-            camera: *frame.camera(),
-            points,
-            normals,
-        };
-        (cloud, scene)
+        let mut scene = SceneCloud::of_frame(frame);
+        let (w, h) = (scene.width(), scene.height());
+        let g = self.lattice;
+        let pixels: Vec<usize> = (0..h)
+            .step_by(g)
+            .flat_map(|v| (0..w).step_by(g).map(move |u| v * w + u))
+            .collect();
+        let normals = self.estimate(&scene.cloud, &pixels)?;
+        scene.normals = normals;
+        Ok(scene)
     }
 
-    /// Normals of `cloud` at every pixel some candidate box reads, `None` elsewhere (one entry
-    /// per pixel, as [`SceneCloud::normals`]).
+    /// The frame as a [`SceneCloud`] with no normals yet (stage `cloud` of detection).
+    pub fn points(&self, frame: &RgbdFrame) -> SceneCloud {
+        SceneCloud::of_frame(frame)
+    }
+
+    /// Normals of `scene` at every pixel some candidate box reads, none elsewhere.
     ///
     /// # Errors
-    /// [`SymmetryError::Normals`] when `cloud` is not organised.
+    /// [`SymmetryError::Normals`] when the cloud is not organised.
     pub fn normals_at(
         &self,
-        cloud: &PointCloud,
+        scene: &SceneCloud,
         candidates: &[BoxCandidate],
-    ) -> Result<Vec<Option<Unit<Vector3<f64>>>>, SymmetryError> {
-        let n = cloud.points().len();
+    ) -> Result<PixelNormals, SymmetryError> {
+        let n = scene.len();
         let mut needed = vec![false; n];
         for c in candidates {
             for &i in &c.pixels {
@@ -150,42 +242,51 @@ impl NormalStage {
             }
         }
         let idx: Vec<usize> = (0..n).filter(|&i| needed[i]).collect();
-        let found: Vec<Vec<Option<Unit<Vector3<f64>>>>> = idx
+        self.estimate(&scene.cloud, &idx)
+    }
+
+    /// Normals at `pixels` (in parallel chunks; the result does not depend on the thread count).
+    fn estimate(
+        &self,
+        cloud: &PointCloud,
+        pixels: &[usize],
+    ) -> Result<PixelNormals, SymmetryError> {
+        let found: Vec<Vec<Option<Unit<Vector3<f64>>>>> = pixels
             .par_chunks(2048)
             .map(|chunk| self.normals.estimate_at(cloud, chunk))
             .collect::<Result<_, _>>()?;
-        let mut out = vec![None; n];
-        for (&i, normal) in idx.iter().zip(found.into_iter().flatten()) {
-            out[i] = normal;
-        }
-        Ok(out)
+        Ok(PixelNormals::from_estimates(
+            cloud.len(),
+            pixels,
+            found.into_iter().flatten(),
+        ))
     }
 }
 
-/// Stage `cloud` of detection: frame → point cloud and normal-less scene cloud.
+/// Stage `cloud` of detection: frame → scene cloud without normals.
 pub(crate) struct CloudStage<'a>(pub(crate) &'a NormalStage);
 
-impl Stage<&RgbdFrame, (PointCloud, SceneCloud)> for CloudStage<'_> {
+impl Stage<&RgbdFrame, SceneCloud> for CloudStage<'_> {
     fn name(&self) -> &'static str {
         "cloud"
     }
 
-    fn run(&self, frame: &RgbdFrame) -> Result<(PointCloud, SceneCloud), PipelineError> {
+    fn run(&self, frame: &RgbdFrame) -> Result<SceneCloud, PipelineError> {
         Ok(self.0.points(frame))
     }
 }
 
 /// Stage `normals` of detection: normals at the candidates' pixels.
-impl Stage<(&PointCloud, &[BoxCandidate]), Vec<Option<Unit<Vector3<f64>>>>> for NormalStage {
+impl Stage<(&SceneCloud, &[BoxCandidate]), PixelNormals> for NormalStage {
     fn name(&self) -> &'static str {
         "normals"
     }
 
     fn run(
         &self,
-        (cloud, candidates): (&PointCloud, &[BoxCandidate]),
-    ) -> Result<Vec<Option<Unit<Vector3<f64>>>>, PipelineError> {
-        Ok(self.normals_at(cloud, candidates)?)
+        (scene, candidates): (&SceneCloud, &[BoxCandidate]),
+    ) -> Result<PixelNormals, PipelineError> {
+        Ok(self.normals_at(scene, candidates)?)
     }
 }
 
@@ -222,14 +323,15 @@ mod tests {
             });
             let full = stage.cloud(&frame).unwrap();
             let expected = sb.patches(&full, None);
-            let (points, mut lazy) = stage.points(&frame);
+            let mut lazy = stage.points(&frame);
             let candidates = sb.candidates(&lazy, None);
-            lazy.normals = stage.normals_at(&points, &candidates).unwrap();
-            let estimated = lazy.normals.iter().flatten().count();
+            let normals = stage.normals_at(&lazy, &candidates).unwrap();
+            lazy.set_normals(normals);
+            let estimated = lazy.normals().count();
             let got = sb.cut_all(&lazy, &candidates);
             assert!(expected.len() > 20, "{}", expected.len());
             assert_eq!(got, expected);
-            assert!(estimated < full.normals.iter().flatten().count());
+            assert!(estimated < full.normals().count());
         }
     }
 }

@@ -163,7 +163,7 @@ impl SlidingBox {
         for v in (v0..=v1).step_by(step) {
             for u in (u0..=u1).step_by(step) {
                 let i = v * width + u;
-                let d = cloud.points[i] - center;
+                let d = cloud.point(i) - center;
                 if d.x.abs() <= half && d.y.abs() <= half && d.z.abs() <= half {
                     pixels.push(i as u32); // NaN fails the test above
                 }
@@ -188,8 +188,8 @@ impl SlidingBox {
         let mut points = Vec::with_capacity(candidate.pixels.len());
         let mut normals = Vec::with_capacity(candidate.pixels.len());
         for &i in &candidate.pixels {
-            if let Some(n) = cloud.normals[i as usize] {
-                points.push(cloud.points[i as usize]);
+            if let Some(n) = cloud.normal(i as usize) {
+                points.push(cloud.point(i as usize));
                 normals.push(n);
             }
         }
@@ -294,8 +294,8 @@ impl VoxelCounts {
         let mut lo = [i64::MAX; 3];
         let mut hi = [i64::MIN; 3];
         let in_reach = |q: &Point3<f64>| q.z.is_finite() && q.z > 0.0 && q.coords.norm() <= reach;
-        for q in cloud.points.iter().filter(|q| in_reach(q)) {
-            let i = idx(q);
+        for q in cloud.points().filter(|q| in_reach(q)) {
+            let i = idx(&q);
             for a in 0..3 {
                 lo[a] = lo[a].min(i[a]);
                 hi[a] = hi[a].max(i[a]);
@@ -308,8 +308,8 @@ impl VoxelCounts {
         let (sx, sy) = (dims[0] + 1, dims[1] + 1);
         let mut sat = vec![0u32; sx * sy * (dims[2] + 1)];
         let at = |x: usize, y: usize, z: usize| (z * sy + y) * sx + x;
-        for q in cloud.points.iter().filter(|q| in_reach(q)) {
-            let i = idx(q);
+        for q in cloud.points().filter(|q| in_reach(q)) {
+            let i = idx(&q);
             let (x, y, z) = (
                 (i[0] - lo[0]) as usize + 1,
                 (i[1] - lo[1]) as usize + 1,
@@ -364,20 +364,25 @@ impl VoxelCounts {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::PixelNormals;
     use pomona_core::PinholeCamera;
 
     /// A flat wall at `z` seen by a small camera, normals facing the camera.
     fn wall(z: f64) -> SceneCloud {
         let camera = PinholeCamera::new(64, 48, 60.0, 60.0, 31.5, 23.5).unwrap();
         let points: Vec<_> = (0..48 * 64)
-            .map(|i| camera.back_project((i % 64) as f64, (i / 64) as f64, z))
+            .map(|i| {
+                camera
+                    .back_project((i % 64) as f64, (i / 64) as f64, z)
+                    .cast::<f32>()
+            })
             .collect();
-        let normals = vec![Some(-Vector3::z_axis()); points.len()];
-        SceneCloud {
-            camera,
-            points,
-            normals,
-        }
+        let pixels: Vec<usize> = (0..points.len()).collect();
+        let cloud = pomona_core::PointCloud::organized(64, 48, points).unwrap();
+        let mut scene = SceneCloud::new(camera, cloud).unwrap();
+        let normals = pixels.iter().map(|_| Some(-Vector3::z_axis()));
+        scene.set_normals(PixelNormals::from_estimates(scene.len(), &pixels, normals));
+        scene
     }
 
     #[test]
@@ -431,8 +436,7 @@ mod tests {
         let vc = VoxelCounts::build(&cloud, &p).unwrap();
         let node = [0i64, 0, 35];
         let brute = cloud
-            .points
-            .iter()
+            .points()
             .filter(|q| {
                 (0..3).all(|a| {
                     let i = (q[a] / p.stride_m).round() as i64;

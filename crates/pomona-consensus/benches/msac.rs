@@ -87,6 +87,16 @@ fn bench(c: &mut Criterion) {
     g.bench_function("window_5x5", |b| {
         b.iter(|| window.estimate(&cloud).unwrap())
     });
+    // The window the shape-fit model scales to on a 1080p Azure Kinect (917 px focal length).
+    let window_11 = WindowNormalParams {
+        half_window: 5,
+        ..WindowNormalParams::default()
+    }
+    .check()
+    .unwrap();
+    g.bench_function("window_11x11", |b| {
+        b.iter(|| window_11.estimate(&cloud).unwrap())
+    });
     g.bench_function("knn_16_kdtree", |b| b.iter(|| knn.estimate(&positions)));
     g.finish();
 }

@@ -351,16 +351,14 @@ impl WindowNormals {
         })?;
         let (w, h) = (w as usize, h as usize);
         let pts = cloud_points_f64(cloud);
-        let hw = self.params.half_window as usize;
         let mut out = vec![None; pts.len()];
-        out.par_chunks_mut(w.max(1)).enumerate().for_each_init(
-            || Vec::with_capacity((2 * hw + 1) * (2 * hw + 1)),
-            |neigh, (v, row)| {
+        out.par_chunks_mut(w.max(1))
+            .enumerate()
+            .for_each(|(v, row)| {
                 for (u, slot) in row.iter_mut().enumerate() {
-                    *slot = self.normal_at(&pts, w, h, u, v, neigh);
+                    *slot = self.normal_at_with(|k| pts[k], w, h, u, v);
                 }
-            },
-        );
+            });
         Ok(out)
     }
 
@@ -380,8 +378,6 @@ impl WindowNormals {
         })?;
         let (w, h) = (w as usize, h as usize);
         let raw = cloud.points();
-        let hw = self.params.half_window as usize;
-        let mut neigh = Vec::with_capacity((2 * hw + 1) * (2 * hw + 1));
         // Converting the window on the fly keeps this O(|indices|), independent of frame size.
         Ok(indices
             .iter()
@@ -389,23 +385,15 @@ impl WindowNormals {
                 if i >= w * h {
                     return None;
                 }
-                self.normal_at_with(|k| raw[k].cast::<f64>(), w, h, i % w, i / w, &mut neigh)
+                self.normal_at_with(|k| raw[k].cast::<f64>(), w, h, i % w, i / w)
             })
             .collect())
     }
 
-    fn normal_at(
-        &self,
-        pts: &[Point3<f64>],
-        w: usize,
-        h: usize,
-        u: usize,
-        v: usize,
-        neigh: &mut Vec<Point3<f64>>,
-    ) -> Option<Unit<Vector3<f64>>> {
-        self.normal_at_with(|k| pts[k], w, h, u, v, neigh)
-    }
-
+    /// The window fit at pixel `(u, v)`. Two passes over the window (mean, then covariance
+    /// about it) in the same order and with the same arithmetic as [`pca_normal`] on the
+    /// gathered neighbours, so the normal is bit-identical to that, without writing the
+    /// neighbours out: at 11×11 that gather was a third of the time.
     fn normal_at_with(
         &self,
         point: impl Fn(usize) -> Point3<f64>,
@@ -413,7 +401,6 @@ impl WindowNormals {
         h: usize,
         u: usize,
         v: usize,
-        neigh: &mut Vec<Point3<f64>>,
     ) -> Option<Unit<Vector3<f64>>> {
         let p = &self.params;
         let hw = p.half_window as usize;
@@ -422,20 +409,37 @@ impl WindowNormals {
         if !centre.iter().all(|c| c.is_finite()) {
             return None;
         }
-        neigh.clear();
-        for vv in v.saturating_sub(hw)..(v + hw + 1).min(h) {
-            for uu in u.saturating_sub(hw)..(u + hw + 1).min(w) {
-                let q = point(vv * w + uu);
-                // NaN fails the comparison, so invalid pixels drop out here.
-                if (q - centre).norm_squared() <= max_d2 {
-                    neigh.push(q);
+        let (rows, cols) = (
+            v.saturating_sub(hw)..(v + hw + 1).min(h),
+            u.saturating_sub(hw)..(u + hw + 1).min(w),
+        );
+        // Each neighbour in row-major order; NaN fails the distance test, so invalid pixels
+        // drop out.
+        let for_each_neighbour = |f: &mut dyn FnMut(&Point3<f64>)| {
+            for vv in rows.clone() {
+                for uu in cols.clone() {
+                    let q = point(vv * w + uu);
+                    if (q - centre).norm_squared() <= max_d2 {
+                        f(&q);
+                    }
                 }
             }
-        }
-        if neigh.len() < p.min_neighbors {
+        };
+        let (mut count, mut sum) = (0usize, Vector3::zeros());
+        for_each_neighbour(&mut |q| {
+            count += 1;
+            sum += q.coords;
+        });
+        if count < p.min_neighbors.max(MIN_NEIGHBOURS) {
             return None;
         }
-        pca_normal(neigh).map(|n| orient_towards(n, &centre, &p.viewpoint))
+        let mean = sum / count as f64;
+        let mut cov = Matrix3::<f64>::zeros();
+        for_each_neighbour(&mut |q| {
+            let d = q.coords - mean;
+            cov += d * d.transpose();
+        });
+        smallest_eigenvector(&cov).map(|n| orient_towards(n, &centre, &p.viewpoint))
     }
 }
 

@@ -95,58 +95,40 @@ pub fn grow_regions(
     }
     let min_pixels = params.min_pixels_for(fx_px);
     let step = params.max_step_m as f32;
-    // `fill[i]`: 0 while pixel i is unreached, else 1 + the number of the flood fill that
-    // reached it; `kept[f]`: the output index of flood fill f, if its cluster is kept. The kept
-    // clusters' pixels are then collected by one raster scan, already sorted.
-    let mut fill = vec![0u32; n];
-    let mut kept: Vec<Option<usize>> = Vec::new();
-    let mut sizes: Vec<usize> = Vec::new();
-    let mut cluster = Vec::new();
-    let mut stack = Vec::new();
-    for seed in 0..n {
-        if fill[seed] != 0 || !keep[seed] || !depth_m[seed].is_finite() {
-            continue;
+    let labels = connected_components(width, height, depth_m, keep, step);
+    // Pixels per component, in raster order (so sorted), for components that may be big enough.
+    let smallest = match &params.min_fruit_area {
+        None => min_pixels,
+        Some(_) => 10,
+    };
+    let wanted: Vec<bool> = labels.sizes.iter().map(|&s| s >= smallest).collect();
+    let mut pixels: Vec<Vec<usize>> = labels
+        .sizes
+        .iter()
+        .zip(&wanted)
+        .map(|(&size, &w)| Vec::with_capacity(if w { size } else { 0 }))
+        .collect();
+    for (i, &label) in labels.label.iter().enumerate() {
+        if wanted.get(label as usize) == Some(&true) {
+            pixels[label as usize].push(i);
         }
-        let id = kept.len() as u32 + 1;
-        fill[seed] = id;
-        cluster.clear();
-        cluster.push(seed);
-        stack.push(seed);
-        while let Some(i) = stack.pop() {
-            let (u, v) = (i % width, i / width);
-            let d = depth_m[i];
-            // The 8-neighbourhood clipped to the image (i itself is already reached).
-            for nv in v.saturating_sub(1)..=(v + 1).min(height - 1) {
-                for nu in u.saturating_sub(1)..=(u + 1).min(width - 1) {
-                    let j = nv * width + nu;
-                    if fill[j] == 0 && keep[j] && (depth_m[j] - d).abs() <= step {
-                        fill[j] = id;
-                        cluster.push(j);
-                        stack.push(j);
+    }
+    let mut clusters: Vec<Vec<usize>> = pixels
+        .into_iter()
+        .zip(wanted)
+        .filter(|(cluster, wanted)| {
+            *wanted
+                && match &params.min_fruit_area {
+                    None => cluster.len() >= min_pixels,
+                    Some(area) => {
+                        cluster.len() >= 10
+                            && cluster.len()
+                                >= area.min_pixels_at(fx_px, median_depth(depth_m, cluster))
                     }
                 }
-            }
-        }
-        let big_enough = match &params.min_fruit_area {
-            None => cluster.len() >= min_pixels,
-            Some(area) => {
-                cluster.len() >= 10
-                    && cluster.len() >= area.min_pixels_at(fx_px, median_depth(depth_m, &cluster))
-            }
-        };
-        kept.push(big_enough.then_some(sizes.len()));
-        if big_enough {
-            sizes.push(cluster.len());
-        }
-    }
-    let mut clusters: Vec<Vec<usize>> = sizes.iter().map(|&s| Vec::with_capacity(s)).collect();
-    if !clusters.is_empty() {
-        for (i, &f) in fill.iter().enumerate() {
-            if let Some(k) = f.checked_sub(1).and_then(|f| kept[f as usize]) {
-                clusters[k].push(i);
-            }
-        }
-    }
+        })
+        .map(|(cluster, _)| cluster)
+        .collect();
     if params.rim_px > 0 {
         for cluster in &mut clusters {
             *cluster = erode(width, height, cluster, params.rim_px);
@@ -154,6 +136,84 @@ pub fn grow_regions(
         clusters.retain(|c| !c.is_empty());
     }
     clusters
+}
+
+/// The connected components of the valid pixels: `label[i]` numbers pixel `i`'s component
+/// (`u32::MAX` for invalid pixels), components numbered in raster order of their first pixel;
+/// `sizes[c]` is component `c`'s pixel count.
+struct Components {
+    label: Vec<u32>,
+    sizes: Vec<usize>,
+}
+
+/// Components of the graph whose nodes are the valid pixels (finite depth, `keep`) and whose
+/// edges join 8-neighbours with depths at most `step` apart — what growing a region from each
+/// unreached valid pixel in raster order finds, in the same order, but by one raster scan with
+/// union–find over the four neighbours already scanned (left, and the three above) and one
+/// labelling scan, rather than a stack-driven fill that tests all eight neighbours of every
+/// pixel. Each union keeps the smaller index as the root, so a component's root is its first
+/// pixel in raster order.
+fn connected_components(
+    width: usize,
+    height: usize,
+    depth_m: &[f32],
+    keep: &[bool],
+    step: f32,
+) -> Components {
+    const NONE: u32 = u32::MAX;
+    let n = width * height;
+    let mut parent = vec![NONE; n];
+    let find = |parent: &mut [u32], mut i: u32| {
+        while parent[i as usize] != i {
+            let grand = parent[parent[i as usize] as usize];
+            parent[i as usize] = grand; // path halving
+            i = grand;
+        }
+        i
+    };
+    for v in 0..height {
+        for u in 0..width {
+            let i = v * width + u;
+            let d = depth_m[i];
+            if !keep[i] || !d.is_finite() {
+                continue;
+            }
+            parent[i] = i as u32;
+            let above = (v > 0).then(|| i - width);
+            let neighbours = [
+                (u > 0).then(|| i - 1),
+                above.filter(|_| u > 0).map(|j| j - 1),
+                above,
+                above.filter(|_| u + 1 < width).map(|j| j + 1),
+            ];
+            for j in neighbours.into_iter().flatten() {
+                // An invalid neighbour has no parent (NaN depth would fail the test anyway).
+                if parent[j] == NONE || (depth_m[j] - d).abs() > step {
+                    continue;
+                }
+                let (a, b) = (find(&mut parent, i as u32), find(&mut parent, j as u32));
+                let (root, child) = (a.min(b), a.max(b));
+                parent[child as usize] = root;
+            }
+        }
+    }
+    let mut label = vec![NONE; n];
+    let mut sizes = Vec::new();
+    for i in 0..n {
+        if parent[i] == NONE {
+            continue;
+        }
+        let root = find(&mut parent, i as u32) as usize;
+        let c = if root == i {
+            sizes.push(0);
+            (sizes.len() - 1) as u32
+        } else {
+            label[root] // the root comes first in raster order, so it is labelled already
+        };
+        label[i] = c;
+        sizes[c as usize] += 1;
+    }
+    Components { label, sizes }
 }
 
 /// Median depth of the pixels of `cluster` (all finite); `NaN` for an empty cluster.
@@ -200,6 +260,74 @@ fn erode(width: usize, height: usize, cluster: &[usize], rim_px: usize) -> Vec<u
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Region growing as the definition reads: a stack-driven fill of the 8-neighbours from
+    /// each unreached valid pixel in raster order; every component, with its pixels sorted.
+    fn flood_fill(
+        width: usize,
+        height: usize,
+        depth: &[f32],
+        keep: &[bool],
+        step: f32,
+    ) -> Vec<Vec<usize>> {
+        let mut reached = vec![false; depth.len()];
+        let mut out = Vec::new();
+        for seed in 0..depth.len() {
+            if reached[seed] || !keep[seed] || !depth[seed].is_finite() {
+                continue;
+            }
+            reached[seed] = true;
+            let (mut cluster, mut stack) = (vec![seed], vec![seed]);
+            while let Some(i) = stack.pop() {
+                let (u, v) = (i % width, i / width);
+                for nv in v.saturating_sub(1)..=(v + 1).min(height - 1) {
+                    for nu in u.saturating_sub(1)..=(u + 1).min(width - 1) {
+                        let j = nv * width + nu;
+                        if !reached[j] && keep[j] && (depth[j] - depth[i]).abs() <= step {
+                            reached[j] = true;
+                            cluster.push(j);
+                            stack.push(j);
+                        }
+                    }
+                }
+            }
+            cluster.sort_unstable();
+            out.push(cluster);
+        }
+        out
+    }
+
+    #[test]
+    fn components_are_those_of_the_flood_fill_in_the_same_order() {
+        // Random terraces with holes, masked pixels and ramps: many components of every shape
+        // (U-shapes and spirals merge late in a raster scan).
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+        let mut next = || rng.gen::<u64>();
+        for (width, height) in [(1, 1), (1, 7), (9, 1), (23, 17), (64, 48)] {
+            for _ in 0..20 {
+                let n = width * height;
+                let depth: Vec<f32> = (0..n)
+                    .map(|i| match next() % 10 {
+                        0 => f32::NAN,
+                        r => 0.5 + 0.004 * (r % 3) as f32 + 0.0001 * (i % width) as f32,
+                    })
+                    .collect();
+                let keep: Vec<bool> = (0..n).map(|_| next() % 7 != 0).collect();
+                let expected = flood_fill(width, height, &depth, &keep, 0.005);
+                let labels = connected_components(width, height, &depth, &keep, 0.005);
+                let mut found: Vec<Vec<usize>> = vec![Vec::new(); labels.sizes.len()];
+                for (i, &c) in labels.label.iter().enumerate() {
+                    if c != u32::MAX {
+                        found[c as usize].push(i);
+                    }
+                }
+                assert_eq!(found, expected, "{width}×{height}");
+                let sizes: Vec<usize> = expected.iter().map(Vec::len).collect();
+                assert_eq!(labels.sizes, sizes);
+            }
+        }
+    }
 
     #[test]
     fn splits_at_depth_steps_and_drops_small_clusters() {

@@ -4,7 +4,9 @@
 //! as in seed 000), plus the symmetry-plane
 //! search on one box and the normal estimators (window vs kd-tree) on the whole frame; and the
 //! built-in `symmetry` and `viewer-pose` models on one `wide` frame from each camera (Kinect v2,
-//! D435, SR4000; mixed fruit, each camera's own depth noise, seeds 621–623, never trained on).
+//! D435, SR4000; mixed fruit, each camera's own depth noise, seeds 621–623, never trained on)
+//! and on the third real 1920×1080 Azure Kinect frame of `../shared/data/ak-apples` (skipped
+//! with a message when the folder is absent, a failure with `POMONA_REQUIRE_DATA=1`).
 //!
 //! `cargo bench -p pomona-symmetry --bench detect`
 #![allow(clippy::unwrap_used, clippy::expect_used, missing_docs)]
@@ -12,7 +14,9 @@
 use criterion::{criterion_group, criterion_main, Criterion};
 use pomona_consensus::{KnnNormalParams, WindowNormalParams};
 use pomona_core::nalgebra::Point3;
+use pomona_io::Dataset;
 use pomona_learn::ModelFile;
+use pomona_pipeline::DatasetFrames;
 use pomona_pipeline::{
     FrameSource, LabelledFrame, Pipeline, StageTimings, SyntheticFrames, TrainOptions,
 };
@@ -105,16 +109,29 @@ fn bench(c: &mut Criterion) {
         Box::new(SymmetryPipeline::default()),
         Box::new(ViewerPosePipeline::default()),
     ];
+    let real = pomona_test_support::shared_data("ak-apples", "pomona-symmetry/benches/detect.rs")
+        .map(|root| {
+            DatasetFrames::new(vec![Dataset::open(&root).unwrap()])
+                .load(2)
+                .unwrap()
+                .frame
+        });
     for pipeline in &builtin {
         let json = pipeline.default_model().unwrap();
         let path = std::path::Path::new("default.json");
         let model = ModelFile::from_json(json, path, pipeline.name()).unwrap();
         let detector = BoxDetector::from_model(pipeline.name(), &model).unwrap();
-        for (camera, preset, seed) in cameras {
+        let synthetic = cameras.map(|(camera, preset, seed)| {
             let frame = SyntheticFrames::mixed_fruit(Domain::Wide, preset, 0.2, seed, 1)
                 .load(0)
                 .unwrap()
                 .frame;
+            (camera, frame)
+        });
+        let frames = synthetic
+            .into_iter()
+            .chain(real.clone().map(|f| ("real azure-kinect 1920x1080", f)));
+        for (camera, frame) in frames {
             group.bench_function(format!("{} {camera}", pipeline.name()), |b| {
                 b.iter(|| {
                     one.install(|| {

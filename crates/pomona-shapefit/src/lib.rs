@@ -25,6 +25,7 @@
 //! negatives** (`hard_negative_rounds`) among the candidates a random cap left out.
 
 mod candidate;
+mod cluster_lattice;
 mod color_model;
 mod depth_proposals;
 mod gpcd;
@@ -37,6 +38,7 @@ mod size_prior;
 pub mod stages;
 
 pub use candidate::Candidate;
+pub use cluster_lattice::ClusterLattice;
 pub use color_model::{ColorBayes, ColorBayesParams, ColorHistograms, ColorLut};
 pub use depth_proposals::DepthProposalParams;
 pub use gpcd::{gpcd, GpcdParams, HueStatistics, GPCD_LEN};

@@ -325,6 +325,7 @@ impl ShapeFitPipeline {
             shapes: ShapeStage {
                 normals,
                 shapes: p.shapes,
+                lattice: p.cluster_lattice,
             },
             descriptor: DescriptorStage {
                 params: p.gpcd,

@@ -4,14 +4,15 @@
 //! to the same MSAC stage.
 
 use pomona_consensus::nalgebra::Point3;
-use pomona_consensus::{OrientedPoint, ShapeExtractionParams, WindowNormals};
+use pomona_consensus::{OrientedPoint, RepeatLimits, ShapeExtractionParams, WindowNormals};
 use pomona_core::{ColorImage, PointCloud, RgbdFrame};
 use pomona_learn::SvmClassifier;
 use pomona_pipeline::{PipelineError, Stage};
 use rayon::prelude::*;
 
 use crate::{
-    gpcd, grow_regions, Candidate, ColorLut, DepthProposalParams, GpcdParams, RegionGrowingParams,
+    gpcd, grow_regions, Candidate, ClusterLattice, ColorLut, DepthProposalParams, GpcdParams,
+    RegionGrowingParams,
 };
 
 /// Colour posterior ≥ threshold and depth within range (Eq. 2, then the masked depth image).
@@ -190,6 +191,8 @@ pub struct ShapeStage {
     pub normals: WindowNormals,
     /// MSAC, estimators, limits and base seed.
     pub shapes: ShapeExtractionParams,
+    /// The pixel lattice clusters are thinned to first.
+    pub lattice: ClusterLattice,
 }
 
 fn err(e: pomona_consensus::ConsensusError) -> PipelineError {
@@ -206,6 +209,7 @@ impl ShapeStage {
         cloud: &PointCloud,
         k: usize,
         cluster: &[usize],
+        step: usize,
     ) -> Result<Vec<Candidate>, PipelineError> {
         let normals = normals.estimate_at(cloud, cluster).map_err(err)?;
         let positions: Vec<Point3<f64>> = cluster
@@ -213,8 +217,16 @@ impl ShapeStage {
             .map(|&i| cloud.points()[i].cast::<f64>())
             .collect();
         let oriented = OrientedPoint::zip(&positions, &normals);
+        // Point counts on a thinned cluster stand for `step²` pixels each.
+        let limits = self.shapes.limits;
+        let area = step * step;
         let params = ShapeExtractionParams {
             seed: self.shapes.seed ^ (k as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15),
+            limits: RepeatLimits {
+                min_points: limits.min_points.div_ceil(area),
+                min_inliers: limits.min_inliers.div_ceil(area),
+                ..limits
+            },
             ..self.shapes
         };
         let extracted = params
@@ -244,10 +256,15 @@ impl<'a> Stage<(&'a RgbdFrame, &'a PointCloud, &'a [Vec<usize>]), Vec<Candidate>
         (frame, cloud, clusters): (&'a RgbdFrame, &'a PointCloud, &'a [Vec<usize>]),
     ) -> Result<Vec<Candidate>, PipelineError> {
         let normals = self.normals.for_focal(frame.camera().fx);
+        let step = self.lattice.step(frame.camera().fx);
+        let width = frame.camera().width as usize;
         let per_cluster: Result<Vec<Vec<Candidate>>, PipelineError> = clusters
             .par_iter()
             .enumerate()
-            .map(|(k, c)| self.cluster_candidates(&normals, cloud, k, c))
+            .map(|(k, c)| {
+                let thinned = ClusterLattice::thin(step, width, c);
+                self.cluster_candidates(&normals, cloud, k, &thinned, step)
+            })
             .collect();
         Ok(per_cluster?.into_iter().flatten().collect())
     }

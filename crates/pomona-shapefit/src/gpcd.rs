@@ -24,6 +24,7 @@
 
 use pomona_core::nalgebra::{Point3, Unit, Vector3};
 use serde::{Deserialize, Serialize};
+use wide::{f64x4, CmpGe, CmpGt, CmpLt};
 
 use pomona_core::{circular_mean_hue, hue_difference, rgb_to_hsv};
 
@@ -88,69 +89,199 @@ pub fn gpcd(
         return out;
     }
     let stride = params.stride_for(n);
-    // The strided subset as plain vectors, normals unwrapped once (not once per pair).
-    let subset: Vec<(Vector3<f64>, Option<Vector3<f64>>)> = (0..n)
-        .step_by(stride)
-        .map(|i| {
-            let normal = normals.get(i).copied().flatten().map(Unit::into_inner);
-            (points[i].coords, normal)
-        })
-        .collect();
-
-    // Votes are counted in integers, alternating between two copies of each histogram by
-    // the target's parity: consecutive pairs mostly fall into the same bin, and a single
-    // floating-point counter would make every pair wait for the previous pair's update.
-    // Integer counts are exact, so the normalised histograms are what summing 1.0s gives.
-    let mut d2_counts = [[0u32; 30]; 2];
-    let mut angular_counts = [[0u32; 27]; 2];
+    let subset = Columns::of(points, normals, stride);
+    let mut votes = Votes::default();
     let d2_bin_width = params.d2_max_m / 30.0;
-    for (k, (pi, ni)) in subset.iter().enumerate() {
-        for (l, (pj, nj)) in subset[k + 1..].iter().enumerate() {
-            let copy = l & 1;
-            let d = pj - pi;
-            let dist = d.norm();
-            if dist.is_nan() || dist <= 0.0 {
-                continue;
-            }
-            let bin = ((dist / d2_bin_width) as usize).min(29);
-            d2_counts[copy][bin] += 1; // both orders: two votes each, see below
-            let (Some(u), Some(nt)) = (ni, nj) else {
-                continue;
-            };
-            // Both orders of the pair from four products (see `PairProducts`).
-            let products = PairProducts {
-                a: u.dot(&d),
-                b: u.dot(nt),
-                c: d.dot(nt),
-                e: d.dot(&u.cross(nt)),
-                dist,
-            };
-            for b in [products.forward_bin(), products.reverse_bin()]
-                .into_iter()
-                .flatten()
-            {
-                angular_counts[copy][b] += 1;
-            }
-        }
+    for k in 0..subset.len {
+        votes.add_source(&subset, k, d2_bin_width);
     }
     let (angular, rest) = out.split_at_mut(27);
     let (color, d2) = rest.split_at_mut(9);
-    normalise(angular, &angular_counts);
-    normalise(d2, &d2_counts);
+    normalise(angular, &votes.angular);
+    normalise(d2, &votes.d2);
     if !colors.is_empty() {
         color.copy_from_slice(&color_moments(colors, params.hue_statistics));
     }
     out
 }
 
-/// `out[b]` = the share of all votes in bin `b`, summed over the copies of a histogram (all
-/// zero without votes).
-fn normalise<const N: usize>(out: &mut [f64], copies: &[[u32; N]; 2]) {
-    let counts: [u64; N] = std::array::from_fn(|b| copies.iter().map(|c| u64::from(c[b])).sum());
+/// `out[b]` = the share of all votes in bin `b` (all zero without votes).
+fn normalise<const N: usize>(out: &mut [f64], counts: &[u64; N]) {
     let total = counts.iter().sum::<u64>().max(1) as f64;
-    for (x, &c) in out.iter_mut().zip(&counts) {
+    for (x, &c) in out.iter_mut().zip(counts) {
         *x = c as f64 / total;
     }
+}
+
+/// Lanes of the pair loop: four targets per step.
+const LANES: usize = 4;
+
+/// The strided subset of a candidate as columns (structure of arrays) for the pair loop; a
+/// point without a normal has a `NaN` normal.
+struct Columns {
+    len: usize,
+    x: Vec<f64>,
+    y: Vec<f64>,
+    z: Vec<f64>,
+    nx: Vec<f64>,
+    ny: Vec<f64>,
+    nz: Vec<f64>,
+}
+
+impl Columns {
+    fn of(points: &[Point3<f64>], normals: &[Option<Unit<Vector3<f64>>>], stride: usize) -> Self {
+        let len = points.len().div_ceil(stride);
+        let mut c = Self {
+            len,
+            x: Vec::with_capacity(len),
+            y: Vec::with_capacity(len),
+            z: Vec::with_capacity(len),
+            nx: Vec::with_capacity(len),
+            ny: Vec::with_capacity(len),
+            nz: Vec::with_capacity(len),
+        };
+        let nan = Vector3::repeat(f64::NAN);
+        for (i, p) in points.iter().enumerate().step_by(stride) {
+            let n = normals
+                .get(i)
+                .copied()
+                .flatten()
+                .map_or(nan, Unit::into_inner);
+            c.push(p.coords, n);
+        }
+        c
+    }
+
+    fn push(&mut self, p: Vector3<f64>, n: Vector3<f64>) {
+        self.x.push(p.x);
+        self.y.push(p.y);
+        self.z.push(p.z);
+        self.nx.push(n.x);
+        self.ny.push(n.y);
+        self.nz.push(n.z);
+    }
+
+    /// Lanes `j..j + LANES` of one column.
+    fn lanes(column: &[f64], j: usize) -> f64x4 {
+        let mut lanes = [f64::NAN; LANES];
+        lanes.copy_from_slice(&column[j..j + LANES]);
+        f64x4::new(lanes)
+    }
+
+    fn point(&self, i: usize) -> Vector3<f64> {
+        Vector3::new(self.x[i], self.y[i], self.z[i])
+    }
+
+    fn normal(&self, i: usize) -> Option<Vector3<f64>> {
+        let n = Vector3::new(self.nx[i], self.ny[i], self.nz[i]);
+        (!n.x.is_nan()).then_some(n)
+    }
+}
+
+/// Vote counts of the D2 and angular histograms.
+#[derive(Default)]
+struct Votes {
+    d2: [u64; 30],
+    angular: [u64; 27],
+}
+
+impl Votes {
+    /// The votes of every pair of subset point `k` with the points after it: four targets at a
+    /// time, then the last few one by one ([`Votes::add_pair`]). Each lane computes what
+    /// `add_pair` computes for one pair — the same IEEE operations in the same order
+    /// (nalgebra's `-`, `dot`, `norm` and `cross` written out), so the histograms are exactly
+    /// those of the pair-by-pair loop (unit test `lanes_vote_as_the_pair_by_pair_loop`), at
+    /// about half its time on SSE2.
+    fn add_source(&mut self, s: &Columns, k: usize, d2_bin_width: f64) {
+        let splat = f64x4::splat;
+        let (px, py, pz) = (splat(s.x[k]), splat(s.y[k]), splat(s.z[k]));
+        let (ux, uy, uz) = (splat(s.nx[k]), splat(s.ny[k]), splat(s.nz[k]));
+        let source_oriented = !s.nx[k].is_nan();
+        let zero = splat(0.0);
+        let whole = k + 1 + (s.len - (k + 1)) / LANES * LANES;
+        for j in whole..s.len {
+            self.add_pair(s, k, j, d2_bin_width);
+        }
+        for j in (k + 1..whole).step_by(LANES) {
+            let lanes = |column: &[f64]| Columns::lanes(column, j);
+            let (dx, dy, dz) = (lanes(&s.x) - px, lanes(&s.y) - py, lanes(&s.z) - pz);
+            let dist = (dx * dx + dy * dy + dz * dz).sqrt();
+            // `dist > 0`: not coincident, and no NaN (a missing coordinate).
+            let voting = dist.cmp_gt(zero).move_mask();
+            let bins = (dist / splat(d2_bin_width)).to_array();
+            for (lane, q) in bins.iter().enumerate() {
+                if voting & (1 << lane) != 0 {
+                    self.d2[(*q as usize).min(29)] += 1; // both orders: two votes each
+                }
+            }
+            let (tx, ty, tz) = (lanes(&s.nx), lanes(&s.ny), lanes(&s.nz));
+            let oriented = voting & !tx.is_nan().move_mask();
+            if !source_oriented || oriented == 0 {
+                continue;
+            }
+            // u × nt, then the four products of `PairProducts`.
+            let (cx, cy, cz) = (uy * tz - uz * ty, uz * tx - ux * tz, ux * ty - uy * tx);
+            let a = ux * dx + uy * dy + uz * dz;
+            let b = ux * tx + uy * ty + uz * tz;
+            let c = dx * tx + dy * ty + dz * tz;
+            let e = dx * cx + dy * cy + dz * cz;
+            for (bins, degenerate) in [lane_bins(a, b, c, e, dist), lane_bins(-c, b, -a, e, dist)] {
+                let voting = oriented & !degenerate;
+                for (lane, bin) in bins.iter().enumerate() {
+                    if voting & (1 << lane) != 0 {
+                        self.angular[*bin as usize] += 1;
+                    }
+                }
+            }
+        }
+    }
+
+    /// The votes of the pair of subset points `k` and `j`.
+    fn add_pair(&mut self, s: &Columns, k: usize, j: usize, d2_bin_width: f64) {
+        let d = s.point(j) - s.point(k);
+        let dist = d.norm();
+        if dist.is_nan() || dist <= 0.0 {
+            return;
+        }
+        self.d2[((dist / d2_bin_width) as usize).min(29)] += 1; // both orders: two votes each
+        let (Some(u), Some(nt)) = (s.normal(k), s.normal(j)) else {
+            return;
+        };
+        let products = PairProducts {
+            a: u.dot(&d),
+            b: u.dot(&nt),
+            c: d.dot(&nt),
+            e: d.dot(&u.cross(&nt)),
+            dist,
+        };
+        for b in [products.forward_bin(), products.reverse_bin()]
+            .into_iter()
+            .flatten()
+        {
+            self.angular[b] += 1;
+        }
+    }
+}
+
+/// [`bin`] on four lanes: each lane's bin as a float (exact small integers), and a bit mask
+/// of the lanes whose frame is degenerate (no vote).
+fn lane_bins(a: f64x4, b: f64x4, c: f64x4, e: f64x4, dist: f64x4) -> ([f64; LANES], i32) {
+    let splat = f64x4::splat;
+    let one = splat(1.0);
+    let dist2 = dist * dist;
+    let v_norm2 = dist2 - a * a;
+    let degenerate = v_norm2.cmp_lt(splat(1e-24) * dist2).move_mask();
+    // Third of x/s in [−1, 1], see `bin`; a true mask AND 1.0 is 1.0, a false one 0.0.
+    let third = |x: f64x4, s2: f64x4| {
+        let x2 = splat(9.0) * x * x;
+        let negative = x.cmp_lt(splat(0.0));
+        (!(negative & x2.cmp_gt(s2)) & one) + (!(negative | x2.cmp_lt(s2)) & one)
+    };
+    let y = c - a * b;
+    let middle = b.cmp_gt(splat(0.0)) & (splat(3.0) * y * y).cmp_lt(b * b * v_norm2);
+    let q3 = (middle & one) + (!middle & y.cmp_ge(splat(0.0)) & splat(2.0));
+    let bins = third(e, v_norm2) + splat(3.0) * third(a, dist2) + splat(9.0) * q3;
+    (bins.to_array(), degenerate)
 }
 
 /// The nine colour values of the descriptor: HSV mean, then the covariance terms hh, hs, hv,
@@ -294,6 +425,39 @@ mod tests {
                 (centre + nrm * radius, Some(Unit::new_normalize(nrm)))
             })
             .unzip()
+    }
+
+    #[test]
+    fn lanes_vote_as_the_pair_by_pair_loop() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+        for n in [2, 3, 5, 8, 9, 64, 203] {
+            // A cap with noise, duplicated points (zero distance), missing normals and a
+            // non-finite point: every branch of a pair's vote.
+            let (mut points, mut normals) = sphere_cap(n, 0.04);
+            for (p, nrm) in points.iter_mut().zip(normals.iter_mut()) {
+                *p += Vector3::new(rng.gen(), rng.gen(), rng.gen()) * 0.004;
+                if rng.gen_bool(0.15) {
+                    *nrm = None;
+                }
+            }
+            if n > 4 {
+                points[3] = points[1];
+                normals[2] = normals[4];
+                points[n - 1].x = f64::NAN;
+            }
+            let subset = Columns::of(&points, &normals, 1);
+            let (mut lanes, mut pairs) = (Votes::default(), Votes::default());
+            for k in 0..subset.len {
+                lanes.add_source(&subset, k, 0.25 / 30.0);
+                for j in k + 1..subset.len {
+                    pairs.add_pair(&subset, k, j, 0.25 / 30.0);
+                }
+            }
+            assert_eq!(lanes.d2, pairs.d2, "{n}");
+            assert_eq!(lanes.angular, pairs.angular, "{n}");
+            assert!(n < 8 || lanes.angular.iter().filter(|&&c| c > 0).count() > 5);
+        }
     }
 
     #[test]

@@ -178,23 +178,36 @@ fn connected_components(
             if !keep[i] || !d.is_finite() {
                 continue;
             }
-            parent[i] = i as u32;
-            let above = (v > 0).then(|| i - width);
-            let neighbours = [
-                (u > 0).then(|| i - 1),
-                above.filter(|_| u > 0).map(|j| j - 1),
-                above,
-                above.filter(|_| u + 1 < width).map(|j| j + 1),
-            ];
-            for j in neighbours.into_iter().flatten() {
+            // `root`: the root of i's component so far (i's parent is kept pointing at it).
+            let mut root = i as u32;
+            parent[i] = root;
+            let mut join = |parent: &mut [u32], j: usize| {
                 // An invalid neighbour has no parent (NaN depth would fail the test anyway).
                 if parent[j] == NONE || (depth_m[j] - d).abs() > step {
-                    continue;
+                    return;
                 }
-                let (a, b) = (find(&mut parent, i as u32), find(&mut parent, j as u32));
-                let (root, child) = (a.min(b), a.max(b));
-                parent[child as usize] = root;
+                let other = find(parent, j as u32);
+                if other < root {
+                    parent[root as usize] = other;
+                    root = other;
+                } else if other > root {
+                    parent[other as usize] = root;
+                }
+            };
+            if u > 0 {
+                join(&mut parent, i - 1);
             }
+            if v > 0 {
+                let above = i - width;
+                if u > 0 {
+                    join(&mut parent, above - 1);
+                }
+                join(&mut parent, above);
+                if u + 1 < width {
+                    join(&mut parent, above + 1);
+                }
+            }
+            parent[i] = root;
         }
     }
     let mut label = vec![NONE; n];

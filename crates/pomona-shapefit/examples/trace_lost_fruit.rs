@@ -94,6 +94,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut fp_kinds: HashMap<&'static str, Vec<f64>> = HashMap::new();
     let mut tp_scores = Vec::new();
     let mut loc_errors = Vec::new();
+    let mut training: HashMap<&'static str, (usize, usize, usize)> = HashMap::new();
     for fi in 0..frames.len() {
         let lf = frames.load(fi)?;
         let Some(mask) = &lf.mask else {
@@ -130,6 +131,40 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             }
         }
         let dets = detector.detect(frame, &mut t)?;
+        // Training's view of the frame: the colour clusters' candidates and those of every
+        // depth-only cluster, labelled by the centre rule; how many negatives are pieces of a
+        // fruit (most inlier pixels on one fruit), and how many of each score inside the margin
+        // (≥ −1, where mining picks its negatives).
+        {
+            let mut train = run_stage(&shapes, (frame, &cloud, clusters.as_slice()), &mut t)?;
+            train.extend(run_stage(&shapes, (frame, &cloud, all_depth.as_slice()), &mut t)?);
+            let f = run_stage(&descriptor, (frame, train.as_slice()), &mut t)?;
+            let s = run_stage(&classifier, f.as_slice(), &mut t)?;
+            for (c, score) in train.iter().zip(s) {
+                let centre = c.shape.center();
+                let positive = lf
+                    .truth
+                    .fruits
+                    .iter()
+                    .any(|f| f.center_m.is_some_and(|t| (t - centre).norm() <= TOL));
+                let mut counts: HashMap<u16, usize> = HashMap::new();
+                for &i in &c.pixels {
+                    *counts.entry(ids[i]).or_default() += 1;
+                }
+                let on_fruit = counts
+                    .iter()
+                    .any(|(&id, &n)| id > 0 && 2 * n > c.pixels.len());
+                let class = match (positive, on_fruit) {
+                    (true, _) => "positive",
+                    (false, true) => "negative-piece-of-fruit",
+                    (false, false) => "negative-background",
+                };
+                let e = training.entry(class).or_insert((0, 0, 0));
+                e.0 += 1;
+                e.1 += usize::from(score >= -1.0);
+                e.2 += usize::from(score >= 0.0);
+            }
+        }
         // Majority fruit id of each candidate's pixels.
         let owner = |pixels: &[usize]| -> (u16, f64) {
             let mut counts: HashMap<u16, usize> = HashMap::new();
@@ -359,6 +394,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         ap_without(&["background"]),
         ap_without(&["duplicate"]),
     );
+    let mut classes: Vec<_> = training.into_iter().collect();
+    classes.sort();
+    for (class, (n, margin, above)) in classes {
+        println!("training view: {class}: {n} (score >= -1: {margin}; >= 0: {above})");
+    }
     let mut stages: Vec<_> = lost.into_iter().collect();
     stages.sort();
     println!("fruit by stage: {stages:?}");

@@ -34,7 +34,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let verbose = args.iter().any(|a| a == "--verbose");
     let pos: Vec<&String> = args.iter().filter(|a| !a.starts_with("--")).collect();
-    let data = PathBuf::from(pos.first().ok_or("usage: trace_lost_fruit DATASET [MODEL]")?);
+    let data = PathBuf::from(
+        pos.first()
+            .ok_or("usage: trace_lost_fruit DATASET [MODEL]")?,
+    );
     let pipeline = ShapeFitPipeline::default();
     let model = match pos.get(1) {
         Some(p) => ModelFile::load(p, "shape-fit")?,
@@ -137,7 +140,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         // (≥ −1, where mining picks its negatives).
         {
             let mut train = run_stage(&shapes, (frame, &cloud, clusters.as_slice()), &mut t)?;
-            train.extend(run_stage(&shapes, (frame, &cloud, all_depth.as_slice()), &mut t)?);
+            train.extend(run_stage(
+                &shapes,
+                (frame, &cloud, all_depth.as_slice()),
+                &mut t,
+            )?);
             let f = run_stage(&descriptor, (frame, train.as_slice()), &mut t)?;
             let s = run_stage(&classifier, f.as_slice(), &mut t)?;
             for (c, score) in train.iter().zip(s) {
@@ -207,7 +214,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 .collect();
             let err = |c: usize| (cands[c].shape.center() - tc).norm();
             let near: Vec<usize> = (0..cands.len()).filter(|&c| err(c) <= TOL).collect();
-            let best_near = near.iter().map(|&c| scores[c]).fold(f64::NEG_INFINITY, f64::max);
+            let best_near = near
+                .iter()
+                .map(|&c| scores[c])
+                .fold(f64::NEG_INFINITY, f64::max);
             let det = dets
                 .iter()
                 .filter(|d| (d.center_m - tc).norm() <= TOL)
@@ -432,11 +442,17 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
 }
 
 trait RunFrame {
-    fn run_frame(&self, frame: &pomona_core::RgbdFrame) -> Result<Vec<bool>, Box<dyn std::error::Error>>;
+    fn run_frame(
+        &self,
+        frame: &pomona_core::RgbdFrame,
+    ) -> Result<Vec<bool>, Box<dyn std::error::Error>>;
 }
 
 impl RunFrame for ColorMaskStage {
-    fn run_frame(&self, frame: &pomona_core::RgbdFrame) -> Result<Vec<bool>, Box<dyn std::error::Error>> {
+    fn run_frame(
+        &self,
+        frame: &pomona_core::RgbdFrame,
+    ) -> Result<Vec<bool>, Box<dyn std::error::Error>> {
         use pomona_pipeline::Stage;
         Ok(self.run(frame)?)
     }

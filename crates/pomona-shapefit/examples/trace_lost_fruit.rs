@@ -15,7 +15,9 @@
 //! `merge` (a candidate within 50 mm, no kept detection), else found. False positives (kept
 //! detections matching no counted fruit) are split into pieces of a counted fruit (most pixels
 //! on it, centre > 50 mm away), duplicates, on hidden fruit (ignored by eval), and background.
-//! Without MODEL the built-in model is used.
+//! Lines starting `CONTEXT` give, per kept detection, its outcome, score, the share of its
+//! cluster's pixels its candidate explains and, for a cylinder, its extent over the cluster's
+//! extent along its axis. Without MODEL the built-in model is used.
 
 use std::collections::HashMap;
 use std::path::PathBuf;
@@ -126,6 +128,19 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             (frame, &cloud, screened.as_slice()),
             &mut t,
         )?);
+        // Which cluster each candidate was fitted in (colour clusters, then screened proposals).
+        let mut cluster_of = vec![usize::MAX; ids.len()];
+        let mut proposal_of = vec![usize::MAX; ids.len()];
+        for (k, c) in clusters.iter().enumerate() {
+            for &i in c {
+                cluster_of[i] = k;
+            }
+        }
+        for (k, c) in screened.iter().enumerate() {
+            for &i in c {
+                proposal_of[i] = k;
+            }
+        }
         let features = run_stage(&descriptor, (frame, cands.as_slice()), &mut t)?;
         let mut scores = run_stage(&classifier, features.as_slice(), &mut t)?;
         if let Some(cal) = &p.radius_calibration {
@@ -134,6 +149,34 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             }
         }
         let dets = detector.detect(frame, &mut t)?;
+        // Share of its cluster a candidate explains, and, for a cylinder, its extent over the
+        // cluster's extent along its axis.
+        let context = |c: usize| -> (f64, f64) {
+            let cand = &cands[c];
+            let Some(&first) = cand.pixels.first() else {
+                return (0.0, 0.0);
+            };
+            let cluster: &[usize] = if c < first_proposal {
+                &clusters[cluster_of[first]]
+            } else {
+                &screened[proposal_of[first]]
+            };
+            let share = cand.pixels.len() as f64 / cluster.len().max(1) as f64;
+            let span = match &cand.shape {
+                Shape::Cylinder(cy) => {
+                    let along: Vec<f64> = cluster
+                        .iter()
+                        .map(|&i| (cloud.points()[i].cast::<f64>() - cy.axis_point).dot(&cy.axis))
+                        .filter(|a| a.is_finite())
+                        .collect();
+                    let lo = along.iter().copied().fold(f64::INFINITY, f64::min);
+                    let hi = along.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+                    cy.length_m().unwrap_or(0.0) / (hi - lo).max(1e-9)
+                }
+                Shape::Sphere(_) => f64::NAN,
+            };
+            (share, span)
+        };
         // Training's view of the frame: the colour clusters' candidates and those of every
         // depth-only cluster, labelled by the centre rule; how many negatives are pieces of a
         // fruit (most inlier pixels on one fruit), and how many of each score inside the margin
@@ -298,6 +341,18 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 .min_by(|a, b| a.1.total_cmp(&b.1));
             if let Some((k, _)) = nearest {
                 taken[k] = true;
+                if let Some(c) = (0..cands.len()).find(|&c| scores[c] == d.score) {
+                    let (share, span) = context(c);
+                    let kind = if counted[k] {
+                        "true-positive"
+                    } else {
+                        "ignored"
+                    };
+                    println!(
+                        "{} CONTEXT {kind} score {:.2} share {share:.2} span {span:.2}",
+                        lf.name, d.score
+                    );
+                }
                 continue;
             }
             let any_near = lf.truth.fruits.iter().enumerate().any(|(k, f)| {
@@ -382,6 +437,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 );
             }
             fp_kinds.entry(kind).or_default().push(d.score);
+            if let Some(c) = cand {
+                let (share, span) = context(c);
+                println!(
+                    "{} CONTEXT {kind} score {:.2} share {share:.2} span {span:.2}",
+                    lf.name, d.score
+                );
+            }
         }
         scores.clear();
     }

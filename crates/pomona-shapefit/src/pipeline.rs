@@ -108,19 +108,30 @@ fn label(
     if !lf.truth.complete {
         return incomplete_label(c, lf, params, fruit_color);
     }
-    Some(match (&lf.mask, params.label_rule) {
-        (Some(mask), LabelRule::MaskMajority) => {
-            let ids = mask.as_slice();
-            let mut counts = std::collections::HashMap::<u16, usize>::new();
-            for &p in &c.pixels {
-                if let Some(&id) = ids.get(p).filter(|&&id| id > 0) {
-                    *counts.entry(id).or_default() += 1;
-                }
+    let on_one_fruit = |mask: &pomona_core::InstanceMask| {
+        let ids = mask.as_slice();
+        let mut counts = std::collections::HashMap::<u16, usize>::new();
+        for &p in &c.pixels {
+            if let Some(&id) = ids.get(p).filter(|&&id| id > 0) {
+                *counts.entry(id).or_default() += 1;
             }
-            counts.values().any(|&n| 2 * n > c.pixels.len())
         }
-        _ => is_positive(&center, &lf.truth, camera, params.positive_tolerance_m),
-    })
+        counts.values().any(|&n| 2 * n > c.pixels.len())
+    };
+    let by_centre = || is_positive(&center, &lf.truth, camera, params.positive_tolerance_m);
+    match (&lf.mask, params.label_rule) {
+        (Some(mask), LabelRule::MaskMajority) => Some(on_one_fruit(mask)),
+        (Some(mask), LabelRule::CenterIgnoringPieces) => {
+            if by_centre() {
+                Some(true)
+            } else if on_one_fruit(mask) {
+                None
+            } else {
+                Some(false)
+            }
+        }
+        _ => Some(by_centre()),
+    }
 }
 
 /// Whether `center` is within `tolerance_m` of the fruit's centre or, for a fruit without a
@@ -985,6 +996,43 @@ mod tests {
             Some(false)
         );
         assert_eq!(label(&at(0.02, 0.0, 0.035), &complete, &p, red), Some(true));
+    }
+
+    #[test]
+    fn pieces_of_a_fruit_are_left_out_only_by_the_piece_rule() {
+        // One fruit centred at (0, 0, 1) whose mask covers the image's left half (ids 1).
+        let mut lf = frame(
+            r#"{"complete": true, "fruits": [
+                {"id": "e", "kind": "eggplant", "diameter_m": 0.06, "center_m": [0, 0, 1]}]}"#,
+        );
+        let ids: Vec<u16> = (0..10_000).map(|i| u16::from(i % 100 < 50)).collect();
+        lf.mask = Some(pomona_core::InstanceMask::from_ids(100, 100, ids).unwrap());
+        let with_pixels = |x: f64, pixels: Vec<usize>| Candidate {
+            pixels,
+            ..ball(x, 0.03)
+        };
+        let left: Vec<usize> = (0..100).map(|r| r * 100 + 10).collect();
+        let right: Vec<usize> = (0..100).map(|r| r * 100 + 90).collect();
+        let centre_rule = ShapeFitParams {
+            label_rule: LabelRule::CenterWithinTolerance,
+            ..ShapeFitParams::default()
+        };
+        let piece_rule = ShapeFitParams {
+            label_rule: LabelRule::CenterIgnoringPieces,
+            ..ShapeFitParams::default()
+        };
+        // A piece: on the fruit's pixels, centre 90 mm from the fruit's.
+        let piece = with_pixels(0.09, left.clone());
+        assert_eq!(label(&piece, &lf, &centre_rule, None), Some(false));
+        assert_eq!(label(&piece, &lf, &piece_rule, None), None);
+        // Off the fruit: a negative under both; on the fruit near its centre: a positive.
+        let leaf = with_pixels(0.09, right);
+        assert_eq!(label(&leaf, &lf, &piece_rule, None), Some(false));
+        let whole = with_pixels(0.01, left);
+        assert_eq!(label(&whole, &lf, &piece_rule, None), Some(true));
+        // Without a mask the piece rule is the centre rule.
+        lf.mask = None;
+        assert_eq!(label(&piece, &lf, &piece_rule, None), Some(false));
     }
 
     #[test]

@@ -86,6 +86,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let shapes = ShapeStage {
         normals,
         shapes: p.shapes,
+        lattice: p.cluster_lattice,
     };
     let descriptor = DescriptorStage {
         params: p.gpcd,

@@ -59,20 +59,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         max_depth_m: p.max_depth_m as f32,
     };
     let regions = RegionGrowingStage { params: p.regions };
-    let (sphere, cylinder) = (
-        p.shapes.sphere.radius_range_m,
-        p.shapes.cylinder.radius_range_m,
-    );
-    let proposals = DepthProposalStage {
-        params: p.depth_proposals,
-        in_range: ColorMaskStage {
-            lut: None,
-            threshold: 0.0,
-            max_depth_m: p.max_depth_m as f32,
-        },
-        regions: RegionGrowingStage { params: p.regions },
-        radius_range_m: (sphere.0.min(cylinder.0), sphere.1.max(cylinder.1)),
-    };
+    let proposals = DepthProposalStage::of_params(p);
     let screen = ProposalScreenStage {
         normals,
         gpcd: GpcdParams {
@@ -115,12 +102,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let mut cands = run_stage(&shapes, (frame, &cloud, clusters.as_slice()), &mut t)?;
         let first_proposal = cands.len();
         // Proposals before and after the screen.
-        let in_range = ColorMaskStage {
-            lut: None,
-            threshold: 0.0,
-            max_depth_m: p.max_depth_m as f32,
-        }
-        .run_frame(frame)?;
+        let in_range = ColorMaskStage::depth_range(p.max_depth_m).run_frame(frame)?;
         let all_depth = run_stage(&regions, (frame, in_range.as_slice()), &mut t)?;
         let proposed = run_stage(&proposals, (frame, keep.as_slice()), &mut t)?;
         let screened = run_stage(&screen, (frame, &cloud, proposed.as_slice()), &mut t)?;
@@ -146,7 +128,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let mut scores = run_stage(&classifier, features.as_slice(), &mut t)?;
         if let Some(cal) = &p.radius_calibration {
             for c in &mut cands {
-                c.shape = cal.apply(&c.shape, &c.points, sphere);
+                c.shape = cal.apply(&c.shape, &c.points, p.shapes.sphere.radius_range_m);
             }
         }
         let dets = detector.detect(frame, &mut t)?;

@@ -306,20 +306,8 @@ impl ShapeFitPipeline {
                 name: "normals".into(),
                 reason: e.to_string(),
             })?;
-        let (sphere, cylinder) = (
-            p.shapes.sphere.radius_range_m,
-            p.shapes.cylinder.radius_range_m,
-        );
-        let proposals = (use_color && p.depth_proposals.enabled).then(|| DepthProposalStage {
-            params: p.depth_proposals,
-            in_range: ColorMaskStage {
-                lut: None,
-                threshold: 0.0,
-                max_depth_m: p.max_depth_m as f32,
-            },
-            regions: RegionGrowingStage { params: p.regions },
-            radius_range_m: (sphere.0.min(cylinder.0), sphere.1.max(cylinder.1)),
-        });
+        let proposals =
+            (use_color && p.depth_proposals.enabled).then(|| DepthProposalStage::of_params(p));
         Ok(Stages {
             proposals,
             screen: None,

@@ -12,7 +12,7 @@ use rayon::prelude::*;
 
 use crate::{
     gpcd, grow_regions, Candidate, ClusterLattice, ColorLut, DepthProposalParams, GpcdParams,
-    RegionGrowingParams,
+    RegionGrowingParams, ShapeFitParams,
 };
 
 /// Colour posterior ≥ threshold and depth within range (Eq. 2, then the masked depth image).
@@ -25,6 +25,17 @@ pub struct ColorMaskStage {
     pub threshold: f32,
     /// Far limit, metres.
     pub max_depth_m: f32,
+}
+
+impl ColorMaskStage {
+    /// The depth range alone: every pixel with depth up to `max_depth_m`, no colour model.
+    pub fn depth_range(max_depth_m: f64) -> Self {
+        Self {
+            lut: None,
+            threshold: 0.0,
+            max_depth_m: max_depth_m as f32,
+        }
+    }
 }
 
 impl Stage<&RgbdFrame, Vec<bool>> for ColorMaskStage {
@@ -90,6 +101,23 @@ pub struct DepthProposalStage {
     /// Smallest and largest radius any shape may fit, metres: the sizes of the smallest and the
     /// largest fruit.
     pub radius_range_m: (f64, f64),
+}
+
+impl DepthProposalStage {
+    /// The depth proposals of a model with parameters `p`: its proposal tests, depth limit and
+    /// region growing, and the radius range of its sphere and cylinder estimators together.
+    pub fn of_params(p: &ShapeFitParams) -> Self {
+        let (sphere, cylinder) = (
+            p.shapes.sphere.radius_range_m,
+            p.shapes.cylinder.radius_range_m,
+        );
+        Self {
+            params: p.depth_proposals,
+            in_range: ColorMaskStage::depth_range(p.max_depth_m),
+            regions: RegionGrowingStage { params: p.regions },
+            radius_range_m: (sphere.0.min(cylinder.0), sphere.1.max(cylinder.1)),
+        }
+    }
 }
 
 impl<'a> Stage<(&'a RgbdFrame, &'a [bool]), Vec<Vec<usize>>> for DepthProposalStage {

@@ -16,6 +16,8 @@
 //! Box centres sit on multiples of the stride in the camera frame, so the grid does not depend
 //! on the frame's content and results do not depend on the thread count.
 
+use std::ops::RangeInclusive;
+
 use nalgebra::{Point3, Unit, Vector3};
 use pomona_pipeline::{PipelineError, Stage};
 use rayon::prelude::*;
@@ -78,8 +80,16 @@ impl SlidingBox {
             if z < p.min_range_m || z > p.max_range_m {
                 continue;
             }
-            for iy in voxels.lo[1] - k..=voxels.hi[1] + k {
-                for ix in voxels.lo[0] - k..=voxels.hi[0] + k {
+            let (xs, ys) = (
+                voxels.lo[0] - k..=voxels.hi[0] + k,
+                voxels.lo[1] - k..=voxels.hi[1] + k,
+            );
+            let (xs, ys) = match in_view(&cloud.camera, z, p.stride_m) {
+                Some((x, y)) => (clip(xs, x), clip(ys, y)),
+                None => (xs, ys),
+            };
+            for iy in ys {
+                for ix in xs.clone() {
                     let c = Point3::new(ix as f64 * p.stride_m, iy as f64 * p.stride_m, z);
                     if c.coords.norm() > p.max_range_m {
                         continue;
@@ -270,6 +280,35 @@ impl Stage<(&SceneCloud, &[BoxCandidate]), Vec<BoxPatch>> for BoxCut<'_> {
     }
 }
 
+/// Node indices along x and along y (inclusive) outside which a centre at depth `z` projects
+/// outside the image, with a node of margin on each side (`None` for a camera with lens
+/// distortion, whose projection is not bounded this simply): skipping them changes nothing but
+/// the time spent on a wide camera's empty space.
+fn in_view(
+    camera: &pomona_core::PinholeCamera,
+    z: f64,
+    stride_m: f64,
+) -> Option<(RangeInclusive<i64>, RangeInclusive<i64>)> {
+    if camera.distortion.is_some() {
+        return None;
+    }
+    // Pixel centres are integers: the image spans [-0.5, size - 0.5) in continuous coordinates.
+    let nodes = |size: u32, c: f64, f: f64| {
+        let lo = (-0.5 - c) * z / f / stride_m;
+        let hi = (size as f64 - 0.5 - c) * z / f / stride_m;
+        lo.floor() as i64 - 1..=hi.ceil() as i64 + 1
+    };
+    Some((
+        nodes(camera.width, camera.cx, camera.fx),
+        nodes(camera.height, camera.cy, camera.fy),
+    ))
+}
+
+/// The intersection of two inclusive ranges (empty when they do not meet).
+fn clip(a: RangeInclusive<i64>, b: RangeInclusive<i64>) -> RangeInclusive<i64> {
+    *a.start().max(b.start())..=*a.end().min(b.end())
+}
+
 /// Point counts per stride-sized voxel (voxel `i` is centred on grid node `i · stride`) with a
 /// summed-volume table for O(1) box counts.
 struct VoxelCounts {
@@ -284,22 +323,31 @@ impl VoxelCounts {
     fn build(cloud: &SceneCloud, p: &SlidingBoxParams) -> Option<Self> {
         let inv = 1.0 / p.stride_m;
         let reach = p.max_range_m + p.box_size_m;
-        let idx = |q: &Point3<f64>| {
-            [
+        // Every point within reach falls in a node index within ±`half_side` on x and y and in
+        // 0..=`half_side` on z, so one pass counts into a dense grid of that extent and finds
+        // the occupied bounds; the table is then summed over the occupied sub-grid only.
+        // (`StageParams::validate` bounds the grid's size.)
+        let half_side = (reach * inv).ceil() as i64 + 1;
+        let side = (2 * half_side + 1) as usize;
+        let depth = (half_side + 1) as usize;
+        let mut grid = vec![0u32; side * side * depth];
+        let mut lo = [i64::MAX; 3];
+        let mut hi = [i64::MIN; 3];
+        for q in cloud.points() {
+            if !(q.z.is_finite() && q.z > 0.0 && q.coords.norm() <= reach) {
+                continue;
+            }
+            let i = [
                 (q.x * inv).round() as i64,
                 (q.y * inv).round() as i64,
                 (q.z * inv).round() as i64,
-            ]
-        };
-        let mut lo = [i64::MAX; 3];
-        let mut hi = [i64::MIN; 3];
-        let in_reach = |q: &Point3<f64>| q.z.is_finite() && q.z > 0.0 && q.coords.norm() <= reach;
-        for q in cloud.points().filter(|q| in_reach(q)) {
-            let i = idx(&q);
+            ];
             for a in 0..3 {
                 lo[a] = lo[a].min(i[a]);
                 hi[a] = hi[a].max(i[a]);
             }
+            let (x, y) = ((i[0] + half_side) as usize, (i[1] + half_side) as usize);
+            grid[(i[2] as usize * side + y) * side + x] += 1;
         }
         if lo[0] > hi[0] {
             return None;
@@ -308,14 +356,15 @@ impl VoxelCounts {
         let (sx, sy) = (dims[0] + 1, dims[1] + 1);
         let mut sat = vec![0u32; sx * sy * (dims[2] + 1)];
         let at = |x: usize, y: usize, z: usize| (z * sy + y) * sx + x;
-        for q in cloud.points().filter(|q| in_reach(q)) {
-            let i = idx(&q);
-            let (x, y, z) = (
-                (i[0] - lo[0]) as usize + 1,
-                (i[1] - lo[1]) as usize + 1,
-                (i[2] - lo[2]) as usize + 1,
-            );
-            sat[at(x, y, z)] += 1;
+        for z in 0..dims[2] {
+            let gz = (lo[2] + z as i64) as usize;
+            for y in 0..dims[1] {
+                let gy = (lo[1] + y as i64 + half_side) as usize;
+                let row = (gz * side + gy) * side;
+                let gx = (lo[0] + half_side) as usize;
+                sat[at(1, y + 1, z + 1)..at(dims[0] + 1, y + 1, z + 1)]
+                    .copy_from_slice(&grid[row + gx..row + gx + dims[0]]);
+            }
         }
         for z in 1..=dims[2] {
             for y in 1..=dims[1] {

@@ -435,6 +435,44 @@ mod tests {
     }
 
     #[test]
+    fn every_node_seen_by_the_camera_lies_in_the_view_bounds() {
+        // An off-centre principal point and unequal focal lengths, so no bound is symmetric.
+        let camera = PinholeCamera::new(64, 48, 60.0, 50.0, 40.2, 17.9).unwrap();
+        let stride = 0.03;
+        for iz in 1..70 {
+            let z = iz as f64 * stride;
+            let (xs, ys) = in_view(&camera, z, stride).unwrap();
+            let (mut lo, mut hi) = ([i64::MAX; 2], [i64::MIN; 2]);
+            for iy in -200..=200 {
+                for ix in -200..=200 {
+                    let c = Point3::new(ix as f64 * stride, iy as f64 * stride, z);
+                    let px = camera.project(&c).unwrap();
+                    if camera.pixel_of(&px).is_some() {
+                        assert!(
+                            xs.contains(&ix) && ys.contains(&iy),
+                            "node ({ix}, {iy}) at {z}"
+                        );
+                        lo = [lo[0].min(ix), lo[1].min(iy)];
+                        hi = [hi[0].max(ix), hi[1].max(iy)];
+                    }
+                }
+            }
+            // Tight: at most two nodes of margin on each side.
+            assert!(
+                *xs.start() >= lo[0] - 2 && *xs.end() <= hi[0] + 2,
+                "x at {z}"
+            );
+            assert!(
+                *ys.start() >= lo[1] - 2 && *ys.end() <= hi[1] + 2,
+                "y at {z}"
+            );
+        }
+        let mut distorted = camera;
+        distorted.distortion = Some(pomona_core::RadialDistortion { k1: -0.2, k2: 0.05 });
+        assert!(in_view(&distorted, 1.0, stride).is_none());
+    }
+
+    #[test]
     fn boxes_sit_just_behind_the_surface() {
         let params = SlidingBoxParams {
             min_points: 20,

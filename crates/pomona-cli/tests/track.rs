@@ -45,6 +45,7 @@ fn approach_sequences_are_tracked_to_the_target() {
 
     let tracks = dir.path().join("tracks");
     let report = dir.path().join("report.json");
+    let report_s = report.to_str().unwrap();
     let out = pomona(&[
         "track",
         "--data",
@@ -52,13 +53,13 @@ fn approach_sequences_are_tracked_to_the_target() {
         "--out",
         tracks.to_str().unwrap(),
         "--json",
-        report.to_str().unwrap(),
+        report_s,
         "--init",
         "truth",
     ]);
     assert!(out.status.success(), "{}", stderr(&out));
     let report: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+        serde_json::from_str(&std::fs::read_to_string(report_s).unwrap()).unwrap();
     assert_eq!(report["sequences"], 3);
     assert_eq!(report["frames"], 36);
     let rate = report["success_rate"].as_f64().unwrap();
@@ -69,6 +70,46 @@ fn approach_sequences_are_tracked_to_the_target() {
             .unwrap();
     assert_eq!(track["frames"].as_array().unwrap().len(), 12);
     assert!(track["frames"][11]["error_radii"].is_number(), "{track}");
+    assert_eq!(report["params"]["scan_threshold_fraction"], 0.75);
+
+    // `--set` overrides a tracker parameter, recorded in the report; a typo or an invalid
+    // value is an error that says so.
+    let out = pomona(&[
+        "track",
+        "--data",
+        data_s,
+        "--out",
+        tracks.to_str().unwrap(),
+        "--json",
+        report_s,
+        "--init",
+        "truth",
+        "--set",
+        "scan_threshold_fraction=1.0",
+        "--set",
+        "edge_scan.gap_px=3",
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(report_s).unwrap()).unwrap();
+    assert_eq!(report["params"]["scan_threshold_fraction"], 1.0);
+    assert_eq!(report["params"]["edge_scan"]["gap_px"], 3);
+    for (set, says) in [
+        ("scan_fraction=1.0", "scan_fraction"),
+        ("scan_threshold_fraction=0", "scan_threshold_fraction"),
+    ] {
+        let out = pomona(&[
+            "track",
+            "--data",
+            data_s,
+            "--out",
+            tracks.to_str().unwrap(),
+            "--set",
+            set,
+        ]);
+        assert!(!out.status.success());
+        assert!(stderr(&out).contains(says), "{set}: {}", stderr(&out));
+    }
 
     // Tracking a folder without sequences is an error naming it.
     let empty = dir.path().join("empty");

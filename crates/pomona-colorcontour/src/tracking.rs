@@ -22,6 +22,9 @@
 //! * **refinement**: the position check is repeated from the fitted centre up to
 //!   `refinements` times (one pass is exact for an unoccluded disc; occlusion makes the first
 //!   estimate depend on the start point);
+//! * **scan hysteresis** (`scan_threshold_fraction`, 0.75): the scans continue through pixels
+//!   of weaker fruit colour than the check needs, so a fruit whose far side is in shade is
+//!   measured whole rather than by its lit cap;
 //! * **recovery after loss**: when neither the check nor the whole spiral finds a valid circle
 //!   the frame is *lost*: the last good estimate is reported with [`TrackStatus::Lost`], the
 //!   next frame searches again from it, and after `relax_after_lost` lost frames in a row the
@@ -59,6 +62,18 @@ pub struct TrackParams {
     pub refinements: u32,
     /// Lost frames in a row after which the radius limits fall back to the global range.
     pub relax_after_lost: u32,
+    /// The four-direction scans run on through pixels whose table value reaches this fraction
+    /// of the colour threshold (1: the paper's single threshold; the 5×5 check always uses the
+    /// full threshold). Below 1 the scans cross the shaded side of a fruit, whose colour is
+    /// weaker, instead of stopping at the terminator and fitting the lit cap — the same
+    /// hysteresis, and the same default 0.75, as the detector's `color_grow_fraction` (chosen
+    /// on approach sequences of seed 41; see docs/results.md, "Approach tracking").
+    #[serde(default = "one")]
+    pub scan_threshold_fraction: f64,
+}
+
+fn one() -> f64 {
+    1.0
 }
 
 impl Default for TrackParams {
@@ -73,6 +88,7 @@ impl Default for TrackParams {
             max_scan_radii: 1.2,
             refinements: 2,
             relax_after_lost: 2,
+            scan_threshold_fraction: 0.75,
         }
     }
 }
@@ -92,6 +108,8 @@ impl TrackParams {
             Some("max_radius_change must be at least 1")
         } else if self.max_scan_radii.is_nan() || self.max_scan_radii < 1.0 {
             Some("max_scan_radii must be at least 1")
+        } else if !(self.scan_threshold_fraction > 0.0 && self.scan_threshold_fraction <= 1.0) {
+            Some("scan_threshold_fraction must lie in (0, 1]")
         } else {
             None
         }
@@ -138,17 +156,26 @@ pub struct ApproachTracker {
 struct FruitPixels<'a> {
     image: &'a ColorImage,
     lut: &'a HSigmaLut,
+    /// The colour threshold (the 5×5 check).
     threshold: u8,
+    /// The scans' threshold (`scan_threshold_fraction` of it).
+    scan_threshold: u8,
 }
 
 impl FruitPixels<'_> {
-    fn is_fruit(&self, x: i64, y: i64) -> bool {
+    fn value(&self, x: i64, y: i64) -> Option<u8> {
         let (Ok(u), Ok(v)) = (u32::try_from(x), u32::try_from(y)) else {
-            return false;
+            return None;
         };
-        self.image
-            .get(u, v)
-            .is_some_and(|rgb| self.lut.value(rgb) >= self.threshold)
+        self.image.get(u, v).map(|rgb| self.lut.value(rgb))
+    }
+
+    fn is_fruit(&self, x: i64, y: i64) -> bool {
+        self.value(x, y).is_some_and(|t| t >= self.threshold)
+    }
+
+    fn is_scanned_fruit(&self, x: i64, y: i64) -> bool {
+        self.value(x, y).is_some_and(|t| t >= self.scan_threshold)
     }
 }
 
@@ -201,10 +228,13 @@ impl ApproachTracker {
 
     /// Tracks the fruit into `image` (the next frame) and returns the estimate.
     pub fn update(&mut self, image: &ColorImage) -> TrackEstimate {
+        let scan_threshold =
+            (f64::from(self.threshold) * self.params.scan_threshold_fraction).ceil() as u8;
         let pixels = FruitPixels {
             image,
             lut: &self.lut,
             threshold: self.threshold,
+            scan_threshold,
         };
         let limits = self.radius_limits();
         let start = (
@@ -285,7 +315,7 @@ impl ApproachTracker {
         let mut circle = None;
         for _ in 0..=self.params.refinements {
             let ends = scan_four_directions(
-                &mut |x, y| pixels.is_fruit(x, y),
+                &mut |x, y| pixels.is_scanned_fruit(x, y),
                 from,
                 size,
                 max_scan,
@@ -297,7 +327,7 @@ impl ApproachTracker {
             };
             circle = Some((c, r));
             let next = (c.x.round() as i64, c.y.round() as i64);
-            if next == from || !pixels.is_fruit(next.0, next.1) {
+            if next == from || !pixels.is_scanned_fruit(next.0, next.1) {
                 break;
             }
             from = next;
@@ -401,6 +431,46 @@ mod tests {
         assert!((est.radius_px - 26.0).abs() < 2.0);
         let est = t.update(&scene(120, 90, &[(31.0, 50.0, 26.0)]));
         assert_eq!(est.status, TrackStatus::Confirmed);
+    }
+
+    #[test]
+    fn scans_with_the_lower_threshold_cross_the_shaded_side() {
+        let lut = orange_lut();
+        // A darker orange whose table value lies between 0.6 and 1 of the threshold.
+        let shade = (40..100)
+            .map(|pct| ORANGE.map(|c| (u32::from(c) * pct / 100) as u8))
+            .find(|&c| (80..120).contains(&lut.value(c)))
+            .unwrap();
+        let (cx, cy, r) = (60.0, 45.0, 20.0);
+        let mut img = scene(120, 90, &[(cx, cy, r)]);
+        // The sun lights the upper left: past a diagonal terminator the fruit is in shade.
+        for v in 0..90u32 {
+            for u in 0..120u32 {
+                let (x, y) = (f64::from(u) - cx, f64::from(v) - cy);
+                if x * x + y * y <= r * r && x + y > 0.0 {
+                    img.set(u, v, shade);
+                }
+            }
+        }
+        let track = |fraction: f64| {
+            let params = TrackParams {
+                scan_threshold_fraction: fraction,
+                ..TrackParams::default()
+            };
+            let start = Point2::new(cx - 8.0, cy - 8.0);
+            ApproachTracker::new(lut.clone(), 128, params, start, r)
+                .unwrap()
+                .update(&img)
+        };
+        // One threshold: two scans stop at the terminator, the circle of the lit cap is too
+        // small for the radius limits, and the fruit is lost.
+        assert_eq!(track(1.0).status, TrackStatus::Lost);
+        let est = track(0.6);
+        assert_eq!(est.status, TrackStatus::Confirmed);
+        assert!(
+            (est.center_px - Point2::new(cx, cy)).norm() < 1.5,
+            "{est:?}"
+        );
     }
 
     #[test]

@@ -57,6 +57,10 @@ pub struct TrackArgs {
     /// Where the track starts in the first frame.
     #[arg(long, value_enum, default_value_t = InitArg::Detection)]
     pub init: InitArg,
+    /// Override a tracker parameter, KEY=VALUE (dotted keys of `TrackParams`, JSON values, e.g.
+    /// `max_radius_change=1.2` or `edge_scan.gap_px=3`); repeat.
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub set: Vec<pomona::ParamOverride>,
 }
 
 /// `--init` values.
@@ -134,6 +138,8 @@ pub struct TrackReport {
     pub lost_frames: usize,
     /// How tracks started.
     pub init: InitArg,
+    /// The tracker's parameters (defaults with `--set` applied).
+    pub params: TrackParams,
     /// Per sequence: name, success and the last frame's error in radii.
     pub per_sequence: Vec<SequenceResult>,
 }
@@ -204,10 +210,26 @@ fn model_file(path: Option<&Path>) -> Result<ModelFile> {
     }
 }
 
+/// The tracker's default parameters with `overrides` applied (keys as in its JSON form).
+///
+/// # Errors
+/// An unknown key, a value of the wrong type, or parameters the tracker refuses.
+fn track_params(overrides: &[pomona::ParamOverride]) -> Result<TrackParams> {
+    let mut json = serde_json::to_value(TrackParams::default())?;
+    pomona::apply_overrides(&mut json, overrides, "the tracker")?;
+    let params: TrackParams =
+        serde_json::from_value(json).context("the tracker's parameters after --set")?;
+    if let Some(reason) = params.invalid_reason() {
+        bail!("invalid tracker parameters after --set: {reason}");
+    }
+    Ok(params)
+}
+
 /// Tracks one sequence.
 fn track_sequence(
     dir: &Path,
     args: &TrackArgs,
+    params: TrackParams,
     table: &(pomona_colorcontour::HSigmaLut, u8),
     detector: &pomona::Detector,
 ) -> Result<SequenceTrack> {
@@ -266,8 +288,8 @@ fn track_sequence(
     };
     track.init_circle_px = Some([c0.x, c0.y, r0]);
     let (lut, threshold) = table.clone();
-    let mut tracker = ApproachTracker::new(lut, threshold, TrackParams::default(), c0, r0)
-        .context("cannot start the tracker")?;
+    let mut tracker =
+        ApproachTracker::new(lut, threshold, params, c0, r0).context("cannot start the tracker")?;
     for stem in dataset.frames() {
         let color = dataset
             .load_color(stem)?
@@ -302,6 +324,7 @@ fn track_sequence(
 /// No sequences in `--data`, an unreadable sequence, model or frame (the message names it), or
 /// an output file that could not be written.
 pub fn run(args: &TrackArgs) -> Result<TrackReport> {
+    let params = track_params(&args.set)?;
     let dirs = sequences(&args.data)?;
     let model = model_file(args.model.as_deref())?;
     let table = ColorContourStageParams::from_model(&model)
@@ -315,7 +338,7 @@ pub fn run(args: &TrackArgs) -> Result<TrackReport> {
     let mut times = Vec::new();
     let (mut searched, mut lost) = (0, 0);
     for dir in &dirs {
-        let track = track_sequence(dir, args, &table, &detector)
+        let track = track_sequence(dir, args, params, &table, &detector)
             .with_context(|| format!("tracking {}", dir.display()))?;
         write_json(&args.out.join(format!("{}.json", track.sequence)), &track)?;
         for f in &track.frames {
@@ -344,6 +367,7 @@ pub fn run(args: &TrackArgs) -> Result<TrackReport> {
         searched_frames: searched,
         lost_frames: lost,
         init: args.init,
+        params,
         per_sequence,
     };
     println!(

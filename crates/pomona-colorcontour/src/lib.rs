@@ -47,6 +47,7 @@ mod mlp;
 mod params;
 mod pipeline;
 mod pixel_f1;
+mod radius_correction;
 mod spiral_search;
 pub mod stages;
 mod tracking;
@@ -74,6 +75,7 @@ pub use pipeline::{
     ColorContourDetector, ColorContourPipeline, ColorContourStageParams, PIPELINE_NAME,
 };
 pub use pixel_f1::{best_f1_threshold, pixel_counts, value_histograms, PixelCounts};
+pub use radius_correction::{radius_pairs, RadiusCorrection};
 pub use spiral_search::{spiral_points, SpiralParams};
 pub use tracking::{ApproachTracker, TrackEstimate, TrackParams, TrackStatus};
 pub use training_pixels::{fruit_labels, training_pixels};

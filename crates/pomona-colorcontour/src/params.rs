@@ -4,7 +4,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::{EdgeFitParams, MlpParams};
+use crate::{EdgeFitParams, MlpParams, RadiusCorrection};
 
 /// Parameters of every stage.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -44,6 +44,15 @@ pub struct ColorContourParams {
     pub mask_closing_px: usize,
     /// The adaptive edge fitting (Eq. 8).
     pub edge_fit: EdgeFitParams,
+    /// Correction of every fitted radius before the size test, the score and the overlap
+    /// pruning (not in the paper, see [`crate::RadiusCorrection`]); none (scale 1, offset 0) is
+    /// the paper's behaviour and what model files from before this setting mean.
+    #[serde(default)]
+    pub radius_correction: RadiusCorrection,
+    /// Whether training replaces `radius_correction` by the one fitted on the training frames
+    /// (fitted against the true circles of their fruit, [`crate::RadiusCorrection::fit`]).
+    #[serde(default)]
+    pub learn_radius_correction: bool,
     /// Circles need at least this support (arc spanned over circumference) to be reported.
     pub min_support: f64,
     /// Of two circles sharing more than this fraction of the smaller one's area, the weaker is
@@ -72,6 +81,8 @@ impl Default for ColorContourParams {
             min_component_px: 40,
             mask_closing_px: 2,
             edge_fit: EdgeFitParams::default(),
+            radius_correction: RadiusCorrection::NONE,
+            learn_radius_correction: false,
             min_support: 0.15,
             max_overlap: 0.4,
             radius_range_m: (0.025, 0.055),

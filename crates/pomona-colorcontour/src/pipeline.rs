@@ -12,9 +12,13 @@ use serde::{Deserialize, Serialize};
 
 use crate::stages::{ColorClassStage, ContourStage, EdgeFitStage, FruitStage};
 use crate::{
-    best_f1_threshold, quantise_probability, training_pixels, value_histograms, ColorContourParams,
-    HSigmaLut, Mlp,
+    best_f1_threshold, quantise_probability, radius_pairs, training_pixels, value_histograms,
+    ColorContourParams, ContourCircle, HSigmaLut, Mlp, RadiusCorrection,
 };
+
+/// Fruit less visible than this are left out when the radius correction is learnt (their
+/// outline is mostly leaves and neighbours; the 2D evaluation ignores them too).
+const RADIUS_TRAINING_MIN_VISIBILITY: f64 = 0.5;
 
 /// Name of the pipeline on the command line and in model files.
 pub const PIPELINE_NAME: &str = "color-contour";
@@ -166,6 +170,9 @@ impl Pipeline for ColorContourPipeline {
                 params.color_threshold = f64::from(t) / 255.0;
             }
         }
+        if params.learn_radius_correction {
+            params.radius_correction = learn_radius_correction(frames, &params, &mlp)?;
+        }
         let stage = ColorContourStageParams { params, mlp };
         Ok(ModelFile::new(
             PIPELINE_NAME,
@@ -185,6 +192,45 @@ impl Pipeline for ColorContourPipeline {
         let stage = ColorContourStageParams::from_model(model)?;
         Ok(Box::new(ColorContourDetector::new(&stage)?))
     }
+}
+
+/// The radius correction that best maps the circles fitted on the training frames to the true
+/// circles of their well-visible fruit ([`RadiusCorrection::fit`]); none when too few fruit
+/// were paired.
+fn learn_radius_correction(
+    frames: &dyn FrameSource,
+    params: &ColorContourParams,
+    mlp: &Mlp,
+) -> Result<RadiusCorrection, PipelineError> {
+    let detector = ColorContourDetector::new(&ColorContourStageParams {
+        params: params.clone(),
+        mlp: mlp.clone(),
+    })?;
+    let per_frame: Result<Vec<Vec<(f64, f64)>>, PipelineError> = (0..frames.len())
+        .into_par_iter()
+        .map(|i| {
+            let lf = frames.load(i)?;
+            let (_, circles) = detector.fitted_circles(&lf.frame, &mut StageTimings::default())?;
+            let circles: Vec<ContourCircle> = circles
+                .into_iter()
+                .filter(|c| c.support >= params.min_support)
+                .collect();
+            let camera = lf.frame.camera();
+            let truth: Vec<_> = lf
+                .truth
+                .fruits
+                .iter()
+                .filter(|f| {
+                    f.visibility
+                        .is_none_or(|v| v >= RADIUS_TRAINING_MIN_VISIBILITY)
+                })
+                .filter_map(|f| f.image_circle(camera))
+                .collect();
+            Ok(radius_pairs(&circles, &truth))
+        })
+        .collect();
+    let pairs: Vec<(f64, f64)> = per_frame?.into_iter().flatten().collect();
+    Ok(RadiusCorrection::fit(&pairs).unwrap_or(RadiusCorrection::NONE))
 }
 
 /// A trained colour-contour detector.
@@ -228,6 +274,12 @@ impl ColorContourDetector {
         if !(near > 0.0 && near <= far) {
             return Err(invalid("working_distance_m", "needs 0 < near ≤ far"));
         }
+        if !p.radius_correction.is_valid() {
+            return Err(invalid(
+                "radius_correction",
+                "needs a finite positive scale and a finite offset",
+            ));
+        }
         if p.prior_radius_m.is_nan() || p.prior_radius_m <= 0.0 {
             return Err(invalid("prior_radius_m", "must be positive"));
         }
@@ -251,6 +303,30 @@ impl ColorContourDetector {
     }
 }
 
+impl ColorContourDetector {
+    /// The first three stages: the fruit mask and the circles fitted on its outlines, before
+    /// the radius correction, the size test and the pruning.
+    ///
+    /// # Errors
+    /// [`PipelineError::MissingColor`] for a frame without colour.
+    pub fn fitted_circles(
+        &self,
+        frame: &RgbdFrame,
+        timings: &mut StageTimings,
+    ) -> Result<(Vec<bool>, Vec<ContourCircle>), PipelineError> {
+        let fruit = run_stage(&self.color, frame, timings)?;
+        let contour_stage = ContourStage {
+            closing_px: self.mask_closing_px,
+            min_component_px: self.min_component_px,
+            smoothing_half_window: self.smoothing_half_window,
+            width: frame.camera().width as usize,
+        };
+        let contours = run_stage(&contour_stage, fruit.as_slice(), timings)?;
+        let circles = run_stage(&self.edge_fit, contours.as_slice(), timings)?;
+        Ok((fruit, circles))
+    }
+}
+
 impl Detector for ColorContourDetector {
     fn pipeline(&self) -> &'static str {
         PIPELINE_NAME
@@ -261,15 +337,7 @@ impl Detector for ColorContourDetector {
         frame: &RgbdFrame,
         timings: &mut StageTimings,
     ) -> Result<Vec<Detection>, PipelineError> {
-        let fruit = run_stage(&self.color, frame, timings)?;
-        let contour_stage = ContourStage {
-            closing_px: self.mask_closing_px,
-            min_component_px: self.min_component_px,
-            smoothing_half_window: self.smoothing_half_window,
-            width: frame.camera().width as usize,
-        };
-        let contours = run_stage(&contour_stage, fruit.as_slice(), timings)?;
-        let circles = run_stage(&self.edge_fit, contours.as_slice(), timings)?;
+        let (fruit, circles) = self.fitted_circles(frame, timings)?;
         run_stage(
             &self.fruit,
             (frame, fruit.as_slice(), circles.as_slice()),

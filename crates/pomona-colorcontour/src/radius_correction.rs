@@ -1,0 +1,240 @@
+//! Correcting the bias of fitted circle radii (not in seed 004).
+//!
+//! The circles of §3.2 are fitted to the outline of the colour mask, and that outline does not
+//! sit on the fruit's silhouette: pixels where fruit and background blend pass the colour test
+//! (more of them with the colour hysteresis, [`crate::hysteresis_mask`]), so the mask reaches
+//! past the silhouette, while the traced outline runs through the centres of the mask's outer
+//! pixels, half a pixel inside the mask's edge. On the synthetic oranges the net result is a
+//! circle a few per cent larger than the fruit, which matters twice: the size test (§3.2,
+//! 25–55 mm at the measured depth) rejects big fruit, and in the overlap pruning the oversized
+//! circle covers its neighbour.
+//!
+//! The correction is affine in the fitted radius, `r' = scale · r − offset_px`: a fixed offset
+//! models a boundary displaced by a constant distance (blur, threshold, pixel-centre tracing),
+//! the scale a bias that grows with the fruit (wider blended rims on larger, closer fruit).
+//! [`RadiusCorrection::fit`] learns both from pairs of fitted and true radii (least squares of
+//! the true radius on the fitted one). [`RadiusCorrection::NONE`] (scale 1, offset 0) is the
+//! paper's behaviour and what model files without the setting mean.
+
+use pomona_core::ImageCircle;
+use serde::{Deserialize, Serialize};
+
+use crate::ContourCircle;
+
+/// `r' = scale · r − offset_px`, applied to every fitted circle before the size test, the
+/// score and the overlap pruning ([`crate::stages::FruitStage`]).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct RadiusCorrection {
+    /// Factor on the fitted radius (1: none).
+    pub scale: f64,
+    /// Pixels taken off after scaling (0: none; negative grows the circle).
+    pub offset_px: f64,
+}
+
+impl Default for RadiusCorrection {
+    fn default() -> Self {
+        Self::NONE
+    }
+}
+
+/// Fewer matched pairs than this and [`RadiusCorrection::fit`] keeps the radii as they are.
+const MIN_PAIRS: usize = 20;
+
+impl RadiusCorrection {
+    /// No correction (seed 004's behaviour).
+    pub const NONE: Self = Self {
+        scale: 1.0,
+        offset_px: 0.0,
+    };
+
+    /// The corrected radius, pixels; `None` when it is not positive (the circle is dropped).
+    pub fn apply(&self, radius_px: f64) -> Option<f64> {
+        let r = self.scale * radius_px - self.offset_px;
+        (r.is_finite() && r > 0.0).then_some(r)
+    }
+
+    /// Whether the correction can be applied: finite, with a positive scale.
+    pub fn is_valid(&self) -> bool {
+        self.scale.is_finite() && self.scale > 0.0 && self.offset_px.is_finite()
+    }
+
+    /// The least-squares line from fitted to true radius over `(fitted_px, truth_px)` pairs;
+    /// with fewer than 20 pairs, or fitted radii that barely vary (then only the scale is fitted,
+    /// as the median of truth over fitted), the best it can do with what it has. `None` when
+    /// there are too few pairs or the line is not usable (non-positive scale).
+    pub fn fit(pairs: &[(f64, f64)]) -> Option<Self> {
+        let pairs: Vec<(f64, f64)> = pairs
+            .iter()
+            .copied()
+            .filter(|&(f, t)| f.is_finite() && t.is_finite() && f > 0.0 && t > 0.0)
+            .collect();
+        if pairs.len() < MIN_PAIRS {
+            return None;
+        }
+        let n = pairs.len() as f64;
+        let (mf, mt) = pairs
+            .iter()
+            .fold((0.0, 0.0), |(a, b), &(f, t)| (a + f / n, b + t / n));
+        let (sff, sft) = pairs.iter().fold((0.0, 0.0), |(a, b), &(f, t)| {
+            (a + (f - mf) * (f - mf), b + (f - mf) * (t - mt))
+        });
+        // Fitted radii spread over less than a pixel (standard deviation): a slope is noise.
+        let line = (sff / n >= 1.0).then(|| {
+            let scale = sft / sff;
+            Self {
+                scale,
+                offset_px: scale * mf - mt,
+            }
+        });
+        let corrected = match line {
+            Some(c) if c.is_valid() => c,
+            _ => {
+                let mut ratios: Vec<f64> = pairs.iter().map(|&(f, t)| t / f).collect();
+                let mid = ratios.len() / 2;
+                let (_, m, _) = ratios.select_nth_unstable_by(mid, f64::total_cmp);
+                Self {
+                    scale: *m,
+                    offset_px: 0.0,
+                }
+            }
+        };
+        corrected.is_valid().then_some(corrected)
+    }
+}
+
+/// A fitted circle is paired with a true one when its centre is within this fraction of the
+/// true radius (half the 2D evaluation's reach: a circle that far off is not of that fruit's
+/// outline alone).
+const PAIR_REACH: f64 = 0.25;
+
+/// `(fitted, true)` radius pairs of one frame for [`RadiusCorrection::fit`]: each true circle
+/// takes the best-supported fitted circle whose centre lies within a quarter of its radius.
+/// `truth` should hold only well-visible fruit, whose outline is mostly their silhouette.
+pub fn radius_pairs(circles: &[ContourCircle], truth: &[ImageCircle]) -> Vec<(f64, f64)> {
+    truth
+        .iter()
+        .filter_map(|t| {
+            circles
+                .iter()
+                .filter(|c| (c.center_px - t.center_px).norm() <= PAIR_REACH * t.radius_px)
+                .max_by(|a, b| a.support.total_cmp(&b.support))
+                .map(|c| (c.radius_px, t.radius_px))
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{contour_circles, smooth_mask, trace_contours, EdgeFitParams};
+    use pomona_core::nalgebra::Point2;
+
+    /// A disc rendered with anti-aliasing (coverage of each pixel by the disc, 8×8 subsamples)
+    /// and thresholded at `min_coverage`, as a colour test passes blended rim pixels.
+    fn rendered_disc(
+        w: usize,
+        h: usize,
+        (cx, cy, r): (f64, f64, f64),
+        min_coverage: f64,
+    ) -> Vec<bool> {
+        (0..w * h)
+            .map(|i| {
+                let (x, y) = ((i % w) as f64, (i / w) as f64);
+                let mut inside = 0;
+                for a in 0..8 {
+                    for b in 0..8 {
+                        let (sx, sy) = (
+                            x - 0.5 + (a as f64 + 0.5) / 8.0,
+                            y - 0.5 + (b as f64 + 0.5) / 8.0,
+                        );
+                        inside += usize::from((sx - cx).powi(2) + (sy - cy).powi(2) <= r * r);
+                    }
+                }
+                inside as f64 / 64.0 >= min_coverage
+            })
+            .collect()
+    }
+
+    /// The best-supported circle of the pipeline's contour stage and edge fit on `mask`.
+    fn fitted_radius(mask: &[bool], w: usize, h: usize, center: Point2<f64>) -> f64 {
+        let params = EdgeFitParams::default();
+        let smooth = smooth_mask(mask, w, h);
+        trace_contours(&smooth, w, h, 20)
+            .iter()
+            .flat_map(|c| contour_circles(&c.smoothed(params.smoothing_half_window), &params))
+            .filter(|c| (c.center_px - center).norm() < 2.0)
+            .max_by(|a, b| a.support.total_cmp(&b.support))
+            .map(|c| c.radius_px)
+            .unwrap_or(f64::NAN)
+    }
+
+    #[test]
+    fn a_fitted_correction_recovers_rendered_disc_radii_within_a_third_of_a_pixel() {
+        let (w, h) = (140, 140);
+        // A rim of blended pixels passing the colour test: a fifth of the pixel is enough.
+        let coverage = 0.2;
+        let mut pairs = Vec::new();
+        for k in 0..24 {
+            let r = 10.0 + 1.3 * k as f64;
+            let (cx, cy) = (69.6 + 0.13 * k as f64, 70.2 - 0.07 * k as f64);
+            let mask = rendered_disc(w, h, (cx, cy, r), coverage);
+            pairs.push((fitted_radius(&mask, w, h, Point2::new(cx, cy)), r));
+        }
+        // Uncorrected, the outline of such a mask is too large by more than the tolerance.
+        let worst = pairs
+            .iter()
+            .map(|(f, t)| f - t)
+            .fold(f64::NEG_INFINITY, f64::max);
+        assert!(worst > 0.3, "no bias to correct: {pairs:?}");
+        let c = RadiusCorrection::fit(&pairs).unwrap();
+        // On discs not used in the fit.
+        for (r, (cx, cy)) in [
+            (13.7, (70.3, 69.8)),
+            (27.2, (68.9, 70.6)),
+            (38.5, (70.1, 70.4)),
+        ] {
+            let mask = rendered_disc(w, h, (cx, cy, r), coverage);
+            let fitted = fitted_radius(&mask, w, h, Point2::new(cx, cy));
+            let corrected = c.apply(fitted).unwrap();
+            assert!(
+                (corrected - r).abs() < 0.3,
+                "r {r}: fitted {fitted}, corrected {corrected} with {c:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn none_is_the_identity_and_bad_fits_are_refused() {
+        assert_eq!(RadiusCorrection::NONE.apply(17.25), Some(17.25));
+        assert_eq!(RadiusCorrection::default(), RadiusCorrection::NONE);
+        let shrink = RadiusCorrection {
+            scale: 1.0,
+            offset_px: 2.0,
+        };
+        assert_eq!(shrink.apply(1.5), None);
+        // Too few pairs.
+        assert_eq!(RadiusCorrection::fit(&[(10.0, 9.0); 5]), None);
+        // Fitted radii all alike: only a scale, the median ratio.
+        let c = RadiusCorrection::fit(&[(20.0, 19.0); 30]).unwrap();
+        assert!(
+            (c.scale - 0.95).abs() < 1e-12 && c.offset_px == 0.0,
+            "{c:?}"
+        );
+        // An exact line is found.
+        let pairs: Vec<(f64, f64)> = (0..30)
+            .map(|k| {
+                let f = 10.0 + k as f64;
+                (f, 0.96 * f - 0.7)
+            })
+            .collect();
+        let c = RadiusCorrection::fit(&pairs).unwrap();
+        assert!(
+            (c.scale - 0.96).abs() < 1e-9 && (c.offset_px - 0.7).abs() < 1e-9,
+            "{c:?}"
+        );
+        // Model files without the setting mean no correction.
+        let old: RadiusCorrection =
+            serde_json::from_value(serde_json::json!({"scale": 1.0, "offset_px": 0.0})).unwrap();
+        assert_eq!(old, RadiusCorrection::NONE);
+    }
+}

@@ -57,7 +57,7 @@ pub use arc_half_angle::{arc_half_angle, arc_radius};
 pub use circle_in_space::{sphere_from_depth, sphere_from_size, SphereFromCircle};
 pub use circle_least_squares::{fit_circle, refine_circle, rms_distance};
 pub use circle_merging::merge_arcs;
-pub use circle_pruning::{disc_overlap_area, prune_overlapping};
+pub use circle_pruning::{disc_overlap_area, prune_overlapping, PruneRank};
 pub use contour::{smooth_mask, trace_contours, Contour};
 pub use contour_circles::{
     contour_arcs, contour_circles, ContourArc, ContourCircle, EdgeFitParams, GroupCircle,
@@ -75,7 +75,7 @@ pub use pipeline::{
     ColorContourDetector, ColorContourPipeline, ColorContourStageParams, PIPELINE_NAME,
 };
 pub use pixel_f1::{best_f1_threshold, pixel_counts, value_histograms, PixelCounts};
-pub use radius_correction::{radius_pairs, RadiusCorrection};
+pub use radius_correction::{radius_pairs, sphere_outline_circle, RadiusCorrection};
 pub use spiral_search::{spiral_points, SpiralParams};
 pub use tracking::{ApproachTracker, TrackEstimate, TrackParams, TrackStatus};
 pub use training_pixels::{fruit_labels, training_pixels};

@@ -4,7 +4,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::{EdgeFitParams, MlpParams, RadiusCorrection};
+use crate::{EdgeFitParams, MlpParams, PruneRank, RadiusCorrection};
 
 /// Parameters of every stage.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -58,6 +58,11 @@ pub struct ColorContourParams {
     /// Of two circles sharing more than this fraction of the smaller one's area, the weaker is
     /// dropped (paper: 40 %).
     pub max_overlap: f64,
+    /// Which of two overlapping circles is the stronger ([`crate::PruneRank`]): `score`
+    /// (support fraction × colour purity; what model files from before this setting mean) or
+    /// `arc-length` (arc in pixels × colour purity).
+    #[serde(default)]
+    pub prune_rank: PruneRank,
     /// Allowed fruit radius at the measured depth, metres (paper: 25–55 mm for oranges).
     pub radius_range_m: (f64, f64),
     /// Camera-to-fruit distances, metres, that bound the radius in pixels of a circle without
@@ -85,6 +90,7 @@ impl Default for ColorContourParams {
             learn_radius_correction: false,
             min_support: 0.15,
             max_overlap: 0.4,
+            prune_rank: PruneRank::Score,
             radius_range_m: (0.025, 0.055),
             working_distance_m: (0.3, 2.0),
             prior_radius_m: 0.04,

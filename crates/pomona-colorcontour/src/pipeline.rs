@@ -12,8 +12,8 @@ use serde::{Deserialize, Serialize};
 
 use crate::stages::{ColorClassStage, ContourStage, EdgeFitStage, FruitStage};
 use crate::{
-    best_f1_threshold, quantise_probability, radius_pairs, training_pixels, value_histograms,
-    ColorContourParams, ContourCircle, HSigmaLut, Mlp, RadiusCorrection,
+    best_f1_threshold, quantise_probability, radius_pairs, sphere_outline_circle, training_pixels,
+    value_histograms, ColorContourParams, ContourCircle, HSigmaLut, Mlp, RadiusCorrection,
 };
 
 /// Fruit less visible than this are left out when the radius correction is learnt (their
@@ -194,9 +194,9 @@ impl Pipeline for ColorContourPipeline {
     }
 }
 
-/// The radius correction that best maps the circles fitted on the training frames to the true
-/// circles of their well-visible fruit ([`RadiusCorrection::fit`]); none when too few fruit
-/// were paired.
+/// The radius correction that best maps the circles fitted on the training frames to the
+/// outlines of their well-visible fruit ([`crate::sphere_outline_circle`] of the truth sphere,
+/// else the annotated circle; [`RadiusCorrection::fit`]); none when too few fruit were paired.
 fn learn_radius_correction(
     frames: &dyn FrameSource,
     params: &ColorContourParams,
@@ -224,7 +224,10 @@ fn learn_radius_correction(
                     f.visibility
                         .is_none_or(|v| v >= RADIUS_TRAINING_MIN_VISIBILITY)
                 })
-                .filter_map(|f| f.image_circle(camera))
+                .filter_map(|f| match f.center_m.zip(f.diameter_m) {
+                    Some((c, d)) => sphere_outline_circle(camera, &c, 0.5 * d),
+                    None => f.image_circle(camera),
+                })
                 .collect();
             Ok(radius_pairs(&circles, &truth))
         })

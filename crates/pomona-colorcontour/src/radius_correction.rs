@@ -16,7 +16,8 @@
 //! the true radius on the fitted one). [`RadiusCorrection::NONE`] (scale 1, offset 0) is the
 //! paper's behaviour and what model files without the setting mean.
 
-use pomona_core::ImageCircle;
+use pomona_core::nalgebra::Point3;
+use pomona_core::{ImageCircle, PinholeCamera};
 use serde::{Deserialize, Serialize};
 
 use crate::ContourCircle;
@@ -100,6 +101,30 @@ impl RadiusCorrection {
         };
         corrected.is_valid().then_some(corrected)
     }
+}
+
+/// The circle of a sphere's outline across its viewing ray: centred on the projected centre,
+/// with the outline's smallest half-width, f R / √(z² − R²) for a centre at depth z (the minor
+/// semi-axis of the outline's ellipse). This is the radius [`crate::sphere_from_depth`] turns
+/// back into metres, so it is what the correction is fitted against. The 2D evaluation's truth
+/// circle ([`ImageCircle::of_sphere`], f R / √(D² − R²) with D the distance) equals it on the
+/// optical axis only; off-axis the outline is wider than that by about 1 / cos θ across the ray
+/// and 1 / cos² θ along it (θ the angle off the axis: 10 % and 22 % at 25°). `None` when the
+/// centre is not in front of the camera or the camera is inside the sphere.
+pub fn sphere_outline_circle(
+    camera: &PinholeCamera,
+    center_m: &Point3<f64>,
+    radius_m: f64,
+) -> Option<ImageCircle> {
+    let z2 = center_m.z * center_m.z;
+    let r2 = radius_m * radius_m;
+    if !(radius_m > 0.0 && center_m.z > 0.0 && z2 > r2) {
+        return None;
+    }
+    Some(ImageCircle {
+        center_px: camera.project(center_m)?,
+        radius_px: camera.mean_focal_px() * radius_m / (z2 - r2).sqrt(),
+    })
 }
 
 /// A fitted circle is paired with a true one when its centre is within this fraction of the
@@ -201,6 +226,31 @@ mod tests {
                 "r {r}: fitted {fitted}, corrected {corrected} with {c:?}"
             );
         }
+    }
+
+    #[test]
+    fn the_outline_circle_is_the_evaluation_circle_on_axis_and_wider_off_axis() {
+        let cam = PinholeCamera::new(640, 480, 500.0, 500.0, 320.0, 240.0).unwrap();
+        let on = Point3::new(0.0, 0.0, 1.0);
+        let a = sphere_outline_circle(&cam, &on, 0.04).unwrap();
+        let b = ImageCircle::of_sphere(&cam, &on, 0.04).unwrap();
+        assert!((a.radius_px - b.radius_px).abs() < 1e-9);
+        // 25° off the axis: the outline's half-width across the ray, from the tangent cone.
+        let t = 25f64.to_radians();
+        let off = Point3::new(t.sin(), 0.0, t.cos());
+        let a = sphere_outline_circle(&cam, &off, 0.04).unwrap();
+        let b = ImageCircle::of_sphere(&cam, &off, 0.04).unwrap();
+        let alpha = (0.04f64).asin();
+        // The cone's extreme rays across the ray (in the y direction) hit the image at
+        // y = f tan α / cos θ, to first order.
+        let across = 500.0 * alpha.tan() / t.cos();
+        assert!(
+            (a.radius_px - across).abs() < 0.05 * across * 0.04,
+            "{} vs {across}",
+            a.radius_px
+        );
+        assert!(a.radius_px > 1.09 * b.radius_px);
+        assert!(sphere_outline_circle(&cam, &Point3::new(0.0, 0.0, -1.0), 0.04).is_none());
     }
 
     #[test]

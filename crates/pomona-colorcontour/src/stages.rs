@@ -145,7 +145,8 @@ fn color_purity(fruit: &[bool], width: usize, height: usize, c: &ContourCircle) 
 ///   `radius_range_m`; without, the pixel radius must lie in the range those radii give over
 ///   `working_distance_m`. Checked *before* the overlap pruning (the paper does it after),
 ///   so an implausible circle cannot remove a plausible one;
-/// * overlap (§3.2): see [`crate::prune_overlapping`];
+/// * overlap (§3.2): see [`crate::prune_overlapping`], circles ranked by `prune_rank`
+///   ([`crate::PruneRank`]);
 /// * 3D: [`crate::sphere_from_depth`], or [`crate::sphere_from_size`] with `prior_radius_m`
 ///   when the circle has no depth (then `diameter_m` is `None`: it was not measured).
 ///
@@ -223,8 +224,11 @@ impl<'a> Stage<(&'a RgbdFrame, &'a [bool], &'a [ContourCircle]), Vec<Detection>>
             .iter()
             .map(|m| (m.circle.center_px, m.circle.radius_px))
             .collect();
-        let scores: Vec<f64> = measured.iter().map(|m| m.score).collect();
-        Ok(prune_overlapping(&discs, &scores, p.max_overlap)
+        let ranks: Vec<f64> = measured
+            .iter()
+            .map(|m| p.prune_rank.key(m.score, m.circle.radius_px))
+            .collect();
+        Ok(prune_overlapping(&discs, &ranks, p.max_overlap)
             .into_iter()
             .map(|i| {
                 let m = &measured[i];

@@ -67,24 +67,42 @@ pub fn disc_overlap_area(a: (Point2<f64>, f64), b: (Point2<f64>, f64)) -> f64 {
     ra * ra * alpha + rb * rb * beta - triangle
 }
 
+/// Whether two circles are taken for one fruit, so that only one is kept: they share more than
+/// `max_overlap` of the smaller circle's area (§3.2) and, with `center_reach > 0` (not in the
+/// paper), their centres are closer than `center_reach` times the larger radius. Two touching
+/// fruit, a small one half in front of a large one, share much of the small one's area, but the
+/// small one's centre lies near or beyond the large one's outline; two circles on one fruit are
+/// centred near each other. `center_reach = 0` is the paper's test alone.
+pub fn clash(
+    a: (Point2<f64>, f64),
+    b: (Point2<f64>, f64),
+    max_overlap: f64,
+    center_reach: f64,
+) -> bool {
+    let (small, large) = (a.1.min(b.1), a.1.max(b.1));
+    let near = center_reach <= 0.0 || (a.0 - b.0).norm() < center_reach * large;
+    near && disc_overlap_area(a, b) > max_overlap * std::f64::consts::PI * small * small
+}
+
 /// Indices of the circles kept: by decreasing `scores` (the ranking values, e.g.
 /// [`PruneRank::key`]; ties by index), a circle is dropped when it shares more than
-/// `max_overlap` of the smaller area with a circle already kept.
+/// `max_overlap` of the smaller area with a circle already kept and, when `center_reach` is
+/// positive, its centre and that circle's are closer than `center_reach` times the larger
+/// radius (see [`clash`]).
 pub fn prune_overlapping(
     circles: &[(Point2<f64>, f64)],
     scores: &[f64],
     max_overlap: f64,
+    center_reach: f64,
 ) -> Vec<usize> {
     let mut order: Vec<usize> = (0..circles.len().min(scores.len())).collect();
     order.sort_by(|&a, &b| scores[b].total_cmp(&scores[a]).then(a.cmp(&b)));
     let mut kept: Vec<usize> = Vec::new();
     for i in order {
-        let clash = kept.iter().any(|&k| {
-            let small = circles[i].1.min(circles[k].1);
-            let area = std::f64::consts::PI * small * small;
-            disc_overlap_area(circles[i], circles[k]) > max_overlap * area
-        });
-        if !clash {
+        if !kept
+            .iter()
+            .any(|&k| clash(circles[i], circles[k], max_overlap, center_reach))
+        {
             kept.push(i);
         }
     }
@@ -131,11 +149,11 @@ mod tests {
             (Point2::new(50.0, 0.0), 5.0),
         ];
         assert_eq!(
-            prune_overlapping(&c, &[0.5, 0.9, 0.4, 0.1], 0.4),
+            prune_overlapping(&c, &[0.5, 0.9, 0.4, 0.1], 0.4, 0.0),
             vec![1, 2, 3]
         );
         assert_eq!(
-            prune_overlapping(&c, &[0.9, 0.5, 0.4, 0.1], 0.4),
+            prune_overlapping(&c, &[0.9, 0.5, 0.4, 0.1], 0.4, 0.0),
             vec![0, 2, 3]
         );
     }
@@ -180,6 +198,24 @@ mod tests {
                 "{rank:?}"
             );
         }
+        // A small fruit half in front of a large one: 64 % of the small one's area is shared,
+        // but its centre lies at 0.85 of the large radius. The paper's test drops the weaker;
+        // with a centre reach of 0.8 both stay, while a circle centred well inside still goes.
+        let large = (Point2::new(0.0, 0.0), 20.0);
+        let front = (Point2::new(17.0, 0.0), 10.0);
+        let inner = (Point2::new(12.0, 0.0), 10.0);
+        assert_eq!(
+            prune_overlapping(&[large, front], &[1.0, 0.5], 0.4, 0.0),
+            vec![0]
+        );
+        assert_eq!(
+            prune_overlapping(&[large, front], &[1.0, 0.5], 0.4, 0.8),
+            vec![0, 1]
+        );
+        assert_eq!(
+            prune_overlapping(&[large, inner], &[1.0, 0.5], 0.4, 0.8),
+            vec![0]
+        );
         let old: PruneRank = serde_json::from_value(serde_json::json!("score")).unwrap();
         assert_eq!(old, PruneRank::default());
         assert_eq!(

@@ -57,7 +57,7 @@ pub use arc_half_angle::{arc_half_angle, arc_radius};
 pub use circle_in_space::{sphere_from_depth, sphere_from_size, SphereFromCircle};
 pub use circle_least_squares::{fit_circle, refine_circle, rms_distance};
 pub use circle_merging::merge_arcs;
-pub use circle_pruning::{disc_overlap_area, prune_overlapping, PruneRank};
+pub use circle_pruning::{clash, disc_overlap_area, prune_overlapping, PruneRank};
 pub use contour::{smooth_mask, trace_contours, Contour};
 pub use contour_circles::{
     contour_arcs, contour_circles, ContourArc, ContourCircle, EdgeFitParams, GroupCircle,

@@ -63,6 +63,12 @@ pub struct ColorContourParams {
     /// `arc-length` (arc in pixels × colour purity).
     #[serde(default)]
     pub prune_rank: PruneRank,
+    /// Two overlapping circles are taken for one fruit only when their centres are closer than
+    /// this fraction of the larger radius (not in the paper, see [`crate::clash`]; 0 = the
+    /// overlap test alone, the paper's rule and what model files from before this setting
+    /// mean).
+    #[serde(default)]
+    pub prune_center_reach: f64,
     /// Allowed fruit radius at the measured depth, metres (paper: 25–55 mm for oranges).
     pub radius_range_m: (f64, f64),
     /// Camera-to-fruit distances, metres, that bound the radius in pixels of a circle without
@@ -91,6 +97,7 @@ impl Default for ColorContourParams {
             min_support: 0.15,
             max_overlap: 0.4,
             prune_rank: PruneRank::Score,
+            prune_center_reach: 0.0,
             radius_range_m: (0.025, 0.055),
             working_distance_m: (0.3, 2.0),
             prior_radius_m: 0.04,

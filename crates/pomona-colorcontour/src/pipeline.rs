@@ -277,6 +277,9 @@ impl ColorContourDetector {
         if !(near > 0.0 && near <= far) {
             return Err(invalid("working_distance_m", "needs 0 < near ≤ far"));
         }
+        if !(p.prune_center_reach.is_finite() && p.prune_center_reach >= 0.0) {
+            return Err(invalid("prune_center_reach", "must be 0 (off) or positive"));
+        }
         if !p.radius_correction.is_valid() {
             return Err(invalid(
                 "radius_correction",

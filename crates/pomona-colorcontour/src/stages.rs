@@ -146,7 +146,7 @@ fn color_purity(fruit: &[bool], width: usize, height: usize, c: &ContourCircle) 
 ///   `working_distance_m`. Checked *before* the overlap pruning (the paper does it after),
 ///   so an implausible circle cannot remove a plausible one;
 /// * overlap (§3.2): see [`crate::prune_overlapping`], circles ranked by `prune_rank`
-///   ([`crate::PruneRank`]);
+///   ([`crate::PruneRank`]), pairs tested by [`crate::clash`] with `prune_center_reach`;
 /// * 3D: [`crate::sphere_from_depth`], or [`crate::sphere_from_size`] with `prior_radius_m`
 ///   when the circle has no depth (then `diameter_m` is `None`: it was not measured).
 ///
@@ -228,18 +228,20 @@ impl<'a> Stage<(&'a RgbdFrame, &'a [bool], &'a [ContourCircle]), Vec<Detection>>
             .iter()
             .map(|m| p.prune_rank.key(m.score, m.circle.radius_px))
             .collect();
-        Ok(prune_overlapping(&discs, &ranks, p.max_overlap)
-            .into_iter()
-            .map(|i| {
-                let m = &measured[i];
-                let (c, r) = (m.circle.center_px, m.circle.radius_px);
-                let mut d = Detection::new(m.center_m, m.score);
-                d.diameter_m = m.diameter_m;
-                d.bbox_px = PixelBox::new(c.x - r, c.y - r, c.x + r, c.y + r).ok();
-                d.center_px = Some(c);
-                d.radius_px = Some(r);
-                d
-            })
-            .collect())
+        Ok(
+            prune_overlapping(&discs, &ranks, p.max_overlap, p.prune_center_reach)
+                .into_iter()
+                .map(|i| {
+                    let m = &measured[i];
+                    let (c, r) = (m.circle.center_px, m.circle.radius_px);
+                    let mut d = Detection::new(m.center_m, m.score);
+                    d.diameter_m = m.diameter_m;
+                    d.bbox_px = PixelBox::new(c.x - r, c.y - r, c.x + r, c.y + r).ok();
+                    d.center_px = Some(c);
+                    d.radius_px = Some(r);
+                    d
+                })
+                .collect(),
+        )
     }
 }

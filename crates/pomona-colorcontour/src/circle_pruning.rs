@@ -176,11 +176,11 @@ mod tests {
         };
         // By score (support fraction) the fragment wins and the fruit is lost.
         assert_eq!(
-            prune_overlapping(&circles, &keys(PruneRank::Score), 0.4),
+            prune_overlapping(&circles, &keys(PruneRank::Score), 0.4, 0.8),
             vec![1]
         );
         assert_eq!(
-            prune_overlapping(&circles, &keys(PruneRank::ArcLength), 0.4),
+            prune_overlapping(&circles, &keys(PruneRank::ArcLength), 0.4, 0.8),
             vec![0]
         );
         // Two circles of one fruit with equal arcs: the one more inside the colour mask wins
@@ -193,7 +193,7 @@ mod tests {
         for rank in [PruneRank::Score, PruneRank::ArcLength] {
             let k = [rank.key(s_over, 24.0), rank.key(s_right, 20.0)];
             assert_eq!(
-                prune_overlapping(&[oversized, right], &k, 0.4),
+                prune_overlapping(&[oversized, right], &k, 0.4, 0.8),
                 vec![1],
                 "{rank:?}"
             );

@@ -19,11 +19,14 @@
 //! ([`Contour`]); concave and straight windows, the jump rule, wrap-around joining and the
 //! support score ([`contour_circles`]); overlap relative to the smaller circle
 //! ([`prune_overlapping`]); the size test before the overlap test, and 3D from depth instead of
-//! stereo ([`stages::FruitStage`], [`sphere_from_depth`]). Four more, each a parameter whose
+//! stereo ([`stages::FruitStage`], [`sphere_from_depth`]). More, each a parameter whose
 //! paper value restores the paper's step: hysteresis on the colour table ([`hysteresis_mask`]),
 //! a closing of the mask ([`close_mask`]), least-squares circles of each group's contour points
-//! ([`GroupCircle`], [`refine_circle`]) and merging of arcs that lie on one circle
-//! ([`merge_arcs`]). Not built here: stereo matching (§4).
+//! ([`GroupCircle`], [`refine_circle`]), merging of arcs that lie on one circle
+//! ([`merge_arcs`]), ranking overlapping circles by arc length ([`PruneRank`]) and taking them
+//! for one fruit only when their centres are close ([`clash`]); and one that is off by default,
+//! a correction of the fitted radii ([`RadiusCorrection`], fixed or learnt in training). Not
+//! built here: stereo matching (§4).
 //!
 //! Tracking during the arm's approach (§3.3) is [`ApproachTracker`]: a 5×5 colour check at the
 //! expected position, a four-direction edge scan and circle fit ([`scan_four_directions`],

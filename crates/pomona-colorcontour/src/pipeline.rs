@@ -365,6 +365,25 @@ mod tests {
     }
 
     #[test]
+    fn model_files_without_the_pruning_and_radius_settings_run_the_previous_behaviour() {
+        let mut json = serde_json::to_value(built_in()).unwrap();
+        let params = json["params"].as_object_mut().unwrap();
+        for key in [
+            "prune_rank",
+            "prune_center_reach",
+            "radius_correction",
+            "learn_radius_correction",
+        ] {
+            assert!(params.remove(key).is_some(), "{key}");
+        }
+        let old: ColorContourStageParams = serde_json::from_value(json).unwrap();
+        assert_eq!(old.params.prune_rank, crate::PruneRank::Score);
+        assert_eq!(old.params.prune_center_reach, 0.0);
+        assert_eq!(old.params.radius_correction, RadiusCorrection::NONE);
+        assert!(!old.params.learn_radius_correction);
+    }
+
+    #[test]
     fn the_built_in_model_runs_the_documented_defaults_and_bad_settings_are_named() {
         let stage = built_in();
         let defaults = ColorContourParams::default();
@@ -381,6 +400,9 @@ mod tests {
             stage.params.edge_fit.merge_max_rms,
             defaults.edge_fit.merge_max_rms
         );
+        assert_eq!(stage.params.prune_rank, defaults.prune_rank);
+        assert_eq!(stage.params.prune_center_reach, defaults.prune_center_reach);
+        assert_eq!(stage.params.radius_correction, RadiusCorrection::NONE);
         assert!(ColorContourDetector::new(&stage).is_ok());
         for (name, change) in [
             (
@@ -391,6 +413,12 @@ mod tests {
             ("color_grow_fraction", |p| p.color_grow_fraction = f64::NAN),
             ("edge_fit.merge_max_rms", |p| {
                 p.edge_fit.merge_max_rms = -0.1
+            }),
+            ("prune_center_reach", |p| p.prune_center_reach = -0.5),
+            ("prune_center_reach", |p| p.prune_center_reach = f64::NAN),
+            ("radius_correction", |p| p.radius_correction.scale = 0.0),
+            ("radius_correction", |p| {
+                p.radius_correction.offset_px = f64::INFINITY
             }),
         ] {
             let mut bad = stage.clone();

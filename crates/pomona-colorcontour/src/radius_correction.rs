@@ -259,6 +259,31 @@ mod tests {
     }
 
     #[test]
+    fn each_true_circle_takes_the_best_supported_circle_near_its_centre() {
+        let circle = |x: f64, r: f64, support: f64| ContourCircle {
+            center_px: Point2::new(x, 50.0),
+            radius_px: r,
+            support,
+        };
+        let truth = [
+            ImageCircle {
+                center_px: Point2::new(40.0, 50.0),
+                radius_px: 20.0,
+            },
+            ImageCircle {
+                center_px: Point2::new(200.0, 50.0),
+                radius_px: 20.0,
+            },
+        ];
+        let circles = [
+            circle(44.0, 21.0, 0.6), // within a quarter radius (5 px)
+            circle(43.0, 12.0, 0.3), // nearer, less support
+            circle(47.0, 25.0, 0.9), // best support, but 7 px off
+        ];
+        assert_eq!(radius_pairs(&circles, &truth), vec![(21.0, 20.0)]);
+    }
+
+    #[test]
     fn none_is_the_identity_and_bad_fits_are_refused() {
         assert_eq!(RadiusCorrection::NONE.apply(17.25), Some(17.25));
         assert_eq!(RadiusCorrection::default(), RadiusCorrection::NONE);

@@ -1,13 +1,17 @@
 //! Correcting the bias of fitted circle radii (not in seed 004).
 //!
 //! The circles of §3.2 are fitted to the outline of the colour mask, and that outline does not
-//! sit on the fruit's silhouette: pixels where fruit and background blend pass the colour test
-//! (more of them with the colour hysteresis, [`crate::hysteresis_mask`]), so the mask reaches
-//! past the silhouette, while the traced outline runs through the centres of the mask's outer
-//! pixels, half a pixel inside the mask's edge. On the synthetic oranges the net result is a
-//! circle a few per cent larger than the fruit, which matters twice: the size test (§3.2,
-//! 25–55 mm at the measured depth) rejects big fruit, and in the overlap pruning the oversized
+//! sit exactly on the fruit's silhouette. Pixels where fruit and background blend may pass the
+//! colour test (more of them with the colour hysteresis, [`crate::hysteresis_mask`]), which
+//! moves the mask's edge outwards. The traced outline runs through the centres of the mask's
+//! outer pixels, half a pixel inside that edge. A radius that is off matters twice: the size test
+//! (§3.2, 25–55 mm at the measured depth) rejects fruit, and in the overlap pruning an oversized
 //! circle covers its neighbour.
+//!
+//! Measured on the synthetic oranges (docs/results.md, "Circle size and the overlap pruning"),
+//! the two effects nearly cancel. Against the outline's half-width across the viewing ray
+//! ([`sphere_outline_circle`]), the circles are within a pixel. No correction improved
+//! detection, so the default is none.
 //!
 //! The correction is affine in the fitted radius, `r' = scale · r − offset_px`: a fixed offset
 //! models a boundary displaced by a constant distance (blur, threshold, pixel-centre tracing),
@@ -59,10 +63,10 @@ impl RadiusCorrection {
         self.scale.is_finite() && self.scale > 0.0 && self.offset_px.is_finite()
     }
 
-    /// The least-squares line from fitted to true radius over `(fitted_px, truth_px)` pairs;
-    /// with fewer than 20 pairs, or fitted radii that barely vary (then only the scale is fitted,
-    /// as the median of truth over fitted), the best it can do with what it has. `None` when
-    /// there are too few pairs or the line is not usable (non-positive scale).
+    /// The least-squares line from fitted to true radius over `(fitted_px, truth_px)` pairs
+    /// (pairs that are not finite and positive are skipped). When the fitted radii spread over
+    /// less than a pixel (standard deviation), or the line's scale is not positive, only a scale
+    /// is fitted: the median of true over fitted radius. `None` with fewer than 20 pairs.
     pub fn fit(pairs: &[(f64, f64)]) -> Option<Self> {
         let pairs: Vec<(f64, f64)> = pairs
             .iter()

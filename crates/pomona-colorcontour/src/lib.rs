@@ -19,11 +19,14 @@
 //! ([`Contour`]); concave and straight windows, the jump rule, wrap-around joining and the
 //! support score ([`contour_circles`]); overlap relative to the smaller circle
 //! ([`prune_overlapping`]); the size test before the overlap test, and 3D from depth instead of
-//! stereo ([`stages::FruitStage`], [`sphere_from_depth`]). Four more, each a parameter whose
+//! stereo ([`stages::FruitStage`], [`sphere_from_depth`]). More, each a parameter whose
 //! paper value restores the paper's step: hysteresis on the colour table ([`hysteresis_mask`]),
 //! a closing of the mask ([`close_mask`]), least-squares circles of each group's contour points
-//! ([`GroupCircle`], [`refine_circle`]) and merging of arcs that lie on one circle
-//! ([`merge_arcs`]). Not built here: stereo matching (§4).
+//! ([`GroupCircle`], [`refine_circle`]), merging of arcs that lie on one circle
+//! ([`merge_arcs`]), ranking overlapping circles by arc length ([`PruneRank`]) and taking them
+//! for one fruit only when their centres are close ([`clash`]); and one that is off by default,
+//! a correction of the fitted radii ([`RadiusCorrection`], fixed or learnt in training). Not
+//! built here: stereo matching (§4).
 //!
 //! Tracking during the arm's approach (§3.3) is [`ApproachTracker`]: a 5×5 colour check at the
 //! expected position, a four-direction edge scan and circle fit ([`scan_four_directions`],
@@ -47,6 +50,7 @@ mod mlp;
 mod params;
 mod pipeline;
 mod pixel_f1;
+mod radius_correction;
 mod spiral_search;
 pub mod stages;
 mod tracking;
@@ -56,7 +60,7 @@ pub use arc_half_angle::{arc_half_angle, arc_radius};
 pub use circle_in_space::{sphere_from_depth, sphere_from_size, SphereFromCircle};
 pub use circle_least_squares::{fit_circle, refine_circle, rms_distance};
 pub use circle_merging::merge_arcs;
-pub use circle_pruning::{disc_overlap_area, prune_overlapping};
+pub use circle_pruning::{clash, disc_overlap_area, prune_overlapping, PruneRank};
 pub use contour::{smooth_mask, trace_contours, Contour};
 pub use contour_circles::{
     contour_arcs, contour_circles, ContourArc, ContourCircle, EdgeFitParams, GroupCircle,
@@ -74,6 +78,7 @@ pub use pipeline::{
     ColorContourDetector, ColorContourPipeline, ColorContourStageParams, PIPELINE_NAME,
 };
 pub use pixel_f1::{best_f1_threshold, pixel_counts, value_histograms, PixelCounts};
+pub use radius_correction::{radius_pairs, sphere_outline_circle, RadiusCorrection};
 pub use spiral_search::{spiral_points, SpiralParams};
 pub use tracking::{ApproachTracker, TrackEstimate, TrackParams, TrackStatus};
 pub use training_pixels::{fruit_labels, training_pixels};

@@ -4,7 +4,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::{EdgeFitParams, MlpParams};
+use crate::{EdgeFitParams, MlpParams, PruneRank, RadiusCorrection};
 
 /// Parameters of every stage.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -44,11 +44,35 @@ pub struct ColorContourParams {
     pub mask_closing_px: usize,
     /// The adaptive edge fitting (Eq. 8).
     pub edge_fit: EdgeFitParams,
+    /// Correction of every fitted radius before the size test, the score and the overlap
+    /// pruning (not in the paper, see [`crate::RadiusCorrection`]); none (scale 1, offset 0) is
+    /// the paper's behaviour, what model files from before this setting mean, and the default:
+    /// fixed, learnt, shrinking or growing corrections all lowered recall on the tuning sets
+    /// (docs/results.md).
+    #[serde(default)]
+    pub radius_correction: RadiusCorrection,
+    /// Whether training replaces `radius_correction` by the one fitted on the training frames
+    /// (fitted against the outlines of their fruit, [`crate::RadiusCorrection::fit`]; default
+    /// off, see `radius_correction`).
+    #[serde(default)]
+    pub learn_radius_correction: bool,
     /// Circles need at least this support (arc spanned over circumference) to be reported.
     pub min_support: f64,
     /// Of two circles sharing more than this fraction of the smaller one's area, the weaker is
     /// dropped (paper: 40 %).
     pub max_overlap: f64,
+    /// Which of two overlapping circles is the stronger ([`crate::PruneRank`]): `score`
+    /// (support fraction × colour purity; what model files from before this setting mean) or
+    /// `arc-length` (arc in pixels × colour purity; default, chosen on orchard scenes (seed 600)
+    /// and `wide` D435 oranges (seed 610), docs/results.md).
+    #[serde(default)]
+    pub prune_rank: PruneRank,
+    /// Two overlapping circles are taken for one fruit only when their centres are closer than
+    /// this fraction of the larger radius (not in the paper, see [`crate::clash`]; 0 = the
+    /// overlap test alone, the paper's rule and what model files from before this setting
+    /// mean; default 0.8, chosen over 0.6–1 on the sets of `prune_rank`).
+    #[serde(default)]
+    pub prune_center_reach: f64,
     /// Allowed fruit radius at the measured depth, metres (paper: 25–55 mm for oranges).
     pub radius_range_m: (f64, f64),
     /// Camera-to-fruit distances, metres, that bound the radius in pixels of a circle without
@@ -72,8 +96,12 @@ impl Default for ColorContourParams {
             min_component_px: 40,
             mask_closing_px: 2,
             edge_fit: EdgeFitParams::default(),
+            radius_correction: RadiusCorrection::NONE,
+            learn_radius_correction: false,
             min_support: 0.15,
             max_overlap: 0.4,
+            prune_rank: PruneRank::ArcLength,
+            prune_center_reach: 0.8,
             radius_range_m: (0.025, 0.055),
             working_distance_m: (0.3, 2.0),
             prior_radius_m: 0.04,

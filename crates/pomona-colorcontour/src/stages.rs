@@ -134,15 +134,19 @@ fn color_purity(fruit: &[bool], width: usize, height: usize, c: &ContourCircle) 
     }
 }
 
-/// From circles to detections: support and size checks, score, overlap pruning, 3D.
+/// From circles to detections: support check, radius correction, size check, score, overlap
+/// pruning, 3D.
 ///
+/// * the radius is corrected first ([`crate::RadiusCorrection`]; none by default in old model
+///   files), and everything below uses the corrected circle;
 /// * score = support (arc spanned over circumference) × colour purity (fraction of the circle
 ///   that is fruit-coloured): a confidence-like value in [0, 1];
 /// * size (§3.2): with depth inside the circle, the fruit radius in metres must lie in
 ///   `radius_range_m`; without, the pixel radius must lie in the range those radii give over
 ///   `working_distance_m`. Checked *before* the overlap pruning (the paper does it after),
 ///   so an implausible circle cannot remove a plausible one;
-/// * overlap (§3.2): see [`crate::prune_overlapping`];
+/// * overlap (§3.2): see [`crate::prune_overlapping`], circles ranked by `prune_rank`
+///   ([`crate::PruneRank`]), pairs tested by [`crate::clash`] with `prune_center_reach`;
 /// * 3D: [`crate::sphere_from_depth`], or [`crate::sphere_from_size`] with `prior_radius_m`
 ///   when the circle has no depth (then `diameter_m` is `None`: it was not measured).
 ///
@@ -181,6 +185,10 @@ impl<'a> Stage<(&'a RgbdFrame, &'a [bool], &'a [ContourCircle]), Vec<Detection>>
             .iter()
             .filter(|c| c.support >= p.min_support)
             .filter_map(|c| {
+                let c = &ContourCircle {
+                    radius_px: p.radius_correction.apply(c.radius_px)?,
+                    ..*c
+                };
                 let (center_m, diameter_m) = match sphere_from_depth(
                     frame,
                     fruit,
@@ -216,19 +224,24 @@ impl<'a> Stage<(&'a RgbdFrame, &'a [bool], &'a [ContourCircle]), Vec<Detection>>
             .iter()
             .map(|m| (m.circle.center_px, m.circle.radius_px))
             .collect();
-        let scores: Vec<f64> = measured.iter().map(|m| m.score).collect();
-        Ok(prune_overlapping(&discs, &scores, p.max_overlap)
-            .into_iter()
-            .map(|i| {
-                let m = &measured[i];
-                let (c, r) = (m.circle.center_px, m.circle.radius_px);
-                let mut d = Detection::new(m.center_m, m.score);
-                d.diameter_m = m.diameter_m;
-                d.bbox_px = PixelBox::new(c.x - r, c.y - r, c.x + r, c.y + r).ok();
-                d.center_px = Some(c);
-                d.radius_px = Some(r);
-                d
-            })
-            .collect())
+        let ranks: Vec<f64> = measured
+            .iter()
+            .map(|m| p.prune_rank.key(m.score, m.circle.radius_px))
+            .collect();
+        Ok(
+            prune_overlapping(&discs, &ranks, p.max_overlap, p.prune_center_reach)
+                .into_iter()
+                .map(|i| {
+                    let m = &measured[i];
+                    let (c, r) = (m.circle.center_px, m.circle.radius_px);
+                    let mut d = Detection::new(m.center_m, m.score);
+                    d.diameter_m = m.diameter_m;
+                    d.bbox_px = PixelBox::new(c.x - r, c.y - r, c.x + r, c.y + r).ok();
+                    d.center_px = Some(c);
+                    d.radius_px = Some(r);
+                    d
+                })
+                .collect(),
+        )
     }
 }

@@ -1,6 +1,8 @@
 //! Trains the model embedded in the binary as color-contour's default: synthetic oranges,
 //! fixed seeds — 40 `wide` frames (randomised leaves, backgrounds, light, distances 0.3–1.6 m,
-//! ripe, green, blushed and yellow fruit; 24 Kinect v2, 16 D435) — with a confidence
+//! ripe, green, blushed and yellow fruit; 24 Kinect v2, 16 D435) and 30 `orchard` frames (citrus
+//! trees, touching clusters, orange to yellow-green fruit; 6 Kinect v2 frames under each of the
+//! five light presets) — with a confidence
 //! calibration and operating threshold fitted on 3 held-out folds
 //! (`pomona_pipeline::train_calibrated`). Then prints the colour classifier's pixel precision,
 //! recall and F1 on held-out orange frames: 16 `wide` D435 frames, 8 `narrow` Kinect v2 frames
@@ -10,11 +12,8 @@
 //! cargo run --release -p pomona-colorcontour --example train_color_contour_default -- crates/pomona-colorcontour/models
 //! ```
 //!
-//! With `--orchard` after the folder, 30 `orchard` frames are added to the training set (citrus
-//! trees, touching clusters, orange to yellow-green fruit; 6 Kinect v2 frames under each of the
-//! five light presets). That model finds more oranges in dim, harsh and backlit orchards but
-//! places its circles less precisely, which costs the stereo matching and the tracker; it is
-//! not the built-in one (docs/results.md, "Training on orchard light").
+//! With `--no-orchard` after the folder, the 40 `wide` frames alone (the built-in recipe until 3
+//! December; docs/results.md, "Training on orchard light", explains the change).
 
 use pomona_colorcontour::{pixel_counts, ColorContourPipeline, ColorContourStageParams, HSigmaLut};
 use pomona_pipeline::{
@@ -24,7 +23,7 @@ use pomona_synth::{
     CameraPreset, Domain, FruitChoice, FruitKind, LightPreset, NoiseModel, SceneSpec,
 };
 
-/// `wide` training frames per camera; seeds 1400–1401 and 1420–1424 (orchard, with `--orchard`)
+/// `wide` training frames per camera; seeds 1400–1401 and 1420–1424 (orchard, unless `--no-orchard`)
 /// are reserved for this model, 1410–1413 and 1430–1434 for the held-out pixel scores.
 const CAMERAS: [(CameraPreset, usize, u64); 2] = [
     (CameraPreset::KinectV2, 24, 1400),
@@ -38,7 +37,7 @@ const ORCHARD_LIGHTS: [(LightPreset, u64, u64); 5] = [
     (LightPreset::LowSun, 1423, 1433),
     (LightPreset::Backlight, 1424, 1434),
 ];
-/// `orchard` frames per light preset, for the held-out pixel scores and (with `--orchard`)
+/// `orchard` frames per light preset, for the held-out pixel scores and (unless `--no-orchard`)
 /// training.
 const ORCHARD_FRAMES: usize = 6;
 const TRAIN_SEED: u64 = 1;
@@ -106,12 +105,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             .unwrap_or_else(|| "crates/pomona-colorcontour/models".into()),
     );
     let with_orchard = match args.next().as_deref() {
-        None => false,
-        Some("--orchard") => true,
+        None => true,
+        Some("--no-orchard") => false,
         Some(other) => {
             return Err(format!(
-            "unexpected argument `{other}`; usage: train_color_contour_default [DIR] [--orchard]"
-        )
+                "unexpected argument `{other}`; usage: train_color_contour_default [DIR] \
+                 [--no-orchard]"
+            )
             .into())
         }
     };

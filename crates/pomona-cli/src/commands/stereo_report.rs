@@ -16,7 +16,7 @@
 use std::collections::{BTreeMap, HashSet};
 
 use anyhow::{Context, Result};
-use pomona_arm::{RefinementOutcome, RotatedStereo};
+use pomona_arm::{EvidenceCounts, RefinementOutcome, RotatedStereo};
 use pomona_core::nalgebra::{Point2, Point3};
 use pomona_core::{FrameTruth, ImageCircle, PinholeCamera};
 use pomona_io::Dataset;
@@ -34,6 +34,8 @@ pub const FAR_DEPTH_M: f64 = 0.8;
 pub struct StereoFrameOutcome {
     /// Frame stem.
     pub stem: String,
+    /// What the matching evidence did (all zero when off).
+    pub evidence: EvidenceCounts,
     /// Centres of the circles detected in the primary view.
     pub primary_centres: Vec<Point2<f64>>,
     /// Centres detected in the stereo view.
@@ -67,6 +69,17 @@ pub struct RefinementCounts {
     pub fallback: BTreeMap<&'static str, usize>,
 }
 
+/// Candidate pairs scored, left unscored and removed by the matching evidence.
+#[derive(Debug, Clone, Copy, Default, Serialize)]
+pub struct EvidenceReport {
+    /// Candidate pairs inside the Eq. 10 windows.
+    pub candidates: usize,
+    /// Of those, pairs whose NCC could not be computed.
+    pub unscored: usize,
+    /// Pairs removed by the NCC floor.
+    pub removed: usize,
+}
+
 /// Matching scores.
 #[derive(Debug, Clone, Default, Serialize)]
 pub struct MatchingScore {
@@ -80,6 +93,16 @@ pub struct MatchingScore {
     pub both_detected: usize,
     /// `correct / pairs_of_fruit`.
     pub precision: Option<f64>,
+    /// Correct pairs beyond the first of their fruit (duplicated circles paired again).
+    pub repeated: usize,
+    /// Pairs of two different fruit, by cause: `duplicate` (the primary fruit or the stereo fruit
+    /// has another circle in its view), `partner_missing` (the primary fruit has no circle in the
+    /// stereo view), `rival` (neither: the relaxation preferred a neighbour).
+    pub wrong_by_cause: BTreeMap<&'static str, usize>,
+    /// Fruit detected in both views but not paired correctly, by what became of their circles:
+    /// `with_another_fruit` (a circle of the fruit is in a pair of two different fruit),
+    /// `with_a_false_detection` (else, in a pair with a detection of no fruit), `unpaired`.
+    pub missed_by_cause: BTreeMap<&'static str, usize>,
     /// Distinct fruit paired correctly over `both_detected`.
     pub recall: Option<f64>,
 }
@@ -148,6 +171,9 @@ pub struct StereoReport {
     pub method: StereoMethod,
     /// The appearance refinement's counts; `null` without `--refine`.
     pub refinement: Option<RefinementCounts>,
+    /// What the matching evidence (`--match-*`) did; absent when it is off.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub matching_evidence: Option<EvidenceReport>,
     /// Half-angle between the shots, degrees.
     pub beta_deg: f64,
     /// Pivot distance, metres.
@@ -215,7 +241,7 @@ impl StereoReport {
     pub fn measure(
         rig: &RotatedStereo,
         method: StereoMethod,
-        refine: bool,
+        (refine, evidence): (bool, bool),
         views: (&Dataset, &Dataset),
         outcomes: &[StereoFrameOutcome],
     ) -> Result<Self> {
@@ -245,6 +271,15 @@ impl StereoReport {
         }
         let mut report = tally.report(rig, method);
         report.refinement = refine.then_some(counts);
+        report.matching_evidence = evidence.then(|| {
+            let mut e = EvidenceReport::default();
+            for o in outcomes {
+                e.candidates += o.evidence.candidates;
+                e.unscored += o.evidence.unscored;
+                e.removed += o.evidence.removed;
+            }
+            e
+        });
         Ok(report)
     }
 
@@ -331,31 +366,62 @@ impl Tally {
         let camera = &rig.camera;
         let (cp, cs) = (truth_circles(tp, camera), truth_circles(ts, camera));
         let ids = |circles: &[(String, ImageCircle)], centres: &[Point2<f64>]| {
-            centres
-                .iter()
-                .filter_map(|c| identity(circles, c))
-                .collect::<HashSet<String>>()
+            let mut n = BTreeMap::<String, usize>::new();
+            for id in centres.iter().filter_map(|c| identity(circles, c)) {
+                *n.entry(id).or_default() += 1;
+            }
+            n
         };
-        let both: HashSet<String> = ids(&cp, &outcome.primary_centres)
-            .intersection(&ids(&cs, &outcome.stereo_centres))
+        let (in_primary, in_stereo) = (
+            ids(&cp, &outcome.primary_centres),
+            ids(&cs, &outcome.stereo_centres),
+        );
+        let both: HashSet<String> = in_primary
+            .keys()
+            .filter(|id| in_stereo.contains_key(*id))
             .cloned()
             .collect();
         self.matching.both_detected += both.len();
         let centre_of = truth_centres(tp);
         let mut paired = HashSet::new();
+        // Per fruit id: in a pair with another fruit, in a pair with a false detection.
+        let mut fates = BTreeMap::<String, (bool, bool)>::new();
         for pair in &outcome.pairs {
             let (p, s, located) = (&pair.primary_px, &pair.stereo_px, &pair.center_m);
             self.matching.pairs += 1;
-            let (Some(a), Some(b)) = (identity(&cp, p), identity(&cs, &pair.stereo_circle_px))
-            else {
+            let (ia, ib) = (identity(&cp, p), identity(&cs, &pair.stereo_circle_px));
+            for (own, other) in [(&ia, &ib), (&ib, &ia)] {
+                if let Some(id) = own {
+                    let fate = fates.entry(id.clone()).or_default();
+                    match other {
+                        Some(o) if o != id => fate.0 = true,
+                        None => fate.1 = true,
+                        Some(_) => {}
+                    }
+                }
+            }
+            let (Some(a), Some(b)) = (ia, ib) else {
                 continue;
             };
             self.matching.pairs_of_fruit += 1;
             if a != b {
+                let cause = if in_primary.get(&a).is_some_and(|&n| n > 1)
+                    || in_stereo.get(&b).is_some_and(|&n| n > 1)
+                {
+                    "duplicate"
+                } else if !in_stereo.contains_key(&a) {
+                    "partner_missing"
+                } else {
+                    "rival"
+                };
+                *self.matching.wrong_by_cause.entry(cause).or_default() += 1;
                 continue;
             }
             self.matching.correct += 1;
             let first = paired.insert(a.clone());
+            if !first {
+                self.matching.repeated += 1;
+            }
             if let (true, Some(truth)) = (first, centre_of.get(a.as_str())) {
                 self.errors_by_depth
                     .push((truth.z, (located - truth).norm() * 1e3));
@@ -366,6 +432,14 @@ impl Tally {
             }
         }
         self.correct_fruit += paired.len();
+        for id in both.difference(&paired) {
+            let cause = match fates.get(id) {
+                Some((true, _)) => "with_another_fruit",
+                Some((false, true)) => "with_a_false_detection",
+                _ => "unpaired",
+            };
+            *self.matching.missed_by_cause.entry(cause).or_default() += 1;
+        }
     }
 
     /// Locates again every fruit centre both views' truth has, from its exact projections.
@@ -432,6 +506,7 @@ impl Tally {
         StereoReport {
             method,
             refinement: None,
+            matching_evidence: None,
             beta_deg: rig.beta_rad.to_degrees(),
             pivot_m: rig.pivot_distance_m,
             frames: self.frames,

@@ -13,7 +13,9 @@
 //!   accounted for (the pair, triangulated, lies at different distances from the two lenses).
 //!
 //! How they enter the matching ([`PairEvidence::apply`] on the [`DisparityMatrix`]):
-//! * a **floor**: candidates whose NCC is below `min_ncc` are removed before the relaxation;
+//! * a **floor**: candidates whose NCC is below `min_ncc` are removed before the relaxation
+//!   (optionally only those whose radii also disagree by more than `floor_radius_tolerance`, and
+//!   then also those whose NCC is unknown);
 //! * a **cost** added to σ = (ΔX − ΔX̄)² (pixels²): `ncc_weight_px2 · (1 − NCC)` and
 //!   `radius_weight_px2 · ln(r_stereo / r_expected)²`.
 //!
@@ -32,6 +34,10 @@ pub struct PairEvidence {
     /// Candidates whose NCC is below this floor are removed before the relaxation; `None`: no
     /// floor. In `[-1, 1]`.
     pub min_ncc: Option<f64>,
+    /// With a floor: remove a candidate only when its radii also disagree,
+    /// `|ln(r_stereo / r_expected)|` above this (and then also when its NCC is unknown);
+    /// `None`: the NCC alone decides. Non-negative.
+    pub floor_radius_tolerance: Option<f64>,
     /// Weight of the appearance cost `1 − NCC` (in `[0, 2]`), pixels². Non-negative; 0 = off.
     pub ncc_weight_px2: f64,
     /// Weight of the size cost `ln(r_stereo / r_expected)²`, pixels². Non-negative; 0 = off.
@@ -46,6 +52,7 @@ impl Default for PairEvidence {
     fn default() -> Self {
         Self {
             min_ncc: None,
+            floor_radius_tolerance: None,
             ncc_weight_px2: 0.0,
             radius_weight_px2: 0.0,
             appearance: DisparityRefinement::default(),
@@ -62,21 +69,48 @@ pub struct PairScore {
     pub radius_log_ratio: Option<f64>,
 }
 
-/// Counts of [`PairEvidence::apply`].
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
-pub struct EvidenceCounts {
+/// What [`PairEvidence::apply`] did.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct EvidenceOutcome {
     /// Candidates inside the windows.
     pub candidates: usize,
     /// Of those, candidates whose NCC could not be computed.
     pub unscored: usize,
     /// Candidates removed by the NCC floor.
     pub removed: usize,
+    /// Every candidate's score: `(row, column, score)`, removed ones included.
+    pub scores: Vec<(usize, usize, PairScore)>,
+}
+
+impl EvidenceOutcome {
+    /// The score of candidate `(l, r)`, if it was scored.
+    pub fn score(&self, l: usize, r: usize) -> Option<PairScore> {
+        self.scores
+            .iter()
+            .find(|(a, b, _)| (*a, *b) == (l, r))
+            .map(|x| x.2)
+    }
 }
 
 impl PairEvidence {
     /// Whether no evidence is used (then [`PairEvidence::apply`] leaves the matrix alone).
     pub fn is_off(&self) -> bool {
         self.min_ncc.is_none() && self.ncc_weight_px2 == 0.0 && self.radius_weight_px2 == 0.0
+    }
+
+    /// Whether the floor removes a candidate of `score`: its NCC is below `min_ncc` and, with
+    /// `floor_radius_tolerance`, also (NCC unknown or below) its radii disagree by more than it.
+    fn fails_floor(&self, score: &PairScore) -> bool {
+        let Some(floor) = self.min_ncc else {
+            return false;
+        };
+        match self.floor_radius_tolerance {
+            None => score.ncc.is_some_and(|n| n < floor),
+            Some(tolerance) => {
+                score.ncc.is_none_or(|n| n < floor)
+                    && score.radius_log_ratio.is_some_and(|r| r.abs() > tolerance)
+            }
+        }
     }
 
     fn needs_ncc(&self) -> bool {
@@ -98,6 +132,10 @@ impl PairEvidence {
             }
         }
         for (name, value) in [
+            (
+                "floor_radius_tolerance",
+                self.floor_radius_tolerance.unwrap_or(0.0),
+            ),
             ("ncc_weight_px2", self.ncc_weight_px2),
             ("radius_weight_px2", self.radius_weight_px2),
         ] {
@@ -156,8 +194,8 @@ impl PairEvidence {
         rig: &RotatedStereo,
         images: (&ColorImage, &ColorImage),
         (primary, stereo): (&[ImageCircle], &[ImageCircle]),
-    ) -> Result<EvidenceCounts, ArmError> {
-        let mut counts = EvidenceCounts::default();
+    ) -> Result<EvidenceOutcome, ArmError> {
+        let mut counts = EvidenceOutcome::default();
         if self.is_off() {
             return Ok(counts);
         }
@@ -173,15 +211,14 @@ impl PairEvidence {
         for (l, r) in candidates {
             counts.candidates += 1;
             let score = self.score(rig, images, &primary[l], &stereo[r])?;
+            counts.scores.push((l, r, score));
             if self.needs_ncc() && score.ncc.is_none() {
                 counts.unscored += 1;
             }
-            if let (Some(floor), Some(ncc)) = (self.min_ncc, score.ncc) {
-                if ncc < floor {
-                    matrix.remove(l, r);
-                    counts.removed += 1;
-                    continue;
-                }
+            if self.fails_floor(&score) {
+                matrix.remove(l, r);
+                counts.removed += 1;
+                continue;
             }
             let mut cost = 0.0;
             if self.ncc_weight_px2 > 0.0 {
@@ -336,7 +373,7 @@ mod tests {
         }
     }
 
-    fn run(s: &Scene, evidence: &PairEvidence) -> (StereoMatching, EvidenceCounts) {
+    fn run(s: &Scene, evidence: &PairEvidence) -> (StereoMatching, EvidenceOutcome) {
         let centres = |c: &[ImageCircle]| c.iter().map(|c| c.center_px).collect::<Vec<_>>();
         let mut matrix =
             DisparityMatrix::from_centres(&centres(&s.primary), &centres(&s.stereo), &s.windows);
@@ -357,7 +394,7 @@ mod tests {
         // The seed's relaxation: A takes B's stereo circle, B goes unpaired.
         let (paper, counts) = run(&s, &PairEvidence::default());
         assert_eq!(pairs(&paper), [(0, 0), (2, 1)], "{paper:?}");
-        assert_eq!(counts, EvidenceCounts::default());
+        assert_eq!(counts, EvidenceOutcome::default());
         // The NCC of the wrong candidate is clearly below the right one's.
         let e = PairEvidence {
             ncc_weight_px2: 1000.0,
@@ -372,6 +409,8 @@ mod tests {
         let (cost, counts) = run(&s, &e);
         assert_eq!(pairs(&cost), [(1, 0), (2, 1)], "{cost:?}");
         assert_eq!((counts.candidates, counts.removed), (3, 0));
+        assert_eq!(counts.score(0, 0).and_then(|s| s.ncc), Some(wrong));
+        assert_eq!(counts.score(0, 1), None);
         // As a floor: A's candidate is removed before the relaxation.
         let floor = PairEvidence {
             min_ncc: Some(0.5 * (wrong + right)),

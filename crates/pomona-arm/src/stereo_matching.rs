@@ -457,6 +457,27 @@ mod tests {
     }
 
     #[test]
+    fn a_duplicated_circle_pairs_its_fruit_once() {
+        // Fruit A has two primary circles (rows 0 and 1, disparities 40 and 41.5 to its one
+        // stereo circle, column 0); fruit B (row 2, column 1) is also in the window of the
+        // duplicate (30). The duplicate with the larger deviation loses column 0 and its
+        // candidate for B is dropped by Eq. 12, so A pairs once and B keeps its partner.
+        let m = DisparityMatrix::from_rows(&[
+            vec![Some(40.0)],
+            vec![Some(41.5), Some(30.0)],
+            vec![None, Some(38.0)],
+        ])
+        .relax(&RelaxationParams::default());
+        assert_eq!(pairs(&m), [(0, 0), (2, 1)]);
+        // Without B's primary circle the duplicate's only remaining candidate is B's stereo
+        // circle, which nobody contests: disparity alone cannot refuse it (the appearance floor
+        // of `PairEvidence` can).
+        let m = DisparityMatrix::from_rows(&[vec![Some(40.0)], vec![Some(41.5), Some(30.0)]])
+            .relax(&RelaxationParams::default());
+        assert_eq!(pairs(&m), [(0, 0), (1, 1)]);
+    }
+
+    #[test]
     fn empty_and_one_sided_inputs() {
         let m = DisparityMatrix::from_rows(&[]).relax(&RelaxationParams::default());
         assert_eq!(m.stop, RelaxationStop::Empty);

@@ -13,9 +13,7 @@
 //!   accounted for (the pair, triangulated, lies at different distances from the two lenses).
 //!
 //! How they enter the matching ([`PairEvidence::apply`] on the [`DisparityMatrix`]):
-//! * a **floor**: candidates whose NCC is below `min_ncc` are removed before the relaxation
-//!   (optionally only those whose radii also disagree by more than `floor_radius_tolerance`, and
-//!   then also those whose NCC is unknown);
+//! * a **floor**: candidates whose NCC is below `min_ncc` are removed before the relaxation;
 //! * a **cost** added to σ = (ΔX − ΔX̄)² (pixels²): `ncc_weight_px2 · (1 − NCC)` and
 //!   `radius_weight_px2 · ln(r_stereo / r_expected)²`.
 //!
@@ -34,10 +32,6 @@ pub struct PairEvidence {
     /// Candidates whose NCC is below this floor are removed before the relaxation; `None`: no
     /// floor. In `[-1, 1]`.
     pub min_ncc: Option<f64>,
-    /// With a floor: remove a candidate only when its radii also disagree,
-    /// `|ln(r_stereo / r_expected)|` above this (and then also when its NCC is unknown);
-    /// `None`: the NCC alone decides. Non-negative.
-    pub floor_radius_tolerance: Option<f64>,
     /// Weight of the appearance cost `1 − NCC` (in `[0, 2]`), pixels². Non-negative; 0 = off.
     pub ncc_weight_px2: f64,
     /// Weight of the size cost `ln(r_stereo / r_expected)²`, pixels². Non-negative; 0 = off.
@@ -52,7 +46,6 @@ impl Default for PairEvidence {
     fn default() -> Self {
         Self {
             min_ncc: None,
-            floor_radius_tolerance: None,
             ncc_weight_px2: 0.0,
             radius_weight_px2: 0.0,
             appearance: DisparityRefinement::default(),
@@ -98,19 +91,10 @@ impl PairEvidence {
         self.min_ncc.is_none() && self.ncc_weight_px2 == 0.0 && self.radius_weight_px2 == 0.0
     }
 
-    /// Whether the floor removes a candidate of `score`: its NCC is below `min_ncc` and, with
-    /// `floor_radius_tolerance`, also (NCC unknown or below) its radii disagree by more than it.
+    /// Whether the floor removes a candidate of `score`: its NCC is known and below `min_ncc`.
     fn fails_floor(&self, score: &PairScore) -> bool {
-        let Some(floor) = self.min_ncc else {
-            return false;
-        };
-        match self.floor_radius_tolerance {
-            None => score.ncc.is_some_and(|n| n < floor),
-            Some(tolerance) => {
-                score.ncc.is_none_or(|n| n < floor)
-                    && score.radius_log_ratio.is_some_and(|r| r.abs() > tolerance)
-            }
-        }
+        self.min_ncc
+            .is_some_and(|floor| score.ncc.is_some_and(|n| n < floor))
     }
 
     fn needs_ncc(&self) -> bool {
@@ -132,10 +116,6 @@ impl PairEvidence {
             }
         }
         for (name, value) in [
-            (
-                "floor_radius_tolerance",
-                self.floor_radius_tolerance.unwrap_or(0.0),
-            ),
             ("ncc_weight_px2", self.ncc_weight_px2),
             ("radius_weight_px2", self.radius_weight_px2),
         ] {
@@ -236,7 +216,11 @@ impl PairEvidence {
 /// `ln(r_stereo / r_expected)`: the stereo radius against the primary circle's angular size seen
 /// from the stereo lens, the pair triangulated; `None` when it does not triangulate or a radius
 /// is not positive.
-fn radius_log_ratio(rig: &RotatedStereo, primary: &ImageCircle, stereo: &ImageCircle) -> Option<f64> {
+fn radius_log_ratio(
+    rig: &RotatedStereo,
+    primary: &ImageCircle,
+    stereo: &ImageCircle,
+) -> Option<f64> {
     if !(primary.radius_px > 0.0 && stereo.radius_px > 0.0) {
         return None;
     }
@@ -362,7 +346,11 @@ mod tests {
         let ((pa, _), (pb, sb), (pc, sc)) = (project(&a), project(&b), project(&c));
         Scene {
             images,
-            primary: vec![circle(&rig, pa, &a), circle(&rig, pb, &b), circle(&rig, pc, &c)],
+            primary: vec![
+                circle(&rig, pa, &a),
+                circle(&rig, pb, &b),
+                circle(&rig, pc, &c),
+            ],
             stereo: vec![circle(&rig, sb, &b), circle(&rig, sc, &c)],
             windows: MatchingWindows {
                 min_disparity_px: 20.0,
@@ -401,8 +389,12 @@ mod tests {
             ..PairEvidence::default()
         };
         let images = (&s.images.0, &s.images.1);
-        let wrong = e.score(&s.rig, images, &s.primary[0], &s.stereo[0]).unwrap();
-        let right = e.score(&s.rig, images, &s.primary[1], &s.stereo[0]).unwrap();
+        let wrong = e
+            .score(&s.rig, images, &s.primary[0], &s.stereo[0])
+            .unwrap();
+        let right = e
+            .score(&s.rig, images, &s.primary[1], &s.stereo[0])
+            .unwrap();
         let (wrong, right) = (wrong.ncc.unwrap(), right.ncc.unwrap());
         assert!(right > 0.9 && wrong < right - 0.3, "{wrong} vs {right}");
         // As a cost: B keeps its own partner, A stays unpaired.

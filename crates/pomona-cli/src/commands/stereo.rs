@@ -25,8 +25,8 @@ use anyhow::{bail, Context, Result};
 use clap::ValueEnum;
 use pomona::{Detection, Detector};
 use pomona_arm::{
-    DisparityMatrix, DisparityRefinement, MatchingWindows, PairEvidence,
-    RefinementOutcome, RelaxationParams, RotatedStereo, StereoMatching,
+    DisparityMatrix, DisparityRefinement, MatchingWindows, PairEvidence, RefinementOutcome,
+    RelaxationParams, RotatedStereo, StereoMatching,
 };
 use pomona_core::nalgebra::{Point2, Point3};
 use pomona_core::{ColorImage, DepthImage, ImageCircle, RgbdFrame};
@@ -90,11 +90,6 @@ pub struct StereoArgs {
     /// below this floor before the relaxation. Default: no floor (the seed's matching).
     #[arg(long, value_name = "NCC")]
     pub match_min_ncc: Option<f64>,
-    /// Matching: with --match-min-ncc, remove only candidates whose radii also disagree,
-    /// |ln(r_stereo / r_expected)| above this (then also those whose NCC cannot be computed).
-    /// Default: the NCC alone decides.
-    #[arg(long, value_name = "LN", requires = "match_min_ncc")]
-    pub match_floor_radius_tol: Option<f64>,
     /// Matching: weight (pixels²) of the appearance cost 1 − NCC added to each candidate's
     /// squared disparity deviation in the relaxation. 0 (default) = the seed's matching.
     #[arg(long, value_name = "PX2", default_value_t = PairEvidence::default().ncc_weight_px2)]
@@ -375,7 +370,6 @@ pub fn run(args: &StereoArgs) -> Result<()> {
         .transpose()?;
     let evidence = PairEvidence {
         min_ncc: args.match_min_ncc,
-        floor_radius_tolerance: args.match_floor_radius_tol,
         ncc_weight_px2: args.match_ncc_weight,
         radius_weight_px2: args.match_radius_weight,
         appearance: DisparityRefinement {

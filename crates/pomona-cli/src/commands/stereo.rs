@@ -12,7 +12,11 @@
 //! ([`pomona_arm::DisparityRefinement`], beyond the seed: the primary view's patch of the fruit is
 //! found in the stereo image to sub-pixel; the circle centres are kept where it does not match
 //! well). It is off by default: it helped at β = 2° and 8° and not at 4° (docs/results.md), and on
-//! flat, textureless discs it can accept a wrong peak. The detection files have
+//! flat, textureless discs it can accept a wrong peak. With `--match-min-ncc` (a floor) or
+//! `--match-ncc-weight` / `--match-radius-weight` (costs added to the relaxation's σ), every
+//! candidate pair is also scored by appearance and size before the relaxation
+//! ([`pomona_arm::PairEvidence`], beyond the seed; all off by default: the seed's matching bit for
+//! bit). The detection files have
 //! the format of `pomona detect`, so `pomona eval --data DIR` scores them against the primary
 //! view's truth. A fruit's diameter is its primary circle's radius scaled to the located depth.
 //!

@@ -254,7 +254,8 @@ mod tests {
         RotatedStereo::new(4f64.to_radians(), 0.3, camera).unwrap()
     }
 
-    /// Textured spheres (centre, texture frequency) before a leafy backdrop 2.5 m away, ray-cast
+    /// Textured spheres (centre, texture frequency) before a backdrop 2.5 m away of about the
+    /// fruit's mean colour (so that the texture, not the silhouette, tells fruit apart), ray-cast
     /// into the view reached by `view_from_camera`, 2×2 supersampled. The texture and shading
     /// are fixed on the surfaces, so both views see the same fruit; fruit of different
     /// frequencies look different.
@@ -287,18 +288,18 @@ mod tests {
                         let at = origin + dir * t;
                         let normal = (at - centre) / RADIUS_M;
                         let light = Vector3::new(-0.3, -0.5, -0.8).normalize();
-                        let shade = 0.55 + 0.45 * normal.dot(&light).max(0.0);
+                        let shade = 0.8 + 0.2 * normal.dot(&light).max(0.0);
                         let pattern = (normal.x * freq).sin() * (normal.y * 0.7 * freq).cos();
                         [
-                            200.0 * shade + 40.0 * pattern,
-                            110.0 * shade + 30.0 * pattern,
-                            20.0,
+                            180.0 * shade + 70.0 * pattern,
+                            100.0 * shade + 50.0 * pattern,
+                            30.0,
                         ]
                     } else {
                         let t = (2.5 - origin.z) / dir.z;
                         let at = origin + dir * t;
                         let leaf = (at.x * 90.0).sin() + (at.y * 70.0).cos();
-                        [40.0 + 10.0 * leaf, 90.0 + 20.0 * leaf, 30.0]
+                        [150.0 + 8.0 * leaf, 85.0 + 8.0 * leaf, 30.0]
                     };
                     for c in 0..3 {
                         sum[c] += colour[c] / 4.0;

@@ -17,6 +17,11 @@
 //! * a **cost** added to σ = (ΔX − ΔX̄)² (pixels²): `ncc_weight_px2 · (1 − NCC)` and
 //!   `radius_weight_px2 · ln(r_stereo / r_expected)²`.
 //!
+//! Limits (measured in docs/results.md): a right candidate can score low (a leaf in front in one
+//! view), and a neighbour of the same size against contrasting foliage shares the silhouette and
+//! shading of the patch and can score high; the detector's radii are too noisy for the size cue
+//! to help.
+//!
 //! A candidate whose NCC cannot be computed (a flat patch, a sweep leaving the image, no point in
 //! front of both views) is never removed and costs as NCC 0 ("no agreement shown"); a candidate
 //! that does not triangulate has no size cost. With everything off ([`PairEvidence::is_off`],
@@ -175,9 +180,9 @@ impl PairEvidence {
         images: (&ColorImage, &ColorImage),
         (primary, stereo): (&[ImageCircle], &[ImageCircle]),
     ) -> Result<EvidenceOutcome, ArmError> {
-        let mut counts = EvidenceOutcome::default();
+        let mut outcome = EvidenceOutcome::default();
         if self.is_off() {
-            return Ok(counts);
+            return Ok(outcome);
         }
         self.validate()?;
         if matrix.shape() != (primary.len(), stereo.len()) {
@@ -189,15 +194,15 @@ impl PairEvidence {
         }
         let candidates: Vec<(usize, usize)> = matrix.candidates().map(|(l, r, _)| (l, r)).collect();
         for (l, r) in candidates {
-            counts.candidates += 1;
+            outcome.candidates += 1;
             let score = self.score(rig, images, &primary[l], &stereo[r])?;
-            counts.scores.push((l, r, score));
+            outcome.scores.push((l, r, score));
             if self.needs_ncc() && score.ncc.is_none() {
-                counts.unscored += 1;
+                outcome.unscored += 1;
             }
             if self.fails_floor(&score) {
                 matrix.remove(l, r);
-                counts.removed += 1;
+                outcome.removed += 1;
                 continue;
             }
             let mut cost = 0.0;
@@ -209,7 +214,7 @@ impl PairEvidence {
             }
             matrix.add_cost(l, r, cost);
         }
-        Ok(counts)
+        Ok(outcome)
     }
 }
 

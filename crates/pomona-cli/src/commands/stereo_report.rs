@@ -560,7 +560,9 @@ impl Tally {
             }
         }
         self.correct_fruit += paired.len();
-        for id in both.difference(&paired) {
+        let mut missed: Vec<&String> = both.difference(&paired).collect();
+        missed.sort();
+        for id in missed {
             let cause = match fates.get(id) {
                 Some((true, _)) => "with_another_fruit",
                 Some((false, true)) => "with_a_false_detection",

@@ -19,7 +19,9 @@
 //! Eq. 10 windows of [`MatchingWindows`]) and located by Eq. 18 or by triangulation. Beyond
 //! the seed, [`DisparityRefinement`] refines a matched pair's stereo-view centre to sub-pixel
 //! by finding the primary view's patch of the fruit in the stereo image (NCC over a sphere
-//! sweep), since the two circle centres' independent errors dominate the depth error.
+//! sweep), since the two circle centres' independent errors dominate the depth error, and
+//! [`PairEvidence`] can give the relaxation more evidence than disparity (the same sweep's NCC of
+//! every candidate pair, and the agreement of the two radii), as a floor or a cost.
 //!
 //! Seeing and reaching (§4.2): [`ArmSimulation`] is the robot in numbers — the camera on the
 //! arm takes two shots rotated ±β about the hub, a target projects to pixel coordinates in both,
@@ -49,6 +51,7 @@ mod matching_windows;
 mod motion_model;
 mod network_training;
 mod nominal_mapping;
+mod pair_evidence;
 mod plan_problem;
 mod random_targets;
 mod rotated_stereo;
@@ -70,6 +73,7 @@ pub use matching_windows::{MatchingWindows, WORKING_VOLUME_GRID_PX};
 pub use motion_model::MotionModel;
 pub use network_training::{train_joint_network, NetworkTraining, TrainingReport};
 pub use nominal_mapping::NominalMapping;
+pub use pair_evidence::{EvidenceOutcome, PairEvidence, PairScore};
 pub use plan_problem::{Arm, PickPlan, PlanFile, PlanProblem, Target, TargetList};
 pub use random_targets::random_targets;
 pub use rotated_stereo::RotatedStereo;

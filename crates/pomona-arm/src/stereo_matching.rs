@@ -13,6 +13,13 @@
 //! resolved by the seed's heuristic, which keeps in each row and column the element closest to
 //! the mean: entries are taken in increasing σ (ties by primary then stereo index, so results
 //! are deterministic) and accepted while their row and column are still free.
+//!
+//! Beyond the seed, a candidate can be removed before the relaxation
+//! ([`DisparityMatrix::remove`]) or carry an extra non-negative cost added to its σ wherever σ is
+//! compared (Eq. 13 marks and the heuristic; [`DisparityMatrix::add_cost`]), in pixels²: other
+//! evidence than disparity, such as the appearance of the pair ([`crate::PairEvidence`]). The
+//! mean disparity of Eq. 11 is unchanged. Without removals or costs the relaxation is the seed's,
+//! bit for bit (every extra cost is +0.0, which leaves σ unchanged).
 
 use nalgebra::Point2;
 use serde::{Deserialize, Serialize};
@@ -85,6 +92,8 @@ pub struct DisparityMatrix {
     rows: usize,
     cols: usize,
     cells: Vec<Option<f64>>,
+    /// Extra cost of each cell added to its σ, pixels² (0 = the seed's relaxation).
+    extra: Vec<f64>,
 }
 
 impl DisparityMatrix {
@@ -101,6 +110,7 @@ impl DisparityMatrix {
         Self {
             rows: rows.len(),
             cols,
+            extra: vec![0.0; cells.len()],
             cells,
         }
     }
@@ -118,8 +128,38 @@ impl DisparityMatrix {
         Self {
             rows: primary.len(),
             cols: stereo.len(),
+            extra: vec![0.0; primary.len() * stereo.len()],
             cells,
         }
+    }
+
+    /// Removes candidate `(l, r)` (no-op outside the matrix).
+    pub fn remove(&mut self, l: usize, r: usize) {
+        if l < self.rows && r < self.cols {
+            self.cells[l * self.cols + r] = None;
+        }
+    }
+
+    /// Adds `cost_px2` (pixels², finite and non-negative; anything else is ignored) to the σ of
+    /// candidate `(l, r)` wherever the relaxation compares σ.
+    pub fn add_cost(&mut self, l: usize, r: usize, cost_px2: f64) {
+        if l < self.rows && r < self.cols && cost_px2.is_finite() && cost_px2 >= 0.0 {
+            self.extra[l * self.cols + r] += cost_px2;
+        }
+    }
+
+    /// The extra cost of candidate `(l, r)`, pixels² (0 outside the matrix).
+    pub fn cost(&self, l: usize, r: usize) -> f64 {
+        if l < self.rows && r < self.cols {
+            self.extra[l * self.cols + r]
+        } else {
+            0.0
+        }
+    }
+
+    /// Candidates of the matrix: `(l, r, disparity)`.
+    pub fn candidates(&self) -> impl Iterator<Item = (usize, usize, f64)> + '_ {
+        self.entries()
     }
 
     /// `(L, R)`.
@@ -150,21 +190,26 @@ impl DisparityMatrix {
 
     /// Eq. 13: the row-minimum marks c and column-minimum marks r of σ about `mean`.
     fn minima_marks(&self, mean: f64) -> (Vec<bool>, Vec<bool>) {
-        let sigma = |v: f64| (v - mean) * (v - mean);
+        let sigma = |i: usize, j: usize, v: f64| self.sigma(i, j, v, mean);
         let mut row_min = vec![f64::INFINITY; self.rows];
         let mut col_min = vec![f64::INFINITY; self.cols];
         for (i, j, v) in self.entries() {
-            row_min[i] = row_min[i].min(sigma(v));
-            col_min[j] = col_min[j].min(sigma(v));
+            row_min[i] = row_min[i].min(sigma(i, j, v));
+            col_min[j] = col_min[j].min(sigma(i, j, v));
         }
         let mut c = vec![false; self.cells.len()];
         let mut r = vec![false; self.cells.len()];
         for (i, j, v) in self.entries() {
             let k = i * self.cols + j;
-            c[k] = sigma(v) == row_min[i];
-            r[k] = sigma(v) == col_min[j];
+            c[k] = sigma(i, j, v) == row_min[i];
+            r[k] = sigma(i, j, v) == col_min[j];
         }
         (c, r)
+    }
+
+    /// σ of Eq. 11 for candidate `(i, j)` with disparity `v` about `mean`, plus its extra cost.
+    fn sigma(&self, i: usize, j: usize, v: f64, mean: f64) -> f64 {
+        (v - mean) * (v - mean) + self.extra[i * self.cols + j]
     }
 
     /// Runs the relaxation (Eqs. 11–16) and the tie-breaking heuristic.
@@ -226,7 +271,7 @@ impl DisparityMatrix {
     /// none is, and drop the rest of its row and column. Ties of σ go to the lower primary,
     /// then stereo, index. Returns the pairs and how many of them had a rival.
     fn single_matches(&self, mean: f64) -> (Vec<StereoPair>, usize) {
-        let sigma = |v: f64| (v - mean) * (v - mean);
+        let sigma = |e: &(usize, usize, f64)| self.sigma(e.0, e.1, e.2, mean);
         let mut left: Vec<(usize, usize, f64)> = self.entries().collect();
         let mut pairs = Vec::new();
         let mut by_heuristic = 0;
@@ -238,8 +283,8 @@ impl DisparityMatrix {
                 per_col[j] += 1;
             }
             let order = |a: &&(usize, usize, f64), b: &&(usize, usize, f64)| {
-                sigma(a.2)
-                    .total_cmp(&sigma(b.2))
+                sigma(a)
+                    .total_cmp(&sigma(b))
                     .then(a.0.cmp(&b.0))
                     .then(a.1.cmp(&b.1))
             };
@@ -372,6 +417,62 @@ mod tests {
         assert_eq!(pairs(&m), [(0, 0), (1, 1)]);
         // Ties of σ on both sides of the mean (18 and 22 about 20) also fall to the index.
         let m = DisparityMatrix::from_rows(&[vec![Some(22.0), Some(18.0)], vec![None, Some(20.0)]])
+            .relax(&RelaxationParams::default());
+        assert_eq!(pairs(&m), [(0, 0), (1, 1)]);
+    }
+
+    #[test]
+    fn extra_costs_and_removals_change_the_choice_and_zero_costs_change_nothing() {
+        // Column 0 is contested by rows 0 (41) and 1 (30); row 2 pulls the mean to 37.7, so by
+        // disparity alone row 0 takes it and row 1 is left with nothing.
+        let rows = [vec![Some(41.0)], vec![Some(30.0)], vec![None, Some(42.0)]];
+        let seed = DisparityMatrix::from_rows(&rows).relax(&RelaxationParams::default());
+        assert_eq!(pairs(&seed), [(0, 0), (2, 1)]);
+        let mut zero = DisparityMatrix::from_rows(&rows);
+        for (l, r) in [(0, 0), (1, 0), (2, 1)] {
+            zero.add_cost(l, r, 0.0);
+        }
+        assert_eq!(zero.relax(&RelaxationParams::default()), seed);
+        // A cost on (0, 0) hands column 0 to row 1.
+        let mut costly = DisparityMatrix::from_rows(&rows);
+        costly.add_cost(0, 0, 500.0);
+        // Invalid costs and cells outside the matrix are ignored.
+        costly.add_cost(1, 0, -1.0);
+        costly.add_cost(1, 0, f64::NAN);
+        costly.add_cost(5, 5, 1.0);
+        assert_eq!((costly.cost(0, 0), costly.cost(1, 0)), (500.0, 0.0));
+        let m = costly.relax(&RelaxationParams::default());
+        assert_eq!(pairs(&m), [(1, 0), (2, 1)]);
+        // The mean disparity is still Eq. 11's (nothing was dropped).
+        assert!((m.mean_disparity_px - 113.0 / 3.0).abs() < 1e-12);
+        // Removing the candidate does the same.
+        let mut removed = DisparityMatrix::from_rows(&rows);
+        removed.remove(0, 0);
+        removed.remove(7, 7);
+        assert_eq!(removed.get(0, 0), None);
+        assert_eq!(
+            pairs(&removed.relax(&RelaxationParams::default())),
+            [(1, 0), (2, 1)]
+        );
+    }
+
+    #[test]
+    fn a_duplicated_circle_pairs_its_fruit_once() {
+        // Fruit A has two primary circles (rows 0 and 1, disparities 40 and 41.5 to its one
+        // stereo circle, column 0); fruit B (row 2, column 1) is also in the window of the
+        // duplicate (30). The duplicate with the larger deviation loses column 0 and its
+        // candidate for B is dropped by Eq. 12, so A pairs once and B keeps its partner.
+        let m = DisparityMatrix::from_rows(&[
+            vec![Some(40.0)],
+            vec![Some(41.5), Some(30.0)],
+            vec![None, Some(38.0)],
+        ])
+        .relax(&RelaxationParams::default());
+        assert_eq!(pairs(&m), [(0, 0), (2, 1)]);
+        // Without B's primary circle the duplicate's only remaining candidate is B's stereo
+        // circle, which nobody contests: disparity alone cannot refuse it (the appearance floor
+        // of `PairEvidence` can).
+        let m = DisparityMatrix::from_rows(&[vec![Some(40.0)], vec![Some(41.5), Some(30.0)]])
             .relax(&RelaxationParams::default());
         assert_eq!(pairs(&m), [(0, 0), (1, 1)]);
     }

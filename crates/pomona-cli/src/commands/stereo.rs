@@ -12,7 +12,11 @@
 //! ([`pomona_arm::DisparityRefinement`], beyond the seed: the primary view's patch of the fruit is
 //! found in the stereo image to sub-pixel; the circle centres are kept where it does not match
 //! well). It is off by default: it helped at β = 2° and 8° and not at 4° (docs/results.md), and on
-//! flat, textureless discs it can accept a wrong peak. The detection files have
+//! flat, textureless discs it can accept a wrong peak. With `--match-min-ncc` (a floor) or
+//! `--match-ncc-weight` / `--match-radius-weight` (costs added to the relaxation's σ), every
+//! candidate pair is also scored by appearance and size before the relaxation
+//! ([`pomona_arm::PairEvidence`], beyond the seed; all off by default: the seed's matching bit for
+//! bit). The detection files have
 //! the format of `pomona detect`, so `pomona eval --data DIR` scores them against the primary
 //! view's truth. A fruit's diameter is its primary circle's radius scaled to the located depth.
 //!
@@ -25,11 +29,11 @@ use anyhow::{bail, Context, Result};
 use clap::ValueEnum;
 use pomona::{Detection, Detector};
 use pomona_arm::{
-    match_centres, DisparityRefinement, MatchingWindows, RefinementOutcome, RelaxationParams,
-    RotatedStereo, StereoMatching,
+    DisparityMatrix, DisparityRefinement, MatchingWindows, PairEvidence, RefinementOutcome,
+    RelaxationParams, RotatedStereo, StereoMatching,
 };
 use pomona_core::nalgebra::{Point2, Point3};
-use pomona_core::{ColorImage, DepthImage, RgbdFrame};
+use pomona_core::{ColorImage, DepthImage, ImageCircle, RgbdFrame};
 use pomona_io::Dataset;
 use pomona_synth::RigFile;
 use rayon::prelude::*;
@@ -85,6 +89,23 @@ pub struct StereoArgs {
     /// are kept.
     #[arg(long, value_name = "NCC", default_value_t = DisparityRefinement::default().min_ncc)]
     pub refine_min_ncc: f64,
+    /// Matching (beyond the seed): remove candidate pairs whose appearance NCC (the primary
+    /// patch moved into the stereo view by the rig's motion, best of the epipolar sweep) is
+    /// below this floor before the relaxation. Default: no floor (the seed's matching).
+    #[arg(long, value_name = "NCC")]
+    pub match_min_ncc: Option<f64>,
+    /// Matching: weight (pixels²) of the appearance cost 1 − NCC added to each candidate's
+    /// squared disparity deviation in the relaxation. 0 (default) = the seed's matching.
+    #[arg(long, value_name = "PX2", default_value_t = PairEvidence::default().ncc_weight_px2)]
+    pub match_ncc_weight: f64,
+    /// Matching: weight (pixels²) of the size cost ln(r_stereo / r_expected)² (the primary
+    /// radius scaled to the stereo view's distance). 0 (default) = the seed's matching.
+    #[arg(long, value_name = "PX2", default_value_t = PairEvidence::default().radius_weight_px2)]
+    pub match_radius_weight: f64,
+    /// Matching: how far the appearance sweep searches either side of each candidate's
+    /// disparity along the epipolar line, pixels.
+    #[arg(long, value_name = "PX", default_value_t = PairEvidence::default().appearance.search_px)]
+    pub match_search_px: f64,
     /// Also measure matching and 3D error against the truth of both views; write them here.
     #[arg(long, value_name = "R.json")]
     pub report: Option<PathBuf>,
@@ -199,11 +220,12 @@ fn located(
     }
 }
 
-/// How a frame is located: the rig, the Eq. 10 windows, the method and the refinement (`None`:
-/// the circle centres, as in the seed).
+/// How a frame is located: the rig, the Eq. 10 windows, the evidence added to the relaxation
+/// (off: the seed's), the method and the refinement (`None`: the circle centres, as in the seed).
 struct Locating<'a> {
     rig: &'a RotatedStereo,
     windows: &'a MatchingWindows,
+    evidence: PairEvidence,
     method: StereoMethod,
     refinement: Option<DisparityRefinement>,
 }
@@ -247,13 +269,26 @@ fn run_frame(
     let stereo = detect(views.1, &images.1)?;
     let (pc, sc) = (circles(&primary), circles(&stereo));
     let centres = |c: &[(Point2<f64>, f64, usize)]| c.iter().map(|x| x.0).collect::<Vec<_>>();
-    let matching: StereoMatching = match_centres(
-        &centres(&pc),
-        &centres(&sc),
-        how.windows,
-        &RelaxationParams::default(),
-    );
     let rig = how.rig;
+    let mut matrix = DisparityMatrix::from_centres(&centres(&pc), &centres(&sc), how.windows);
+    let discs = |c: &[(Point2<f64>, f64, usize)]| {
+        c.iter()
+            .map(|x| ImageCircle {
+                center_px: x.0,
+                radius_px: x.1,
+            })
+            .collect::<Vec<_>>()
+    };
+    let evidence = how
+        .evidence
+        .apply(
+            &mut matrix,
+            rig,
+            (&images.0, &images.1),
+            (&discs(&pc), &discs(&sc)),
+        )
+        .with_context(|| format!("scoring the candidate pairs of frame {stem}"))?;
+    let matching: StereoMatching = matrix.relax(&RelaxationParams::default());
     let mut detections = Vec::new();
     let mut pairs = Vec::new();
     for pair in &matching.pairs {
@@ -276,12 +311,14 @@ fn run_frame(
             stereo_px,
             refinement,
             center_m,
+            evidence: evidence.score(pair.primary, pair.stereo),
         });
     }
     Ok(FrameRun {
         detections,
         outcome: StereoFrameOutcome {
             stem: stem.to_owned(),
+            evidence,
             primary_centres: centres(&pc),
             stereo_centres: centres(&sc),
             pairs,
@@ -335,9 +372,20 @@ pub fn run(args: &StereoArgs) -> Result<()> {
             Ok(r)
         })
         .transpose()?;
+    let evidence = PairEvidence {
+        min_ncc: args.match_min_ncc,
+        ncc_weight_px2: args.match_ncc_weight,
+        radius_weight_px2: args.match_radius_weight,
+        appearance: DisparityRefinement {
+            search_px: args.match_search_px,
+            ..PairEvidence::default().appearance
+        },
+    };
+    evidence.validate().context("bad --match-* option")?;
     let how = Locating {
         rig: &rig,
         windows: &windows,
+        evidence,
         method: args.method,
         refinement,
     };
@@ -386,7 +434,7 @@ pub fn run(args: &StereoArgs) -> Result<()> {
         let report = StereoReport::measure(
             &rig,
             args.method,
-            refinement.is_some(),
+            (refinement.is_some(), !evidence.is_off()),
             (&dataset, &stereo),
             &outcomes,
         )?;

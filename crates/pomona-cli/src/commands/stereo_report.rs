@@ -16,7 +16,7 @@
 use std::collections::{BTreeMap, HashSet};
 
 use anyhow::{Context, Result};
-use pomona_arm::{RefinementOutcome, RotatedStereo};
+use pomona_arm::{EvidenceOutcome, PairScore, RefinementOutcome, RotatedStereo};
 use pomona_core::nalgebra::{Point2, Point3};
 use pomona_core::{FrameTruth, ImageCircle, PinholeCamera};
 use pomona_io::Dataset;
@@ -34,6 +34,8 @@ pub const FAR_DEPTH_M: f64 = 0.8;
 pub struct StereoFrameOutcome {
     /// Frame stem.
     pub stem: String,
+    /// What the matching evidence did (all zero when off).
+    pub evidence: EvidenceOutcome,
     /// Centres of the circles detected in the primary view.
     pub primary_centres: Vec<Point2<f64>>,
     /// Centres detected in the stereo view.
@@ -55,6 +57,8 @@ pub struct LocatedPair {
     pub refinement: Option<RefinementOutcome>,
     /// The located centre, primary camera frame.
     pub center_m: Point3<f64>,
+    /// The matching evidence's score of the pair (`None` when the evidence is off).
+    pub evidence: Option<PairScore>,
 }
 
 /// How many located pairs the appearance refinement moved and why the others kept their
@@ -65,6 +69,86 @@ pub struct RefinementCounts {
     pub refined: usize,
     /// Pairs that kept the circle centres, by reason (`low_ncc`, `flat_patch`, ...).
     pub fallback: BTreeMap<&'static str, usize>,
+}
+
+/// Candidate pairs scored, left unscored and removed by the matching evidence, and how the
+/// evidence separates candidates of one fruit from the rest.
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct EvidenceReport {
+    /// Candidate pairs inside the Eq. 10 windows.
+    pub candidates: usize,
+    /// Of those, pairs whose NCC could not be computed.
+    pub unscored: usize,
+    /// Pairs removed by the NCC floor.
+    pub removed: usize,
+    /// NCC of candidates whose two circles are the same fruit.
+    pub ncc_same_fruit: Spread,
+    /// NCC of candidates of two different fruit.
+    pub ncc_other_fruit: Spread,
+    /// NCC of candidates involving a false detection.
+    pub ncc_false_detection: Spread,
+    /// |ln(r_stereo / r_expected)| of candidates of the same fruit.
+    pub radius_same_fruit: Spread,
+    /// |ln(r_stereo / r_expected)| of candidates of two different fruit.
+    pub radius_other_fruit: Spread,
+}
+
+/// Quantiles of a sample.
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct Spread {
+    /// Sample size.
+    pub n: usize,
+    /// 10th, 25th, 50th, 75th and 90th percentiles (empty without samples).
+    pub p10_25_50_75_90: Vec<f64>,
+}
+
+impl Spread {
+    fn of(values: Vec<f64>) -> Self {
+        let v = sorted(values);
+        Self {
+            n: v.len(),
+            p10_25_50_75_90: [0.1, 0.25, 0.5, 0.75, 0.9]
+                .iter()
+                .filter_map(|&q| quantile(&v, q))
+                .collect(),
+        }
+    }
+}
+
+/// A fruit detected in both views but not paired correctly.
+#[derive(Debug, Clone, Serialize)]
+pub struct MissedFruit {
+    /// Frame stem.
+    pub stem: String,
+    /// The fruit.
+    pub fruit: String,
+    /// As in [`MatchingScore::missed_by_cause`].
+    pub cause: &'static str,
+    /// Its truth centre, primary camera frame, metres.
+    pub center_m: Option<[f64; 3]>,
+    /// Its circles' centres in the primary view, pixels.
+    pub primary_px: Vec<[f64; 2]>,
+    /// Its circles' centres in the stereo view, pixels.
+    pub stereo_px: Vec<[f64; 2]>,
+}
+
+/// A pair of two different fruit.
+#[derive(Debug, Clone, Serialize)]
+pub struct WrongPair {
+    /// Frame stem.
+    pub stem: String,
+    /// Primary circle centre, pixels.
+    pub primary_px: [f64; 2],
+    /// Stereo circle centre, pixels.
+    pub stereo_px: [f64; 2],
+    /// The fruit of the primary and of the stereo circle.
+    pub fruit: [String; 2],
+    /// As in [`MatchingScore::wrong_by_cause`].
+    pub cause: &'static str,
+    /// The matching evidence's NCC of the pair, if computed.
+    pub ncc: Option<f64>,
+    /// The matching evidence's ln(r_stereo / r_expected), if computed.
+    pub radius_log_ratio: Option<f64>,
 }
 
 /// Matching scores.
@@ -80,6 +164,20 @@ pub struct MatchingScore {
     pub both_detected: usize,
     /// `correct / pairs_of_fruit`.
     pub precision: Option<f64>,
+    /// Correct pairs beyond the first of their fruit (duplicated circles paired again).
+    pub repeated: usize,
+    /// Pairs of two different fruit, by cause: `duplicate` (the primary fruit or the stereo fruit
+    /// has another circle in its view), `partner_missing` (the primary fruit has no circle in the
+    /// stereo view), `rival` (neither: the relaxation preferred a neighbour).
+    pub wrong_by_cause: BTreeMap<&'static str, usize>,
+    /// Fruit detected in both views but not paired correctly, by what became of their circles:
+    /// `with_another_fruit` (a circle of the fruit is in a pair of two different fruit),
+    /// `with_a_false_detection` (else, in a pair with a detection of no fruit), `unpaired`.
+    pub missed_by_cause: BTreeMap<&'static str, usize>,
+    /// Every pair of two different fruit.
+    pub wrong_pairs: Vec<WrongPair>,
+    /// Every fruit detected in both views but not paired correctly.
+    pub missed: Vec<MissedFruit>,
     /// Distinct fruit paired correctly over `both_detected`.
     pub recall: Option<f64>,
 }
@@ -148,6 +246,9 @@ pub struct StereoReport {
     pub method: StereoMethod,
     /// The appearance refinement's counts; `null` without `--refine`.
     pub refinement: Option<RefinementCounts>,
+    /// What the matching evidence (`--match-*`) did; absent when it is off.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub matching_evidence: Option<EvidenceReport>,
     /// Half-angle between the shots, degrees.
     pub beta_deg: f64,
     /// Pivot distance, metres.
@@ -215,7 +316,7 @@ impl StereoReport {
     pub fn measure(
         rig: &RotatedStereo,
         method: StereoMethod,
-        refine: bool,
+        (refine, evidence): (bool, bool),
         views: (&Dataset, &Dataset),
         outcomes: &[StereoFrameOutcome],
     ) -> Result<Self> {
@@ -245,6 +346,9 @@ impl StereoReport {
         }
         let mut report = tally.report(rig, method);
         report.refinement = refine.then_some(counts);
+        report.matching_evidence = evidence
+            .then(|| evidence_report(rig, views, outcomes))
+            .transpose()?;
         Ok(report)
     }
 
@@ -304,6 +408,56 @@ impl StereoReport {
     }
 }
 
+/// The matching evidence's counts, and its scores split by what the candidates truly are.
+fn evidence_report(
+    rig: &RotatedStereo,
+    views: (&Dataset, &Dataset),
+    outcomes: &[StereoFrameOutcome],
+) -> Result<EvidenceReport> {
+    let mut e = EvidenceReport::default();
+    let (mut same, mut other, mut false_) = (Vec::new(), Vec::new(), Vec::new());
+    let (mut radius_same, mut radius_other) = (Vec::new(), Vec::new());
+    for o in outcomes {
+        e.candidates += o.evidence.candidates;
+        e.unscored += o.evidence.unscored;
+        e.removed += o.evidence.removed;
+        let load = |d: &Dataset| {
+            d.load_truth(&o.stem)
+                .with_context(|| format!("truth of frame {} in {}", o.stem, d.root().display()))
+        };
+        let (Some(tp), Some(ts)) = (load(views.0)?, load(views.1)?) else {
+            continue;
+        };
+        let (cp, cs) = (
+            truth_circles(&tp, &rig.camera),
+            truth_circles(&ts, &rig.camera),
+        );
+        for (l, r, score) in &o.evidence.scores {
+            let (Some(p), Some(s)) = (o.primary_centres.get(*l), o.stereo_centres.get(*r)) else {
+                continue;
+            };
+            let (a, b) = (identity(&cp, p), identity(&cs, s));
+            let (ncc_bin, radius_bin) = match (&a, &b) {
+                (Some(a), Some(b)) if a == b => (&mut same, Some(&mut radius_same)),
+                (Some(_), Some(_)) => (&mut other, Some(&mut radius_other)),
+                _ => (&mut false_, None),
+            };
+            if let Some(ncc) = score.ncc {
+                ncc_bin.push(ncc);
+            }
+            if let (Some(bin), Some(ratio)) = (radius_bin, score.radius_log_ratio) {
+                bin.push(ratio.abs());
+            }
+        }
+    }
+    e.ncc_same_fruit = Spread::of(same);
+    e.ncc_other_fruit = Spread::of(other);
+    e.ncc_false_detection = Spread::of(false_);
+    e.radius_same_fruit = Spread::of(radius_same);
+    e.radius_other_fruit = Spread::of(radius_other);
+    Ok(e)
+}
+
 /// Running counts of [`StereoReport::measure`] over frames.
 #[derive(Default)]
 struct Tally {
@@ -331,31 +485,71 @@ impl Tally {
         let camera = &rig.camera;
         let (cp, cs) = (truth_circles(tp, camera), truth_circles(ts, camera));
         let ids = |circles: &[(String, ImageCircle)], centres: &[Point2<f64>]| {
-            centres
-                .iter()
-                .filter_map(|c| identity(circles, c))
-                .collect::<HashSet<String>>()
+            let mut n = BTreeMap::<String, usize>::new();
+            for id in centres.iter().filter_map(|c| identity(circles, c)) {
+                *n.entry(id).or_default() += 1;
+            }
+            n
         };
-        let both: HashSet<String> = ids(&cp, &outcome.primary_centres)
-            .intersection(&ids(&cs, &outcome.stereo_centres))
+        let (in_primary, in_stereo) = (
+            ids(&cp, &outcome.primary_centres),
+            ids(&cs, &outcome.stereo_centres),
+        );
+        let both: HashSet<String> = in_primary
+            .keys()
+            .filter(|id| in_stereo.contains_key(*id))
             .cloned()
             .collect();
         self.matching.both_detected += both.len();
         let centre_of = truth_centres(tp);
         let mut paired = HashSet::new();
+        // Per fruit id: in a pair with another fruit, in a pair with a false detection.
+        let mut fates = BTreeMap::<String, (bool, bool)>::new();
         for pair in &outcome.pairs {
             let (p, s, located) = (&pair.primary_px, &pair.stereo_px, &pair.center_m);
             self.matching.pairs += 1;
-            let (Some(a), Some(b)) = (identity(&cp, p), identity(&cs, &pair.stereo_circle_px))
-            else {
+            let (ia, ib) = (identity(&cp, p), identity(&cs, &pair.stereo_circle_px));
+            for (own, other) in [(&ia, &ib), (&ib, &ia)] {
+                if let Some(id) = own {
+                    let fate = fates.entry(id.clone()).or_default();
+                    match other {
+                        Some(o) if o != id => fate.0 = true,
+                        None => fate.1 = true,
+                        Some(_) => {}
+                    }
+                }
+            }
+            let (Some(a), Some(b)) = (ia, ib) else {
                 continue;
             };
             self.matching.pairs_of_fruit += 1;
             if a != b {
+                let cause = if in_primary.get(&a).is_some_and(|&n| n > 1)
+                    || in_stereo.get(&b).is_some_and(|&n| n > 1)
+                {
+                    "duplicate"
+                } else if !in_stereo.contains_key(&a) {
+                    "partner_missing"
+                } else {
+                    "rival"
+                };
+                *self.matching.wrong_by_cause.entry(cause).or_default() += 1;
+                self.matching.wrong_pairs.push(WrongPair {
+                    stem: outcome.stem.clone(),
+                    primary_px: [p.x, p.y],
+                    stereo_px: [pair.stereo_circle_px.x, pair.stereo_circle_px.y],
+                    fruit: [a, b],
+                    cause,
+                    ncc: pair.evidence.and_then(|e| e.ncc),
+                    radius_log_ratio: pair.evidence.and_then(|e| e.radius_log_ratio),
+                });
                 continue;
             }
             self.matching.correct += 1;
             let first = paired.insert(a.clone());
+            if !first {
+                self.matching.repeated += 1;
+            }
             if let (true, Some(truth)) = (first, centre_of.get(a.as_str())) {
                 self.errors_by_depth
                     .push((truth.z, (located - truth).norm() * 1e3));
@@ -366,6 +560,31 @@ impl Tally {
             }
         }
         self.correct_fruit += paired.len();
+        let mut missed: Vec<&String> = both.difference(&paired).collect();
+        missed.sort();
+        for id in missed {
+            let cause = match fates.get(id) {
+                Some((true, _)) => "with_another_fruit",
+                Some((false, true)) => "with_a_false_detection",
+                _ => "unpaired",
+            };
+            *self.matching.missed_by_cause.entry(cause).or_default() += 1;
+            let of = |circles: &[(String, ImageCircle)], centres: &[Point2<f64>]| {
+                centres
+                    .iter()
+                    .filter(|c| identity(circles, c).as_ref() == Some(id))
+                    .map(|c| [c.x, c.y])
+                    .collect()
+            };
+            self.matching.missed.push(MissedFruit {
+                stem: outcome.stem.clone(),
+                fruit: id.clone(),
+                cause,
+                center_m: centre_of.get(id.as_str()).map(|c| [c.x, c.y, c.z]),
+                primary_px: of(&cp, &outcome.primary_centres),
+                stereo_px: of(&cs, &outcome.stereo_centres),
+            });
+        }
     }
 
     /// Locates again every fruit centre both views' truth has, from its exact projections.
@@ -432,6 +651,7 @@ impl Tally {
         StereoReport {
             method,
             refinement: None,
+            matching_evidence: None,
             beta_deg: rig.beta_rad.to_degrees(),
             pivot_m: rig.pivot_distance_m,
             frames: self.frames,

@@ -423,14 +423,7 @@ fn bilinear(image: &ColorImage, px: &Point2<f64>) -> Option<[f64; 3]> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use pomona_core::PinholeCamera;
-
-    const RADIUS_M: f64 = 0.04;
-
-    fn rig() -> RotatedStereo {
-        let camera = PinholeCamera::new(320, 240, 400.0, 400.0, 159.5, 119.5).unwrap();
-        RotatedStereo::new(4f64.to_radians(), 0.3, camera).unwrap()
-    }
+    use crate::test_scenes::{backdrop_hit, radius_px, ray_to_fruit, rig, RADIUS_M};
 
     /// A textured sphere at `centre` (primary frame) before a textured backdrop 2.5 m away,
     /// ray-cast into the view whose frame is reached by `view_from_camera`, 3×3 supersampled.
@@ -456,11 +449,8 @@ mod tests {
                     );
                     let n = camera.normalised(&q);
                     let dir = (camera_from_view.rotation * Vector3::new(n.x, n.y, 1.0)).normalize();
-                    let oc = origin - centre;
-                    let b = dir.dot(&oc);
-                    let disc = b * b - (oc.norm_squared() - RADIUS_M * RADIUS_M);
-                    let colour = if disc >= 0.0 {
-                        let hit = origin + dir * (-b - disc.sqrt());
+                    let colour = if let Some(t) = ray_to_fruit(&origin, &dir, centre) {
+                        let hit = origin + dir * t;
                         let normal = (hit - centre) / RADIUS_M;
                         let shade = 0.55
                             + 0.45
@@ -478,8 +468,7 @@ mod tests {
                             [230.0, 120.0, 20.0]
                         }
                     } else {
-                        let t = (2.5 - origin.z) / dir.z;
-                        let hit = origin + dir * t;
+                        let hit = backdrop_hit(&origin, &dir);
                         let leaf = (hit.x * 90.0).sin() + (hit.y * 70.0).cos();
                         [40.0 + 10.0 * leaf, 90.0 + 20.0 * leaf, 30.0]
                     };
@@ -506,10 +495,6 @@ mod tests {
         );
         let stereo = render(&rig, &rig.stereo_from_camera(), centre, sphere_texture);
         (rig, primary, stereo)
-    }
-
-    fn radius_px(rig: &RotatedStereo, centre: &Point3<f64>) -> f64 {
-        rig.camera.fx * (RADIUS_M / centre.coords.norm()).asin().tan()
     }
 
     #[test]

@@ -56,6 +56,8 @@ mod plan_problem;
 mod random_targets;
 mod rotated_stereo;
 mod stereo_matching;
+#[cfg(test)]
+mod test_scenes;
 mod two_arm_cell;
 
 pub use arm_joints::ArmJoints;

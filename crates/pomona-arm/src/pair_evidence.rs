@@ -248,16 +248,9 @@ fn radius_log_ratio(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::test_scenes::{backdrop_hit, radius_px, ray_to_fruit, rig, RADIUS_M};
     use crate::{match_centres, MatchingWindows, RelaxationParams, StereoMatching};
     use nalgebra::{Isometry3, Point2, Point3, Vector3};
-    use pomona_core::PinholeCamera;
-
-    const RADIUS_M: f64 = 0.04;
-
-    fn rig() -> RotatedStereo {
-        let camera = PinholeCamera::new(320, 240, 400.0, 400.0, 159.5, 119.5).unwrap();
-        RotatedStereo::new(4f64.to_radians(), 0.3, camera).unwrap()
-    }
 
     /// Textured spheres (centre, texture frequency) before a backdrop 2.5 m away of about the
     /// fruit's mean colour (so that the texture, not the silhouette, tells fruit apart), ray-cast
@@ -283,10 +276,7 @@ mod tests {
                     let hit = fruit
                         .iter()
                         .filter_map(|(centre, freq)| {
-                            let oc = origin - centre;
-                            let b = dir.dot(&oc);
-                            let disc = b * b - (oc.norm_squared() - RADIUS_M * RADIUS_M);
-                            (disc >= 0.0).then(|| (-b - disc.sqrt(), centre, *freq))
+                            ray_to_fruit(&origin, &dir, centre).map(|t| (t, centre, *freq))
                         })
                         .min_by(|a, b| a.0.total_cmp(&b.0));
                     let colour = if let Some((t, centre, freq)) = hit {
@@ -301,8 +291,7 @@ mod tests {
                             30.0,
                         ]
                     } else {
-                        let t = (2.5 - origin.z) / dir.z;
-                        let at = origin + dir * t;
+                        let at = backdrop_hit(&origin, &dir);
                         let leaf = (at.x * 90.0).sin() + (at.y * 70.0).cos();
                         [150.0 + 8.0 * leaf, 85.0 + 8.0 * leaf, 30.0]
                     };
@@ -319,7 +308,7 @@ mod tests {
     fn circle(rig: &RotatedStereo, px: Point2<f64>, centre: &Point3<f64>) -> ImageCircle {
         ImageCircle {
             center_px: px,
-            radius_px: rig.camera.fx * (RADIUS_M / centre.coords.norm()).asin().tan(),
+            radius_px: radius_px(rig, centre),
         }
     }
 

@@ -46,20 +46,19 @@ fn approach_sequences_are_tracked_to_the_target() {
     let tracks = dir.path().join("tracks");
     let report = dir.path().join("report.json");
     let report_s = report.to_str().unwrap();
-    let out = pomona(&[
-        "track",
-        "--data",
-        data_s,
-        "--out",
-        tracks.to_str().unwrap(),
-        "--json",
-        report_s,
-        "--init",
-        "truth",
-    ]);
-    assert!(out.status.success(), "{}", stderr(&out));
-    let report: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(report_s).unwrap()).unwrap();
+    let tracks_s = tracks.to_str().unwrap();
+    // `pomona track` on the sequences from the truth, with `extra` arguments; the report.
+    let track_from_truth = |extra: &[&str]| {
+        let mut args = vec![
+            "track", "--data", data_s, "--out", tracks_s, "--json", report_s, "--init", "truth",
+        ];
+        args.extend_from_slice(extra);
+        let out = pomona(&args);
+        assert!(out.status.success(), "{}", stderr(&out));
+        serde_json::from_str::<serde_json::Value>(&std::fs::read_to_string(report_s).unwrap())
+            .unwrap()
+    };
+    let report = track_from_truth(&[]);
     assert_eq!(report["sequences"], 3);
     assert_eq!(report["frames"], 36);
     let rate = report["success_rate"].as_f64().unwrap();
@@ -74,39 +73,19 @@ fn approach_sequences_are_tracked_to_the_target() {
 
     // `--set` overrides a tracker parameter, recorded in the report; a typo or an invalid
     // value is an error that says so.
-    let out = pomona(&[
-        "track",
-        "--data",
-        data_s,
-        "--out",
-        tracks.to_str().unwrap(),
-        "--json",
-        report_s,
-        "--init",
-        "truth",
+    let report = track_from_truth(&[
         "--set",
         "scan_threshold_fraction=1.0",
         "--set",
         "edge_scan.gap_px=3",
     ]);
-    assert!(out.status.success(), "{}", stderr(&out));
-    let report: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(report_s).unwrap()).unwrap();
     assert_eq!(report["params"]["scan_threshold_fraction"], 1.0);
     assert_eq!(report["params"]["edge_scan"]["gap_px"], 3);
     for (set, says) in [
         ("scan_fraction=1.0", "scan_fraction"),
         ("scan_threshold_fraction=0", "scan_threshold_fraction"),
     ] {
-        let out = pomona(&[
-            "track",
-            "--data",
-            data_s,
-            "--out",
-            tracks.to_str().unwrap(),
-            "--set",
-            set,
-        ]);
+        let out = pomona(&["track", "--data", data_s, "--out", tracks_s, "--set", set]);
         assert!(!out.status.success());
         assert!(stderr(&out).contains(says), "{set}: {}", stderr(&out));
     }
@@ -119,7 +98,7 @@ fn approach_sequences_are_tracked_to_the_target() {
         "--data",
         empty.to_str().unwrap(),
         "--out",
-        tracks.to_str().unwrap(),
+        tracks_s,
     ]);
     assert!(!out.status.success());
     assert!(stderr(&out).contains("empty"), "{}", stderr(&out));

@@ -13,6 +13,8 @@
 //! * [`train_calibrated`] / [`load_detector`]: any pipeline's training with a confidence
 //!   calibrated on held-out frames and an operating threshold, and the detector that reports it.
 //! * [`detect_and_evaluate`]: a detector run over labelled frames and scored against their truth.
+//! * [`FreeSpaceCheck`]: the geometric test any detector with depth can apply to a detection —
+//!   the camera must not see through the fruit's centre.
 //! * [`FrameSource`]: labelled frames for training, loaded lazily from datasets
 //!   ([`DatasetFrames`]) or rendered on demand (`SyntheticFrames`, with the `synth` feature).
 
@@ -21,6 +23,7 @@ mod detection_evaluation;
 mod detector;
 mod error;
 mod frame_source;
+mod free_space;
 mod stage;
 #[cfg(feature = "synth")]
 mod synthetic_frames;
@@ -34,6 +37,7 @@ pub use detection_evaluation::{detect_and_evaluate, DetectionEvaluation};
 pub use detector::{complete_with_defaults, Detector, Pipeline, TrainOptions};
 pub use error::PipelineError;
 pub use frame_source::{ChainedFrames, DatasetFrames, FrameSource, LabelledFrame};
+pub use free_space::{FreeSpaceCheck, FreeSpaceFilter};
 pub use pomona_learn::ModelFile;
 pub use stage::{run_stage, Stage};
 #[cfg(feature = "synth")]

@@ -17,7 +17,7 @@ use serde::{Deserialize, Serialize};
 use crate::negative_selection::{cap_negatives, hardest_negatives};
 use crate::stages::{
     pixel_colors, BackProjectionStage, ClassifierStage, ColorMaskStage, DepthProposalStage,
-    DescriptorStage, ProposalScreenStage, RegionGrowingStage, ShapeStage,
+    DescriptorStage, FreeSpaceStage, ProposalScreenStage, RegionGrowingStage, ShapeStage,
 };
 use crate::{
     Candidate, CoaxialMergeParams, ColorBayes, ColorHistograms, ColorLut, GpcdParams, LabelRule,
@@ -321,6 +321,9 @@ impl ShapeFitPipeline {
                 max_depth_m: p.max_depth_m as f32,
             },
             regions: RegionGrowingStage { params: p.regions },
+            free_space: FreeSpaceStage {
+                check: p.free_space,
+            },
             shapes: ShapeStage {
                 normals,
                 shapes: p.shapes,
@@ -343,6 +346,7 @@ struct Stages {
     screen: Option<ProposalScreenStage>,
     regions: RegionGrowingStage,
     shapes: ShapeStage,
+    free_space: FreeSpaceStage,
     descriptor: DescriptorStage,
 }
 
@@ -367,18 +371,16 @@ impl Stages {
         let keep = run_stage(mask, frame, t)?;
         let clusters = run_stage(&self.regions, (frame, keep.as_slice()), t)?;
         let cloud = run_stage(&BackProjectionStage, frame, t)?;
-        let mut candidates = run_stage(&self.shapes, (frame, &cloud, clusters.as_slice()), t)?;
+        let shapes = run_stage(&self.shapes, (frame, &cloud, clusters.as_slice()), t)?;
+        let mut candidates = run_stage(&self.free_space, (frame, shapes), t)?;
         let first_proposal = candidates.len();
         if let Some(proposals) = proposals {
             let mut clusters = run_stage(proposals, (frame, keep.as_slice()), t)?;
             if let Some(screen) = &self.screen {
                 clusters = run_stage(screen, (frame, &cloud, clusters.as_slice()), t)?;
             }
-            candidates.extend(run_stage(
-                &self.shapes,
-                (frame, &cloud, clusters.as_slice()),
-                t,
-            )?);
+            let shapes = run_stage(&self.shapes, (frame, &cloud, clusters.as_slice()), t)?;
+            candidates.extend(run_stage(&self.free_space, (frame, shapes), t)?);
         }
         let features = run_stage(&self.descriptor, (frame, candidates.as_slice()), t)?;
         Ok(CandidateSet {

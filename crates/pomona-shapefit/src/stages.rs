@@ -7,7 +7,7 @@ use pomona_consensus::nalgebra::Point3;
 use pomona_consensus::{OrientedPoint, RepeatLimits, ShapeExtractionParams, WindowNormals};
 use pomona_core::{ColorImage, PointCloud, RgbdFrame};
 use pomona_learn::SvmClassifier;
-use pomona_pipeline::{PipelineError, Stage};
+use pomona_pipeline::{FreeSpaceCheck, PipelineError, Stage};
 use rayon::prelude::*;
 
 use crate::{
@@ -308,6 +308,33 @@ pub(crate) fn pixel_colors(image: Option<&ColorImage>, pixels: &[usize]) -> Vec<
         .iter()
         .filter_map(|&i| img.get((i % w) as u32, (i / w) as u32))
         .collect()
+}
+
+/// Drops the candidates the camera sees through: a shape whose centre has the seen depth behind
+/// it ([`FreeSpaceCheck`]; not in the paper). Run on the shapes before the descriptor, in
+/// training as in detection, so the classifier is taught on the candidates it will score.
+pub struct FreeSpaceStage {
+    /// The check and its limits.
+    pub check: FreeSpaceCheck,
+}
+
+impl<'a> Stage<(&'a RgbdFrame, Vec<Candidate>), Vec<Candidate>> for FreeSpaceStage {
+    fn name(&self) -> &'static str {
+        "free-space"
+    }
+
+    fn run(
+        &self,
+        (frame, mut candidates): (&'a RgbdFrame, Vec<Candidate>),
+    ) -> Result<Vec<Candidate>, PipelineError> {
+        if self.check.enabled {
+            candidates.retain(|c| {
+                self.check
+                    .admits(frame, &c.shape.center(), c.shape.radius_m())
+            });
+        }
+        Ok(candidates)
+    }
 }
 
 /// The GPCD of every candidate (colour terms zero when `use_color` is off).

@@ -133,6 +133,7 @@ impl BoxDetector {
         };
         let positives = self.positive_boxes(&patches, timings)?;
         let detections = self.merged_detections(&cloud, &positives, timings)?;
+        let detections = run_stage(&s.free_space, (frame, detections), timings)?;
         Ok(FrameResult {
             detections,
             pruning,

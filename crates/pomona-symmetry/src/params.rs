@@ -8,6 +8,7 @@
 
 use pomona_consensus::WindowNormalParams;
 use pomona_learn::{MinMaxScaler, RbfSvm, SvmClassifier};
+use pomona_pipeline::FreeSpaceCheck;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{check_at_least, check_positive, SymmetryError};
@@ -377,6 +378,11 @@ pub struct StageParams {
     /// mean-shift centres are already off the grid and where it cost 0.005 AP on one test set.
     #[serde(default = "CentreRefinementParams::disabled")]
     pub refinement: CentreRefinementParams,
+    /// Merged detections whose centre the camera sees through are dropped (not in the seeds;
+    /// see [`FreeSpaceCheck`]). Detection-time only; absent in older models: on, with the
+    /// defaults (a geometric test, not learnt).
+    #[serde(default)]
+    pub free_space: FreeSpaceCheck,
 }
 
 impl StageParams {
@@ -397,6 +403,7 @@ impl StageParams {
                 ..CascadeParams::default()
             },
             refinement: CentreRefinementParams::default(),
+            free_space: FreeSpaceCheck::default(),
         }
     }
 

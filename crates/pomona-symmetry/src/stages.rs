@@ -4,6 +4,7 @@
 //! fixed-frame features of the cascade.
 
 use nalgebra::Point3;
+use pomona_pipeline::FreeSpaceFilter;
 use rayon::prelude::*;
 
 use crate::{
@@ -23,6 +24,9 @@ pub struct Stages {
     /// Fixed-frame features, for the cascade (symmetry frame with `cascade.enabled`).
     pub(crate) cascade_features: Option<FeatureStage>,
     pub(crate) refinement: CentreRefinement,
+    /// Drops merged detections the camera sees through; a detection the refinement gave no
+    /// diameter counts as a fruit a quarter of the box across.
+    pub(crate) free_space: FreeSpaceFilter,
 }
 
 impl Stages {
@@ -50,6 +54,10 @@ impl Stages {
             frames: FrameStage::new(frame),
             features: FeatureStage::new(params.frame, boxes.half_m(), params.histogram),
             refinement: CentreRefinement::new(params.refinement)?,
+            free_space: FreeSpaceFilter {
+                check: params.free_space,
+                fallback_radius_m: params.boxes.box_size_m / 4.0,
+            },
             boxes,
         })
     }

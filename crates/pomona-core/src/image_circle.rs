@@ -20,11 +20,16 @@ pub struct ImageCircle {
 }
 
 impl ImageCircle {
-    /// The circle a sphere of `radius_m` centred at `center_in_camera` images to: centred on the
-    /// projected centre, radius f·R / √(D² − R²) for a centre at distance D (the cone of rays
-    /// tangent to the sphere, measured at the principal point; off-axis the true outline is a
-    /// slightly larger ellipse, under 2 % larger at 25° off-axis). `None` when the centre is not
-    /// in front of the camera or the camera is inside the sphere.
+    /// The circle a sphere of `radius_m` centred at `center_in_camera` images to. The sphere's
+    /// outline is the image of the cone of rays tangent to it, an ellipse: on the optical axis a
+    /// circle of radius f·R / √(D² − R²) (D the distance to the centre), off the axis stretched
+    /// along the line to the principal point by about 1/cos²θ and across it by 1/cosθ, and
+    /// centred slightly outward of the projected centre (θ the angle off the axis: at 25° the
+    /// outline is 22 % and 10 % larger than on the axis). The circle is the ellipse's centre
+    /// and the mean of its two semi-axes — what a circle fitted to the outline finds. Computed
+    /// in undistorted coordinates, then mapped through the camera's lens model. `None` when the
+    /// centre is not in front of the camera, the camera is inside the sphere, or the tangent
+    /// cone reaches 90° off the axis (no bounded outline).
     ///
     /// ```
     /// use pomona_core::{nalgebra::Point3, ImageCircle, PinholeCamera};
@@ -37,16 +42,31 @@ impl ImageCircle {
         center_in_camera: &Point3<f64>,
         radius_m: f64,
     ) -> Option<Self> {
-        let center_px = camera.project(center_in_camera)?;
-        let distance_sq = center_in_camera.coords.norm_squared();
-        let r_sq = radius_m * radius_m;
-        if !(radius_m > 0.0 && distance_sq > r_sq) {
+        let distance = center_in_camera.coords.norm();
+        if !(radius_m > 0.0 && distance > radius_m && center_in_camera.z > 0.0) {
             return None;
         }
-        let focal_px = camera.mean_focal_px();
+        let half_cone = (radius_m / distance).asin();
+        let (x, y) = (center_in_camera.x, center_in_camera.y);
+        let off_axis = x.hypot(y).atan2(center_in_camera.z);
+        if off_axis + half_cone >= std::f64::consts::FRAC_PI_2 {
+            return None;
+        }
+        // Extremes along the radial line, and the half-width across it, at depth 1.
+        let (near, far) = ((off_axis - half_cone).tan(), (off_axis + half_cone).tan());
+        let radial = 0.5 * (far - near);
+        let across = half_cone.sin() / (off_axis.cos().powi(2) - half_cone.sin().powi(2)).sqrt();
+        let middle = 0.5 * (far + near);
+        let norm = x.hypot(y);
+        let (dx, dy) = if norm > 0.0 {
+            (x / norm, y / norm)
+        } else {
+            (0.0, 0.0)
+        };
+        let center_px = camera.project(&Point3::new(middle * dx, middle * dy, 1.0))?;
         Some(Self {
             center_px,
-            radius_px: focal_px * radius_m / (distance_sq - r_sq).sqrt(),
+            radius_px: camera.mean_focal_px() * 0.5 * (radial + across),
         })
     }
 
@@ -101,6 +121,71 @@ mod tests {
         let c = ImageCircle::of_sphere(&cam(), &Point3::new(0.0, 0.0, 0.5), 0.05).unwrap();
         assert!((c.radius_px - 60.302).abs() < 1e-3, "{}", c.radius_px);
         assert!((c.center_px - Point2::new(319.5, 239.5)).norm() < 1e-9);
+    }
+
+    /// The sphere's outline by brute force: the circle where the tangent rays touch it,
+    /// projected.
+    fn outline(cam: &PinholeCamera, c: &Point3<f64>, r: f64) -> Vec<Point2<f64>> {
+        let d2 = c.coords.norm_squared();
+        let touch_centre = c.coords * (1.0 - r * r / d2);
+        let touch_radius = r * (1.0 - r * r / d2).sqrt();
+        let w = c.coords.normalize();
+        let u = w.cross(&nalgebra::Vector3::x()).normalize();
+        let v = w.cross(&u);
+        (0..720)
+            .map(|k| {
+                let t = k as f64 * std::f64::consts::PI / 360.0;
+                let p = touch_centre + touch_radius * (t.cos() * u + t.sin() * v);
+                cam.project(&Point3::from(p)).unwrap()
+            })
+            .collect()
+    }
+
+    #[test]
+    fn off_axis_the_circle_is_the_outline_ellipses_centre_and_mean_semi_axis() {
+        let cam = cam();
+        // 25° off the axis, up and to the right, 0.6 m away.
+        let dir = nalgebra::Vector3::new(0.8, -0.6, 0.0) * 25f64.to_radians().tan();
+        let c = Point3::from((dir + nalgebra::Vector3::z()).normalize() * 0.6);
+        let circle = ImageCircle::of_sphere(&cam, &c, 0.04).unwrap();
+        let pts = outline(&cam, &c, 0.04);
+        let n = pts.len() as f64;
+        let mean = pts
+            .iter()
+            .fold(nalgebra::Vector2::zeros(), |a, p| a + p.coords)
+            / n;
+        // The outline is symmetric about its centre, so the centroid of evenly spread touch
+        // points is near it; the extreme distances along and across the radial line are the
+        // semi-axes.
+        let radial = (Point2::from(mean) - Point2::new(319.5, 239.5)).normalize();
+        let across = nalgebra::Vector2::new(-radial.y, radial.x);
+        let extent = |axis: nalgebra::Vector2<f64>| {
+            let proj: Vec<f64> = pts.iter().map(|p| p.coords.dot(&axis)).collect();
+            let (lo, hi) = proj
+                .iter()
+                .fold((f64::MAX, f64::MIN), |(a, b), &v| (a.min(v), b.max(v)));
+            (0.5 * (hi - lo), 0.5 * (hi + lo))
+        };
+        let ((a, mid_a), (b, mid_b)) = (extent(radial), extent(across));
+        let want_centre = radial * mid_a + across * mid_b;
+        assert!(
+            (circle.center_px.coords - want_centre).norm() < 0.05,
+            "{circle:?} {want_centre}"
+        );
+        assert!(
+            (circle.radius_px - 0.5 * (a + b)).abs() < 0.05,
+            "{circle:?} {a} {b}"
+        );
+        // Larger than the on-axis formula by 22 % and 10 % on the two axes.
+        let on_axis = 600.0 * 0.04 / (0.36f64 - 0.0016).sqrt();
+        assert!((a / on_axis - 1.22).abs() < 0.02 && (b / on_axis - 1.10).abs() < 0.02);
+        // The projected centre lies inside, nearer the principal point than the outline's centre.
+        let projected = cam.project(&c).unwrap();
+        let outward = (circle.center_px - projected).dot(&radial);
+        assert!(
+            outward > 0.0 && outward < 0.1 * circle.radius_px,
+            "{outward}"
+        );
     }
 
     #[test]

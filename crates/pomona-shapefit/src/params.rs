@@ -97,10 +97,10 @@ pub struct ShapeFitParams {
     /// [`DepthProposalParams`]). Absent in older model files: off.
     #[serde(default = "DepthProposalParams::off")]
     pub depth_proposals: DepthProposalParams,
-    /// Shapes whose centre the camera sees through are dropped before the descriptor (not in
-    /// the paper; see [`FreeSpaceCheck`]). Absent in older model files: on, with the defaults —
-    /// a geometric test, not learnt, that the models trained before it pass unchanged
-    /// (docs/results.md, "Free-space check").
+    /// Detection only: shapes whose centre the camera sees through are dropped before the
+    /// descriptor (not in the paper; see [`FreeSpaceCheck`]). Absent in older model files: on,
+    /// with the defaults — a geometric test, not learnt, and training does not use it, so the
+    /// models trained before it run with it unchanged (docs/results.md, "Free-space check").
     #[serde(default)]
     pub free_space: FreeSpaceCheck,
 }

@@ -321,9 +321,7 @@ impl ShapeFitPipeline {
                 max_depth_m: p.max_depth_m as f32,
             },
             regions: RegionGrowingStage { params: p.regions },
-            free_space: FreeSpaceStage {
-                check: p.free_space,
-            },
+            free_space: None,
             shapes: ShapeStage {
                 normals,
                 shapes: p.shapes,
@@ -346,7 +344,9 @@ struct Stages {
     screen: Option<ProposalScreenStage>,
     regions: RegionGrowingStage,
     shapes: ShapeStage,
-    free_space: FreeSpaceStage,
+    /// The free-space check of the shapes (a loaded detector's, when switched on; training
+    /// sees every shape, as in the paper).
+    free_space: Option<FreeSpaceStage>,
     descriptor: DescriptorStage,
 }
 
@@ -372,7 +372,7 @@ impl Stages {
         let clusters = run_stage(&self.regions, (frame, keep.as_slice()), t)?;
         let cloud = run_stage(&BackProjectionStage, frame, t)?;
         let shapes = run_stage(&self.shapes, (frame, &cloud, clusters.as_slice()), t)?;
-        let mut candidates = run_stage(&self.free_space, (frame, shapes), t)?;
+        let mut candidates = self.admitted(frame, shapes, t)?;
         let first_proposal = candidates.len();
         if let Some(proposals) = proposals {
             let mut clusters = run_stage(proposals, (frame, keep.as_slice()), t)?;
@@ -380,7 +380,7 @@ impl Stages {
                 clusters = run_stage(screen, (frame, &cloud, clusters.as_slice()), t)?;
             }
             let shapes = run_stage(&self.shapes, (frame, &cloud, clusters.as_slice()), t)?;
-            candidates.extend(run_stage(&self.free_space, (frame, shapes), t)?);
+            candidates.extend(self.admitted(frame, shapes, t)?);
         }
         let features = run_stage(&self.descriptor, (frame, candidates.as_slice()), t)?;
         Ok(CandidateSet {
@@ -388,6 +388,19 @@ impl Stages {
             features,
             first_proposal,
         })
+    }
+
+    /// `shapes` less those the free-space check refuses, when it is on.
+    fn admitted(
+        &self,
+        frame: &RgbdFrame,
+        shapes: Vec<Candidate>,
+        t: &mut StageTimings,
+    ) -> Result<Vec<Candidate>, PipelineError> {
+        match &self.free_space {
+            Some(check) => run_stage(check, (frame, shapes), t),
+            None => Ok(shapes),
+        }
     }
 }
 
@@ -482,6 +495,11 @@ impl Pipeline for ShapeFitPipeline {
                 use_color,
                 svm: model.classifier(),
                 min_score,
+            });
+        }
+        if p.free_space.enabled {
+            stages.free_space = Some(FreeSpaceStage {
+                check: p.free_space,
             });
         }
         Ok(Box::new(ShapeFitDetector {

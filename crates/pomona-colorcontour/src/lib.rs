@@ -44,6 +44,7 @@ mod contour_circles;
 mod edge_scan;
 mod hsigma;
 mod hsigma_lut;
+mod local_redetection;
 mod mask_closing;
 mod mask_hysteresis;
 mod mlp;
@@ -70,6 +71,9 @@ pub use edge_scan::{
 };
 pub use hsigma::{hsigma, hsigma_integers, hsigma_of_integers};
 pub use hsigma_lut::{quantise_probability, HSigmaLut};
+pub use local_redetection::{
+    most_consistent_circle, LocalRedetectParams, Redetect, SampledRegion,
+};
 pub use mask_closing::close_mask;
 pub use mask_hysteresis::hysteresis_mask;
 pub use mlp::{HSigmaSample, Mlp, MlpParams};

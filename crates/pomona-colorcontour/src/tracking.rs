@@ -645,8 +645,34 @@ mod tests {
     fn redetecting(mode: Redetect) -> TrackParams {
         TrackParams {
             redetect: mode,
-            motion_model: true,
             ..TrackParams::default()
+        }
+    }
+
+    /// A disc and a smaller neighbour of the same colour overlapping its top right, tracked over
+    /// `frames` copies of the image from the disc's centre: the centre error over the radius.
+    fn touching_pair_error(params: TrackParams, n: (f64, f64, f64), frames: usize) -> f64 {
+        let (cx, cy, r) = (60.0, 60.0, 20.0);
+        let img = scene(140, 110, &[(cx, cy, r), n]);
+        let mut t = ApproachTracker::new(orange_lut(), 128, params, Point2::new(cx, cy), r)
+            .unwrap();
+        let mut est = t.update(&img);
+        for _ in 1..frames {
+            est = t.update(&img);
+        }
+        (est.center_px - Point2::new(cx, cy)).norm() / r
+    }
+
+    #[test]
+    fn redetection_stays_on_a_fruit_touching_a_neighbour() {
+        // The neighbour covers the disc's top right: the paper's upward scan ends on the
+        // neighbour's outline and the circle through it grows over the pair.
+        let neighbour = (66.0, 40.0, 14.0);
+        let paper = touching_pair_error(TrackParams::default(), neighbour, 5);
+        assert!(paper > 0.3, "{paper:.2}");
+        for mode in [Redetect::Always, Redetect::OnDoubt] {
+            let new = touching_pair_error(redetecting(mode), neighbour, 5);
+            assert!(new < 0.05, "{mode:?}: {new:.2}");
         }
     }
 
@@ -669,12 +695,35 @@ mod tests {
                 .unwrap()
                 .update(&img)
         };
+        // The paper's scans from the start see pieces: no circle within the radius limits.
         let paper = run(TrackParams::default());
-        let new = run(redetecting(Redetect::Always));
-        eprintln!("paper {paper:?}\nnew {new:?}");
-        assert_eq!(new.status, TrackStatus::Redetected);
-        assert!((new.center_px - Point2::new(cx, cy)).norm() < 0.1 * r, "{new:?}");
-        assert!((new.radius_px - r).abs() < 0.1 * r, "{new:?}");
-        assert!((paper.center_px - Point2::new(cx, cy)).norm() > 0.2 * r, "{paper:?}");
+        assert_eq!(paper.status, TrackStatus::Lost, "{paper:?}");
+        for mode in [Redetect::Always, Redetect::OnDoubt] {
+            let new = run(redetecting(mode));
+            assert_eq!(new.status, TrackStatus::Redetected, "{mode:?}");
+            assert!((new.center_px - Point2::new(cx, cy)).norm() < 0.1 * r, "{new:?}");
+            assert!((new.radius_px - r).abs() < 0.1 * r, "{new:?}");
+        }
+    }
+
+    #[test]
+    fn parameters_from_before_the_redetection_run_the_paper_tracker() {
+        let mut json = serde_json::to_value(TrackParams::default()).unwrap();
+        let map = json.as_object_mut().unwrap();
+        for key in ["redetect", "local_redetect", "motion_model"] {
+            assert!(map.remove(key).is_some(), "{key}");
+        }
+        let old: TrackParams = serde_json::from_value(json).unwrap();
+        assert_eq!(old.redetect, Redetect::Off);
+        assert!(!old.motion_model);
+        assert_eq!(old.local_redetect, LocalRedetectParams::default());
+        let bad = TrackParams {
+            local_redetect: LocalRedetectParams {
+                max_radius_ratio: 0.5,
+                ..LocalRedetectParams::default()
+            },
+            ..TrackParams::default()
+        };
+        assert!(bad.invalid_reason().is_some());
     }
 }

@@ -71,9 +71,7 @@ pub use edge_scan::{
 };
 pub use hsigma::{hsigma, hsigma_integers, hsigma_of_integers};
 pub use hsigma_lut::{quantise_probability, HSigmaLut};
-pub use local_redetection::{
-    most_consistent_circle, LocalRedetectParams, Redetect, SampledRegion,
-};
+pub use local_redetection::{most_consistent_circle, LocalRedetectParams, Redetect, SampledRegion};
 pub use mask_closing::close_mask;
 pub use mask_hysteresis::hysteresis_mask;
 pub use mlp::{HSigmaSample, Mlp, MlpParams};

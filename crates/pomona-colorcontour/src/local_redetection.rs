@@ -121,7 +121,11 @@ impl LocalRedetectParams {
     }
 
     /// Whether the circle `(center, radius)` is far enough from the prediction to be doubted.
-    pub fn doubts(&self, (center, radius): (Point2<f64>, f64), predicted: (Point2<f64>, f64)) -> bool {
+    pub fn doubts(
+        &self,
+        (center, radius): (Point2<f64>, f64),
+        predicted: (Point2<f64>, f64),
+    ) -> bool {
         let (pc, pr) = predicted;
         (center - pc).norm() > self.doubt_center_radii * pr
             || (radius / pr).ln().abs() > self.doubt_radius_ratio.ln()
@@ -150,8 +154,7 @@ impl SampledRegion {
         (width, height): (u32, u32),
         max_side_samples: u32,
     ) -> Option<Self> {
-        if !(center.x.is_finite() && center.y.is_finite() && half_px.is_finite() && half_px > 0.0)
-        {
+        if !(center.x.is_finite() && center.y.is_finite() && half_px.is_finite() && half_px > 0.0) {
             return None;
         }
         let clip = |v: f64, n: u32| v.clamp(0.0, f64::from(n)) as u32;
@@ -198,11 +201,8 @@ impl SampledRegion {
             rows,
         } = *self;
         (0..rows as u32).flat_map(move |j| {
-            (0..cols as u32).map(move |i| {
-                image
-                    .get(x0 + i * step, y0 + j * step)
-                    .unwrap_or([0, 0, 0])
-            })
+            (0..cols as u32)
+                .map(move |i| image.get(x0 + i * step, y0 + j * step).unwrap_or([0, 0, 0]))
         })
     }
 
@@ -279,12 +279,15 @@ mod tests {
             support: 0.5,
         });
         assert_eq!((c.center_px, c.radius_px), (Point2::new(20.0, 40.0), 10.0));
-        let small = SampledRegion::around(Point2::new(320.0, 240.0), 20.0, (640, 480), 128).unwrap();
+        let small =
+            SampledRegion::around(Point2::new(320.0, 240.0), 20.0, (640, 480), 128).unwrap();
         assert_eq!((small.step(), small.size()), (1, (41, 41)));
         let img = ColorImage::filled(640, 480, [1, 2, 3]);
         assert_eq!(small.pixels(&img).count(), 41 * 41);
         assert!(SampledRegion::around(Point2::new(-100.0, 50.0), 20.0, (640, 480), 128).is_none());
-        assert!(SampledRegion::around(Point2::new(f64::NAN, 50.0), 20.0, (640, 480), 128).is_none());
+        assert!(
+            SampledRegion::around(Point2::new(f64::NAN, 50.0), 20.0, (640, 480), 128).is_none()
+        );
     }
 
     #[test]

@@ -6,10 +6,9 @@ use pomona_core::{Detection, PixelBox, RgbdFrame};
 use pomona_pipeline::{PipelineError, Stage};
 
 use crate::{
-    close_mask, contour_arcs, hysteresis_mask, merge_arcs, prune_overlapping, smooth_mask,
-    sphere_from_depth, sphere_from_size, trace_contours, ColorContourParams, Contour, ContourArc,
-    ContourCircle, EdgeFitParams, HSigmaLut, PIPELINE_NAME,
-    quantise_probability,
+    close_mask, contour_arcs, hysteresis_mask, merge_arcs, prune_overlapping, quantise_probability,
+    smooth_mask, sphere_from_depth, sphere_from_size, trace_contours, ColorContourParams, Contour,
+    ContourArc, ContourCircle, EdgeFitParams, HSigmaLut, PIPELINE_NAME,
 };
 
 /// Per pixel: the lookup table's value at or above the threshold (§3.1), or, with a lower
@@ -49,8 +48,7 @@ impl ColorClassStage {
     /// hysteresis from `color_grow_fraction` and `color_grow_seed_px` (off at 1).
     pub fn from_params(lut: HSigmaLut, threshold: u8, params: &ColorContourParams) -> Self {
         let grow_threshold = if params.color_grow_fraction < 1.0 {
-            quantise_probability(params.color_threshold * params.color_grow_fraction)
-                .min(threshold)
+            quantise_probability(params.color_threshold * params.color_grow_fraction).min(threshold)
         } else {
             threshold
         };

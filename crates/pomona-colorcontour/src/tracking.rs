@@ -37,10 +37,9 @@ use pomona_pipeline::{PipelineError, StageTimings};
 use serde::{Deserialize, Serialize};
 
 use crate::{
-    circle_from_boundaries, most_consistent_circle, scan_four_directions,
-    spiral_points, ColorContourDetector, ColorContourParams, ColorContourStageParams,
-    EdgeScanParams, HSigmaLut, LocalRedetectParams, Redetect, SampledRegion, ScanEnd,
-    SpiralParams,
+    circle_from_boundaries, most_consistent_circle, scan_four_directions, spiral_points,
+    ColorContourDetector, ColorContourParams, ColorContourStageParams, EdgeScanParams, HSigmaLut,
+    LocalRedetectParams, Redetect, SampledRegion, ScanEnd, SpiralParams,
 };
 
 /// Every tunable of the tracker, defaulted to seed 004's values where it gives them.
@@ -654,8 +653,8 @@ mod tests {
     fn touching_pair_error(params: TrackParams, n: (f64, f64, f64), frames: usize) -> f64 {
         let (cx, cy, r) = (60.0, 60.0, 20.0);
         let img = scene(140, 110, &[(cx, cy, r), n]);
-        let mut t = ApproachTracker::new(orange_lut(), 128, params, Point2::new(cx, cy), r)
-            .unwrap();
+        let mut t =
+            ApproachTracker::new(orange_lut(), 128, params, Point2::new(cx, cy), r).unwrap();
         let mut est = t.update(&img);
         for _ in 1..frames {
             est = t.update(&img);
@@ -701,7 +700,10 @@ mod tests {
         for mode in [Redetect::Always, Redetect::OnDoubt] {
             let new = run(redetecting(mode));
             assert_eq!(new.status, TrackStatus::Redetected, "{mode:?}");
-            assert!((new.center_px - Point2::new(cx, cy)).norm() < 0.1 * r, "{new:?}");
+            assert!(
+                (new.center_px - Point2::new(cx, cy)).norm() < 0.1 * r,
+                "{new:?}"
+            );
             assert!((new.radius_px - r).abs() < 0.1 * r, "{new:?}");
         }
     }

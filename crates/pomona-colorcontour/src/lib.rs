@@ -32,7 +32,9 @@
 //! expected position, a four-direction edge scan and circle fit ([`scan_four_directions`],
 //! [`circle_from_boundaries`]), and a rectangular spiral search with growing steps ([`spiral_points`]) when
 //! the fruit is not where expected, with recovery after loss; it classifies pixels with a
-//! model's colour table ([`ColorContourStageParams::color_table`]).
+//! model's colour table ([`ColorContourStageParams::color_table`]). Not in the paper: a local
+//! re-detection with the detector's own stages on a window around the fruit ([`Redetect`],
+//! [`ColorContourDetector::fitted_circles_in`]) where the four scans are in doubt.
 
 mod arc_half_angle;
 mod circle_in_space;

@@ -171,7 +171,8 @@ pub struct TrackEstimate {
     pub radius_px: f64,
     /// How it was obtained.
     pub status: TrackStatus,
-    /// 5×5 checks made this frame (1 when the fruit was where expected).
+    /// 5×5 checks made this frame (1 when the fruit was where expected; 0 when the local
+    /// re-detection, run first with `redetect = always`, found it).
     pub probes: usize,
 }
 

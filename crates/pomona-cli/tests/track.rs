@@ -70,6 +70,7 @@ fn approach_sequences_are_tracked_to_the_target() {
     assert_eq!(track["frames"].as_array().unwrap().len(), 12);
     assert!(track["frames"][11]["error_radii"].is_number(), "{track}");
     assert_eq!(report["params"]["scan_threshold_fraction"], 0.75);
+    assert_eq!(report["params"]["redetect"], "on-doubt");
 
     // `--set` overrides a tracker parameter, recorded in the report; a typo or an invalid
     // value is an error that says so.
@@ -81,9 +82,18 @@ fn approach_sequences_are_tracked_to_the_target() {
     ]);
     assert_eq!(report["params"]["scan_threshold_fraction"], 1.0);
     assert_eq!(report["params"]["edge_scan"]["gap_px"], 3);
+    // The local re-detection every frame: most frames are found by it.
+    let report = track_from_truth(&["--set", r#"redetect="always""#]);
+    assert_eq!(report["params"]["redetect"], "always");
+    let redetected = report["redetected_frames"].as_u64().unwrap();
+    assert!(redetected > 18, "{report}");
+    let rate = report["success_rate"].as_f64().unwrap();
+    assert!(rate >= 2.0 / 3.0, "success rate {rate}: {report}");
     for (set, says) in [
         ("scan_fraction=1.0", "scan_fraction"),
         ("scan_threshold_fraction=0", "scan_threshold_fraction"),
+        ("local_redetect.max_radius_ratio=0.5", "max_radius_ratio"),
+        (r#"redetect="sometimes""#, "sometimes"),
     ] {
         let out = pomona(&["track", "--data", data_s, "--out", tracks_s, "--set", set]);
         assert!(!out.status.success());

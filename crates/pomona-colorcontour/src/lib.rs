@@ -32,7 +32,9 @@
 //! expected position, a four-direction edge scan and circle fit ([`scan_four_directions`],
 //! [`circle_from_boundaries`]), and a rectangular spiral search with growing steps ([`spiral_points`]) when
 //! the fruit is not where expected, with recovery after loss; it classifies pixels with a
-//! model's colour table ([`ColorContourStageParams::color_table`]).
+//! model's colour table ([`ColorContourStageParams::color_table`]). Not in the paper: a local
+//! re-detection with the detector's own stages on a window around the fruit ([`Redetect`],
+//! [`ColorContourDetector::fitted_circles_in`]) where the four scans are in doubt.
 
 mod arc_half_angle;
 mod circle_in_space;
@@ -44,6 +46,7 @@ mod contour_circles;
 mod edge_scan;
 mod hsigma;
 mod hsigma_lut;
+mod local_redetection;
 mod mask_closing;
 mod mask_hysteresis;
 mod mlp;
@@ -70,6 +73,7 @@ pub use edge_scan::{
 };
 pub use hsigma::{hsigma, hsigma_integers, hsigma_of_integers};
 pub use hsigma_lut::{quantise_probability, HSigmaLut};
+pub use local_redetection::{most_consistent_circle, LocalRedetectParams, Redetect, SampledRegion};
 pub use mask_closing::close_mask;
 pub use mask_hysteresis::hysteresis_mask;
 pub use mlp::{HSigmaSample, Mlp, MlpParams};

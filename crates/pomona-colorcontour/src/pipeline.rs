@@ -1,7 +1,7 @@
 //! The `color-contour` pipeline: training (the colour perceptron on fruit and background pixels)
 //! and the detector that chains the stages.
 
-use pomona_core::{Detection, RgbdFrame};
+use pomona_core::{ColorImage, Detection, RgbdFrame};
 use pomona_learn::{ModelFile, SvmClassifier};
 use pomona_pipeline::{
     params_from_json, params_to_json, run_stage, Detector, FrameSource, Pipeline, PipelineError,
@@ -14,6 +14,7 @@ use crate::stages::{ColorClassStage, ContourStage, EdgeFitStage, FruitStage};
 use crate::{
     best_f1_threshold, quantise_probability, radius_pairs, sphere_outline_circle, training_pixels,
     value_histograms, ColorContourParams, ContourCircle, HSigmaLut, Mlp, RadiusCorrection,
+    SampledRegion,
 };
 
 /// Fruit less visible than this are left out when the radius correction is learnt (their
@@ -237,6 +238,7 @@ fn learn_radius_correction(
 }
 
 /// A trained colour-contour detector.
+#[derive(Debug, Clone)]
 pub struct ColorContourDetector {
     color: ColorClassStage,
     smoothing_half_window: usize,
@@ -254,7 +256,20 @@ impl ColorContourDetector {
     /// [`PipelineError::InvalidParameter`] for out-of-range parameters.
     pub fn new(stage: &ColorContourStageParams) -> Result<Self, PipelineError> {
         let (lut, threshold) = stage.color_table()?;
-        let p = &stage.params;
+        Self::from_table(lut, threshold, &stage.params)
+    }
+
+    /// Builds the stages from a compiled colour table (fruit from table value `threshold`) and
+    /// the stage parameters `p` (their `color_threshold` only scales the hysteresis threshold,
+    /// `color_grow_fraction` × `color_threshold`).
+    ///
+    /// # Errors
+    /// [`PipelineError::InvalidParameter`] for out-of-range parameters.
+    pub fn from_table(
+        lut: HSigmaLut,
+        threshold: u8,
+        p: &ColorContourParams,
+    ) -> Result<Self, PipelineError> {
         let invalid = |name: &str, reason: &str| PipelineError::InvalidParameter {
             name: name.into(),
             reason: reason.into(),
@@ -262,7 +277,6 @@ impl ColorContourDetector {
         if !(0.0..=1.0).contains(&p.color_grow_fraction) {
             return Err(invalid("color_grow_fraction", "must lie in [0, 1]"));
         }
-        let grow_threshold = quantise_probability(p.color_threshold * p.color_grow_fraction);
         if p.edge_fit.merge_max_rms.is_nan() || p.edge_fit.merge_max_rms < 0.0 {
             return Err(invalid(
                 "edge_fit.merge_max_rms",
@@ -290,16 +304,7 @@ impl ColorContourDetector {
             return Err(invalid("prior_radius_m", "must be positive"));
         }
         Ok(Self {
-            color: ColorClassStage {
-                lut,
-                threshold,
-                grow_threshold: if p.color_grow_fraction < 1.0 {
-                    grow_threshold.min(threshold)
-                } else {
-                    threshold
-                },
-                grow_seed_px: p.color_grow_seed_px,
-            },
+            color: ColorClassStage::from_params(lut, threshold, p),
             smoothing_half_window: p.edge_fit.smoothing_half_window,
             min_component_px: p.min_component_px,
             mask_closing_px: p.mask_closing_px,
@@ -321,15 +326,48 @@ impl ColorContourDetector {
         timings: &mut StageTimings,
     ) -> Result<(Vec<bool>, Vec<ContourCircle>), PipelineError> {
         let fruit = run_stage(&self.color, frame, timings)?;
+        let circles = self.circles_of_mask(&fruit, frame.camera().width as usize, timings)?;
+        Ok((fruit, circles))
+    }
+
+    /// The circles fitted on the outlines of a fruit mask (row-major, `width` wide): the
+    /// contour and edge-fit stages.
+    fn circles_of_mask(
+        &self,
+        fruit: &[bool],
+        width: usize,
+        timings: &mut StageTimings,
+    ) -> Result<Vec<ContourCircle>, PipelineError> {
         let contour_stage = ContourStage {
             closing_px: self.mask_closing_px,
             min_component_px: self.min_component_px,
             smoothing_half_window: self.smoothing_half_window,
-            width: frame.camera().width as usize,
+            width,
         };
-        let contours = run_stage(&contour_stage, fruit.as_slice(), timings)?;
-        let circles = run_stage(&self.edge_fit, contours.as_slice(), timings)?;
-        Ok((fruit, circles))
+        let contours = run_stage(&contour_stage, fruit, timings)?;
+        run_stage(&self.edge_fit, contours.as_slice(), timings)
+    }
+
+    /// The first three stages on a region of `image` only (the tracker's local re-detection,
+    /// [`crate::SampledRegion`]): the circles fitted on the outlines of the region's fruit mask,
+    /// in image pixels, before the radius correction, the size test and the pruning. Outlines
+    /// that the region's border cuts run straight along it and give no circles there.
+    ///
+    /// # Errors
+    /// Those of the stages (none at present).
+    pub fn fitted_circles_in(
+        &self,
+        image: &ColorImage,
+        region: &SampledRegion,
+        timings: &mut StageTimings,
+    ) -> Result<Vec<ContourCircle>, PipelineError> {
+        let (cols, rows) = region.size();
+        let fruit = self.color.classify(region.pixels(image), cols, rows);
+        Ok(self
+            .circles_of_mask(&fruit, cols, timings)?
+            .into_iter()
+            .map(|c| region.circle_to_image(c))
+            .collect())
     }
 }
 

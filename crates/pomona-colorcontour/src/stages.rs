@@ -6,13 +6,14 @@ use pomona_core::{Detection, PixelBox, RgbdFrame};
 use pomona_pipeline::{PipelineError, Stage};
 
 use crate::{
-    close_mask, contour_arcs, hysteresis_mask, merge_arcs, prune_overlapping, smooth_mask,
-    sphere_from_depth, sphere_from_size, trace_contours, ColorContourParams, Contour, ContourArc,
-    ContourCircle, EdgeFitParams, HSigmaLut, PIPELINE_NAME,
+    close_mask, contour_arcs, hysteresis_mask, merge_arcs, prune_overlapping, quantise_probability,
+    smooth_mask, sphere_from_depth, sphere_from_size, trace_contours, ColorContourParams, Contour,
+    ContourArc, ContourCircle, EdgeFitParams, HSigmaLut, PIPELINE_NAME,
 };
 
 /// Per pixel: the lookup table's value at or above the threshold (§3.1), or, with a lower
 /// `grow_threshold`, grown into weaker neighbours by [`crate::hysteresis_mask`].
+#[derive(Debug, Clone)]
 pub struct ColorClassStage {
     /// The compiled perceptron.
     pub lut: HSigmaLut,
@@ -33,26 +34,59 @@ impl Stage<&RgbdFrame, Vec<bool>> for ColorClassStage {
         let color = frame.color().ok_or(PipelineError::MissingColor {
             pipeline: PIPELINE_NAME,
         })?;
-        if self.grow_threshold >= self.threshold {
-            return Ok(color
-                .pixels()
-                .map(|rgb| self.lut.value(rgb) >= self.threshold)
-                .collect());
-        }
-        let values: Vec<u8> = color.pixels().map(|rgb| self.lut.value(rgb)).collect();
         let camera = frame.camera();
-        Ok(hysteresis_mask(
-            &values,
+        Ok(self.classify(
+            color.pixels(),
             camera.width as usize,
             camera.height as usize,
+        ))
+    }
+}
+
+impl ColorClassStage {
+    /// The stage with the detector's settings: `threshold` from the model's colour table, the
+    /// hysteresis from `color_grow_fraction` and `color_grow_seed_px` (off at 1).
+    pub fn from_params(lut: HSigmaLut, threshold: u8, params: &ColorContourParams) -> Self {
+        let grow_threshold = if params.color_grow_fraction < 1.0 {
+            quantise_probability(params.color_threshold * params.color_grow_fraction).min(threshold)
+        } else {
+            threshold
+        };
+        Self {
+            lut,
+            threshold,
+            grow_threshold,
+            grow_seed_px: params.color_grow_seed_px,
+        }
+    }
+
+    /// The mask of `pixels`, row-major, `width` × `height` (a whole frame, or a region of one:
+    /// the local re-detection of the tracker classifies a window around the fruit).
+    pub fn classify(
+        &self,
+        pixels: impl Iterator<Item = [u8; 3]>,
+        width: usize,
+        height: usize,
+    ) -> Vec<bool> {
+        if self.grow_threshold >= self.threshold {
+            return pixels
+                .map(|rgb| self.lut.value(rgb) >= self.threshold)
+                .collect();
+        }
+        let values: Vec<u8> = pixels.map(|rgb| self.lut.value(rgb)).collect();
+        hysteresis_mask(
+            &values,
+            width,
+            height,
             (self.threshold, self.grow_threshold),
             self.grow_seed_px,
-        ))
+        )
     }
 }
 
 /// Optional closing ([`crate::close_mask`]), 5×5 Gaussian, threshold, outer borders of the
 /// components, smoothed (see [`crate::Contour`]).
+#[derive(Debug, Clone)]
 pub struct ContourStage {
     /// Half-width of the closing square, pixels (0: no closing).
     pub closing_px: usize,
@@ -82,6 +116,7 @@ impl Stage<&[bool], Vec<Contour>> for ContourStage {
 
 /// Circles from every contour (Eq. 8, adaptive windows, grouping at centre jumps), then arcs of
 /// one circle merged ([`crate::merge_arcs`]).
+#[derive(Debug, Clone)]
 pub struct EdgeFitStage {
     /// Fitting parameters.
     pub params: EdgeFitParams,
@@ -152,6 +187,7 @@ fn color_purity(fruit: &[bool], width: usize, height: usize, c: &ContourCircle) 
 ///
 /// `bbox_px` is the square around the circle (not clipped to the image), so the image circle is
 /// its centre and half its width.
+#[derive(Debug, Clone)]
 pub struct FruitStage {
     /// The detector's parameters.
     pub params: ColorContourParams,

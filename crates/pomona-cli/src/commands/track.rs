@@ -1,6 +1,8 @@
 //! `pomona track`: follow the target fruit through every approach sequence of a folder made by
 //! `pomona synth --approach`, with seed 004's approach tracker (§3.3,
-//! `pomona_colorcontour::ApproachTracker`), and score it.
+//! `pomona_colorcontour::ApproachTracker`; by default with the local contour re-detection,
+//! `--set redetect="off"` for the paper's tracker alone), and score it. The tracker uses the
+//! model's colour table and, for the re-detection, its stage parameters.
 //!
 //! Per sequence (`DIR/seq-*/`, a dataset with `approach.json` naming the target):
 //! * the track starts from the first frame's `color-contour` detection nearest the target's
@@ -82,7 +84,7 @@ pub struct TrackedFrame {
     pub center_px: [f64; 2],
     /// Estimated radius, pixels.
     pub radius_px: f64,
-    /// `confirmed`, `searched` or `lost`.
+    /// `confirmed`, `searched`, `redetected` or `lost`.
     pub status: TrackStatus,
     /// 5×5 checks made.
     pub probes: usize,
@@ -136,6 +138,8 @@ pub struct TrackReport {
     pub searched_frames: usize,
     /// Frames lost.
     pub lost_frames: usize,
+    /// Frames found by the local contour re-detection (`redetect` not `off`).
+    pub redetected_frames: usize,
     /// How tracks started.
     pub init: InitArg,
     /// The tracker's parameters (defaults with `--set` applied).
@@ -230,7 +234,7 @@ fn track_sequence(
     dir: &Path,
     args: &TrackArgs,
     params: TrackParams,
-    table: &(pomona_colorcontour::HSigmaLut, u8),
+    model: &ColorContourStageParams,
     detector: &pomona::Detector,
 ) -> Result<SequenceTrack> {
     let name = dir
@@ -287,9 +291,8 @@ fn track_sequence(
         return Ok(track);
     };
     track.init_circle_px = Some([c0.x, c0.y, r0]);
-    let (lut, threshold) = table.clone();
     let mut tracker =
-        ApproachTracker::new(lut, threshold, params, c0, r0).context("cannot start the tracker")?;
+        ApproachTracker::from_model(model, params, c0, r0).context("cannot start the tracker")?;
     for stem in dataset.frames() {
         let color = dataset
             .load_color(stem)?
@@ -327,24 +330,24 @@ pub fn run(args: &TrackArgs) -> Result<TrackReport> {
     let params = track_params(&args.set)?;
     let dirs = sequences(&args.data)?;
     let model = model_file(args.model.as_deref())?;
-    let table = ColorContourStageParams::from_model(&model)
-        .and_then(|s| s.color_table())
-        .context("the model's colour table")?;
+    let stage = ColorContourStageParams::from_model(&model).context("the model's parameters")?;
+    stage.color_table().context("the model's colour table")?;
     let pipeline = pomona::pipeline(PIPELINE_NAME)?;
     let detector = load_detector(pipeline.as_ref(), args.model.as_deref(), &[])?;
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create {}", args.out.display()))?;
     let mut per_sequence = Vec::new();
     let mut times = Vec::new();
-    let (mut searched, mut lost) = (0, 0);
+    let (mut searched, mut lost, mut redetected) = (0, 0, 0);
     for dir in &dirs {
-        let track = track_sequence(dir, args, params, &table, &detector)
+        let track = track_sequence(dir, args, params, &stage, &detector)
             .with_context(|| format!("tracking {}", dir.display()))?;
         write_json(&args.out.join(format!("{}.json", track.sequence)), &track)?;
         for f in &track.frames {
             times.push(f.ms);
             searched += usize::from(f.status == TrackStatus::Searched);
             lost += usize::from(f.status == TrackStatus::Lost);
+            redetected += usize::from(f.status == TrackStatus::Redetected);
         }
         per_sequence.push(SequenceResult {
             sequence: track.sequence.clone(),
@@ -366,13 +369,14 @@ pub fn run(args: &TrackArgs) -> Result<TrackReport> {
         frames: times.len(),
         searched_frames: searched,
         lost_frames: lost,
+        redetected_frames: redetected,
         init: args.init,
         params,
         per_sequence,
     };
     println!(
         "tracked {} sequences ({} frames, init {}): success_rate {:.3} ({} of {}), ms_per_frame \
-         {:.4} (median {:.4}, max {:.3}), {} frames found by search, {} lost",
+         {:.4} (median {:.4}, max {:.3}), {} frames found by search, {} by re-detection, {} lost",
         report.sequences,
         report.frames,
         match args.init {
@@ -386,6 +390,7 @@ pub fn run(args: &TrackArgs) -> Result<TrackReport> {
         report.ms_per_frame_median,
         report.ms_per_frame_max,
         report.searched_frames,
+        report.redetected_frames,
         report.lost_frames
     );
     if let Some(path) = &args.json {

@@ -24,9 +24,8 @@
 //! a closing of the mask ([`close_mask`]), least-squares circles of each group's contour points
 //! ([`GroupCircle`], [`refine_circle`]), merging of arcs that lie on one circle
 //! ([`merge_arcs`]), ranking overlapping circles by arc length ([`PruneRank`]) and taking them
-//! for one fruit only when their centres are close ([`clash`]); and one that is off by default,
-//! a correction of the fitted radii ([`RadiusCorrection`], fixed or learnt in training). Not
-//! built here: stereo matching (§4).
+//! for one fruit only when their centres are close ([`clash`]). Not built here: stereo matching
+//! (§4).
 //!
 //! Tracking during the arm's approach (§3.3) is [`ApproachTracker`]: a 5×5 colour check at the
 //! expected position, a four-direction edge scan and circle fit ([`scan_four_directions`],
@@ -53,7 +52,6 @@ mod mlp;
 mod params;
 mod pipeline;
 mod pixel_f1;
-mod radius_correction;
 mod spiral_search;
 pub mod stages;
 mod tracking;
@@ -82,7 +80,6 @@ pub use pipeline::{
     ColorContourDetector, ColorContourPipeline, ColorContourStageParams, PIPELINE_NAME,
 };
 pub use pixel_f1::{best_f1_threshold, pixel_counts, value_histograms, PixelCounts};
-pub use radius_correction::{radius_pairs, sphere_outline_circle, RadiusCorrection};
 pub use spiral_search::{spiral_points, SpiralParams};
 pub use tracking::{ApproachTracker, TrackEstimate, TrackParams, TrackStatus};
 pub use training_pixels::{fruit_labels, training_pixels};

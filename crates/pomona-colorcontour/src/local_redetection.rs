@@ -64,12 +64,6 @@ pub struct LocalRedetectParams {
     pub max_radius_ratio: f64,
     /// Weight of `|ln(r / r_pred)|` against the centre shift in predicted radii.
     pub radius_weight: f64,
-    /// The chosen circle is replaced by the support-weighted mean of the candidates whose
-    /// centres lie within this many predicted radii of its centre (arcs of one fruit that the
-    /// edge fit did not merge, e.g. the flatter top and bottom of an oblate fruit seen close
-    /// up); 0 = the chosen circle alone.
-    #[serde(default)]
-    pub average_within_radii: f64,
     /// With [`Redetect::OnDoubt`]: the paper's circle is doubted when its centre lies more than
     /// this many predicted radii from the predicted centre …
     pub doubt_center_radii: f64,
@@ -86,7 +80,6 @@ impl Default for LocalRedetectParams {
             max_center_shift_radii: 0.8,
             max_radius_ratio: 1.3,
             radius_weight: 1.0,
-            average_within_radii: 0.0,
             doubt_center_radii: 0.15,
             doubt_radius_ratio: 1.1,
         }
@@ -109,8 +102,6 @@ impl LocalRedetectParams {
             Some("local_redetect.max_radius_ratio must be at least 1")
         } else if !(self.radius_weight.is_finite() && self.radius_weight >= 0.0) {
             Some("local_redetect.radius_weight must be 0 or positive")
-        } else if !(self.average_within_radii.is_finite() && self.average_within_radii >= 0.0) {
-            Some("local_redetect.average_within_radii must be 0 or positive")
         } else if !(self.doubt_center_radii.is_finite() && self.doubt_center_radii >= 0.0) {
             Some("local_redetect.doubt_center_radii must be 0 or positive")
         } else if !(self.doubt_radius_ratio.is_finite() && self.doubt_radius_ratio >= 1.0) {
@@ -228,7 +219,7 @@ pub fn most_consistent_circle(
     params: &LocalRedetectParams,
 ) -> Option<ContourCircle> {
     let max_log = params.max_radius_ratio.ln();
-    let candidates: Vec<(f64, &ContourCircle)> = circles
+    circles
         .iter()
         .filter(|c| c.support >= params.min_support && c.radius_px > 0.0)
         .filter_map(|c| {
@@ -237,30 +228,8 @@ pub fn most_consistent_circle(
             (shift <= params.max_center_shift_radii && log_ratio <= max_log)
                 .then_some((shift + params.radius_weight * log_ratio, c))
         })
-        .collect();
-    let best = *candidates.iter().min_by(|a, b| a.0.total_cmp(&b.0))?.1;
-    if params.average_within_radii <= 0.0 {
-        return Some(best);
-    }
-    let reach = params.average_within_radii * radius;
-    let (mut x, mut y, mut r, mut w) = (0.0, 0.0, 0.0, 0.0);
-    for (_, c) in candidates
-        .iter()
-        .filter(|(_, c)| (c.center_px - best.center_px).norm() <= reach)
-    {
-        x += c.support * c.center_px.x;
-        y += c.support * c.center_px.y;
-        r += c.support * c.radius_px;
-        w += c.support;
-    }
-    if w <= 0.0 {
-        return Some(best);
-    }
-    Some(ContourCircle {
-        center_px: Point2::new(x / w, y / w),
-        radius_px: r / w,
-        support: best.support,
-    })
+        .min_by(|a, b| a.0.total_cmp(&b.0))
+        .map(|(_, c)| *c)
 }
 
 #[cfg(test)]

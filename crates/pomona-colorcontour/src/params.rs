@@ -4,7 +4,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::{EdgeFitParams, MlpParams, PruneRank, RadiusCorrection};
+use crate::{EdgeFitParams, MlpParams, PruneRank};
 
 /// Parameters of every stage.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -44,18 +44,6 @@ pub struct ColorContourParams {
     pub mask_closing_px: usize,
     /// The adaptive edge fitting (Eq. 8).
     pub edge_fit: EdgeFitParams,
-    /// Correction of every fitted radius before the size test, the score and the overlap
-    /// pruning (not in the paper, see [`crate::RadiusCorrection`]); none (scale 1, offset 0) is
-    /// the paper's behaviour, what model files from before this setting mean, and the default:
-    /// fixed, learnt, shrinking or growing corrections all lowered recall on the tuning sets
-    /// (docs/results.md).
-    #[serde(default)]
-    pub radius_correction: RadiusCorrection,
-    /// Whether training replaces `radius_correction` by the one fitted on the training frames
-    /// (fitted against the outlines of their fruit, [`crate::RadiusCorrection::fit`]; default
-    /// off, see `radius_correction`).
-    #[serde(default)]
-    pub learn_radius_correction: bool,
     /// Circles need at least this support (arc spanned over circumference) to be reported.
     pub min_support: f64,
     /// Of two circles sharing more than this fraction of the smaller one's area, the weaker is
@@ -96,8 +84,6 @@ impl Default for ColorContourParams {
             min_component_px: 40,
             mask_closing_px: 2,
             edge_fit: EdgeFitParams::default(),
-            radius_correction: RadiusCorrection::NONE,
-            learn_radius_correction: false,
             min_support: 0.15,
             max_overlap: 0.4,
             prune_rank: PruneRank::ArcLength,

@@ -12,14 +12,9 @@ use serde::{Deserialize, Serialize};
 
 use crate::stages::{ColorClassStage, ContourStage, EdgeFitStage, FruitStage};
 use crate::{
-    best_f1_threshold, quantise_probability, radius_pairs, sphere_outline_circle, training_pixels,
-    value_histograms, ColorContourParams, ContourCircle, HSigmaLut, Mlp, RadiusCorrection,
-    SampledRegion,
+    best_f1_threshold, quantise_probability, training_pixels, value_histograms, ColorContourParams,
+    ContourCircle, HSigmaLut, Mlp, SampledRegion,
 };
-
-/// Fruit less visible than this are left out when the radius correction is learnt (their
-/// outline is mostly leaves and neighbours; the 2D evaluation ignores them too).
-const RADIUS_TRAINING_MIN_VISIBILITY: f64 = 0.5;
 
 /// Name of the pipeline on the command line and in model files.
 pub const PIPELINE_NAME: &str = "color-contour";
@@ -171,9 +166,6 @@ impl Pipeline for ColorContourPipeline {
                 params.color_threshold = f64::from(t) / 255.0;
             }
         }
-        if params.learn_radius_correction {
-            params.radius_correction = learn_radius_correction(frames, &params, &mlp)?;
-        }
         let stage = ColorContourStageParams { params, mlp };
         Ok(ModelFile::new(
             PIPELINE_NAME,
@@ -193,48 +185,6 @@ impl Pipeline for ColorContourPipeline {
         let stage = ColorContourStageParams::from_model(model)?;
         Ok(Box::new(ColorContourDetector::new(&stage)?))
     }
-}
-
-/// The radius correction that best maps the circles fitted on the training frames to the
-/// outlines of their well-visible fruit ([`crate::sphere_outline_circle`] of the truth sphere,
-/// else the annotated circle; [`RadiusCorrection::fit`]); none when too few fruit were paired.
-fn learn_radius_correction(
-    frames: &dyn FrameSource,
-    params: &ColorContourParams,
-    mlp: &Mlp,
-) -> Result<RadiusCorrection, PipelineError> {
-    let detector = ColorContourDetector::new(&ColorContourStageParams {
-        params: params.clone(),
-        mlp: mlp.clone(),
-    })?;
-    let per_frame: Result<Vec<Vec<(f64, f64)>>, PipelineError> = (0..frames.len())
-        .into_par_iter()
-        .map(|i| {
-            let lf = frames.load(i)?;
-            let (_, circles) = detector.fitted_circles(&lf.frame, &mut StageTimings::default())?;
-            let circles: Vec<ContourCircle> = circles
-                .into_iter()
-                .filter(|c| c.support >= params.min_support)
-                .collect();
-            let camera = lf.frame.camera();
-            let truth: Vec<_> = lf
-                .truth
-                .fruits
-                .iter()
-                .filter(|f| {
-                    f.visibility
-                        .is_none_or(|v| v >= RADIUS_TRAINING_MIN_VISIBILITY)
-                })
-                .filter_map(|f| match f.center_m.zip(f.diameter_m) {
-                    Some((c, d)) => sphere_outline_circle(camera, &c, 0.5 * d),
-                    None => f.image_circle(camera),
-                })
-                .collect();
-            Ok(radius_pairs(&circles, &truth))
-        })
-        .collect();
-    let pairs: Vec<(f64, f64)> = per_frame?.into_iter().flatten().collect();
-    Ok(RadiusCorrection::fit(&pairs).unwrap_or(RadiusCorrection::NONE))
 }
 
 /// A trained colour-contour detector.
@@ -293,12 +243,6 @@ impl ColorContourDetector {
         }
         if !(p.prune_center_reach.is_finite() && p.prune_center_reach >= 0.0) {
             return Err(invalid("prune_center_reach", "must be 0 (off) or positive"));
-        }
-        if !p.radius_correction.is_valid() {
-            return Err(invalid(
-                "radius_correction",
-                "needs a finite positive scale and a finite offset",
-            ));
         }
         if p.prior_radius_m.is_nan() || p.prior_radius_m <= 0.0 {
             return Err(invalid("prior_radius_m", "must be positive"));
@@ -403,22 +347,15 @@ mod tests {
     }
 
     #[test]
-    fn model_files_without_the_pruning_and_radius_settings_run_the_previous_behaviour() {
+    fn model_files_without_the_pruning_settings_run_the_previous_behaviour() {
         let mut json = serde_json::to_value(built_in()).unwrap();
         let params = json["params"].as_object_mut().unwrap();
-        for key in [
-            "prune_rank",
-            "prune_center_reach",
-            "radius_correction",
-            "learn_radius_correction",
-        ] {
+        for key in ["prune_rank", "prune_center_reach"] {
             assert!(params.remove(key).is_some(), "{key}");
         }
         let old: ColorContourStageParams = serde_json::from_value(json).unwrap();
         assert_eq!(old.params.prune_rank, crate::PruneRank::Score);
         assert_eq!(old.params.prune_center_reach, 0.0);
-        assert_eq!(old.params.radius_correction, RadiusCorrection::NONE);
-        assert!(!old.params.learn_radius_correction);
     }
 
     #[test]
@@ -440,7 +377,6 @@ mod tests {
         );
         assert_eq!(stage.params.prune_rank, defaults.prune_rank);
         assert_eq!(stage.params.prune_center_reach, defaults.prune_center_reach);
-        assert_eq!(stage.params.radius_correction, RadiusCorrection::NONE);
         assert!(ColorContourDetector::new(&stage).is_ok());
         for (name, change) in [
             (
@@ -454,10 +390,6 @@ mod tests {
             }),
             ("prune_center_reach", |p| p.prune_center_reach = -0.5),
             ("prune_center_reach", |p| p.prune_center_reach = f64::NAN),
-            ("radius_correction", |p| p.radius_correction.scale = 0.0),
-            ("radius_correction", |p| {
-                p.radius_correction.offset_px = f64::INFINITY
-            }),
         ] {
             let mut bad = stage.clone();
             change(&mut bad.params);

@@ -169,11 +169,8 @@ fn color_purity(fruit: &[bool], width: usize, height: usize, c: &ContourCircle) 
     }
 }
 
-/// From circles to detections: support check, radius correction, size check, score, overlap
-/// pruning, 3D.
+/// From circles to detections: support check, size check, score, overlap pruning, 3D.
 ///
-/// * the radius is corrected first ([`crate::RadiusCorrection`]; none by default in old model
-///   files), and everything below uses the corrected circle;
 /// * score = support (arc spanned over circumference) × colour purity (fraction of the circle
 ///   that is fruit-coloured): a confidence-like value in [0, 1];
 /// * size (§3.2): with depth inside the circle, the fruit radius in metres must lie in
@@ -221,10 +218,6 @@ impl<'a> Stage<(&'a RgbdFrame, &'a [bool], &'a [ContourCircle]), Vec<Detection>>
             .iter()
             .filter(|c| c.support >= p.min_support)
             .filter_map(|c| {
-                let c = &ContourCircle {
-                    radius_px: p.radius_correction.apply(c.radius_px)?,
-                    ..*c
-                };
                 let (center_m, diameter_m) = match sphere_from_depth(
                     frame,
                     fruit,

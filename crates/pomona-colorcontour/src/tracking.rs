@@ -37,12 +37,11 @@
 //! track ([`TrackStatus::Redetected`]) — every frame (`always`), or only when the paper's check
 //! finds no circle or one that disagrees with the expected centre or radius (`on-doubt`). Four
 //! scans from one point cannot tell a touching neighbour or a leaf from the fruit's outline; the
-//! edge fit sees pieces of outline and their curvature. And a **motion model** (`motion_model`):
-//! the expected circle is the last one moved by a running mean of the centre's displacements
-//! between frames (each new one weighted ½) and grown by a running geometric mean of the
-//! radius growth factors, instead of the last one.
+//! edge fit sees pieces of outline and their curvature. The expected circle is the last one (a
+//! constant-velocity and growth-rate prediction was tried with the re-detection and lowered the
+//! success rate on the tuning set; docs/results.md, "Local contour re-detection").
 
-use pomona_core::nalgebra::{Point2, Vector2};
+use pomona_core::nalgebra::Point2;
 use pomona_core::ColorImage;
 use pomona_pipeline::{PipelineError, StageTimings};
 use serde::{Deserialize, Serialize};
@@ -93,12 +92,6 @@ pub struct TrackParams {
     /// The local re-detection's window and choice of circle.
     #[serde(default)]
     pub local_redetect: LocalRedetectParams,
-    /// Predict each frame's circle from the previous ones (constant image velocity of the
-    /// centre, constant growth rate of the radius) instead of repeating the last one. Off (the
-    /// paper, and what parameters from before this setting mean) by default: with the
-    /// re-detection it lowered the success rate on the tuning set (docs/results.md).
-    #[serde(default)]
-    pub motion_model: bool,
 }
 
 fn one() -> f64 {
@@ -120,7 +113,6 @@ impl Default for TrackParams {
             scan_threshold_fraction: 0.75,
             redetect: Redetect::OnDoubt,
             local_redetect: LocalRedetectParams::default(),
-            motion_model: false,
         }
     }
 }
@@ -187,11 +179,6 @@ pub struct ApproachTracker {
     center_px: Point2<f64>,
     radius_px: f64,
     lost_in_a_row: u32,
-    /// Centre motion per frame and radius growth factor per frame (the motion model).
-    velocity_px: Vector2<f64>,
-    growth: f64,
-    /// Whether the last frame gave a circle (so the motion between frames can be measured).
-    moved_from_found: bool,
 }
 
 /// Fruit colour of the pixels of one image, looked up on demand.
@@ -295,9 +282,6 @@ impl ApproachTracker {
             center_px,
             radius_px,
             lost_in_a_row: 0,
-            velocity_px: Vector2::zeros(),
-            growth: 1.0,
-            moved_from_found: false,
         })
     }
 
@@ -317,7 +301,7 @@ impl ApproachTracker {
             scan_threshold,
         };
         let limits = self.radius_limits();
-        let predicted = self.predicted();
+        let predicted = (self.center_px, self.radius_px);
         let mut probes = 0;
         let mut found = None;
         let mut status = TrackStatus::Confirmed;
@@ -344,18 +328,13 @@ impl ApproachTracker {
         }
         match found {
             Some((c, r)) => {
-                self.update_motion(c, r);
                 self.center_px = c;
                 self.radius_px = r;
                 self.lost_in_a_row = 0;
-                self.moved_from_found = true;
             }
             None => {
                 status = TrackStatus::Lost;
                 self.lost_in_a_row += 1;
-                self.velocity_px = Vector2::zeros();
-                self.growth = 1.0;
-                self.moved_from_found = false;
             }
         }
         TrackEstimate {
@@ -364,31 +343,6 @@ impl ApproachTracker {
             status,
             probes,
         }
-    }
-
-    /// The circle expected in the next frame: the last one, or with the motion model the last
-    /// one moved by the velocity and grown by the growth rate.
-    fn predicted(&self) -> (Point2<f64>, f64) {
-        if self.params.motion_model {
-            (
-                self.center_px + self.velocity_px,
-                self.radius_px * self.growth,
-            )
-        } else {
-            (self.center_px, self.radius_px)
-        }
-    }
-
-    /// Measures the motion from the last circle to `(c, r)` (when the last frame gave one) and
-    /// averages it with the previous measurement.
-    fn update_motion(&mut self, c: Point2<f64>, r: f64) {
-        if !self.moved_from_found {
-            return;
-        }
-        let k = self.params.max_radius_change;
-        let growth = (r / self.radius_px).clamp(1.0 / k, k);
-        self.velocity_px = 0.5 * (self.velocity_px + (c - self.center_px));
-        self.growth = (self.growth * growth).sqrt();
     }
 
     /// The paper's step: the 5×5 check and position check at `at`, else the spiral search.
@@ -736,12 +690,11 @@ mod tests {
     fn parameters_from_before_the_redetection_run_the_paper_tracker() {
         let mut json = serde_json::to_value(TrackParams::default()).unwrap();
         let map = json.as_object_mut().unwrap();
-        for key in ["redetect", "local_redetect", "motion_model"] {
+        for key in ["redetect", "local_redetect"] {
             assert!(map.remove(key).is_some(), "{key}");
         }
         let old: TrackParams = serde_json::from_value(json).unwrap();
         assert_eq!(old.redetect, Redetect::Off);
-        assert!(!old.motion_model);
         assert_eq!(old.local_redetect, LocalRedetectParams::default());
         let bad = TrackParams {
             local_redetect: LocalRedetectParams {

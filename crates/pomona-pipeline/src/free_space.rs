@@ -61,6 +61,22 @@ impl FreeSpaceCheck {
         }
     }
 
+    /// Which setting is unusable and why, if one is: `min_lead_radii` must be finite and
+    /// `disc_radius_fraction` finite and positive.
+    pub fn invalid_reason(&self) -> Option<(&'static str, f64, &'static str)> {
+        if !self.min_lead_radii.is_finite() {
+            Some(("min_lead_radii", self.min_lead_radii, "must be finite"))
+        } else if !(self.disc_radius_fraction.is_finite() && self.disc_radius_fraction > 0.0) {
+            Some((
+                "disc_radius_fraction",
+                self.disc_radius_fraction,
+                "must be finite and > 0",
+            ))
+        } else {
+            None
+        }
+    }
+
     /// How far, in radii of a fruit of `radius_m` centred at `center_m` (camera frame), the
     /// seen surface lies in front of the centre: `(z_centre − median depth) / radius`, the
     /// median over the disc of [`Self::disc_radius_fraction`] × the fruit's image radius
@@ -225,6 +241,22 @@ mod tests {
         };
         let all = off.run((&frame, vec![floating, behind_leaf])).unwrap();
         assert_eq!(all.len(), 2);
+    }
+
+    #[test]
+    fn unusable_settings_are_named() {
+        assert_eq!(FreeSpaceCheck::default().invalid_reason(), None);
+        let nan = FreeSpaceCheck {
+            min_lead_radii: f64::NAN,
+            ..FreeSpaceCheck::default()
+        };
+        assert_eq!(nan.invalid_reason().map(|r| r.0), Some("min_lead_radii"));
+        let flat = FreeSpaceCheck {
+            disc_radius_fraction: 0.0,
+            ..FreeSpaceCheck::default()
+        };
+        let reason = flat.invalid_reason().map(|r| r.0);
+        assert_eq!(reason, Some("disc_radius_fraction"));
     }
 
     #[test]

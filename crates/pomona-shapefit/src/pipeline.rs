@@ -498,6 +498,12 @@ impl Pipeline for ShapeFitPipeline {
             });
         }
         if p.free_space.enabled {
+            if let Some((name, value, reason)) = p.free_space.invalid_reason() {
+                return Err(PipelineError::InvalidParameter {
+                    name: format!("params.free_space.{name}"),
+                    reason: format!("{value} {reason}"),
+                });
+            }
             stages.free_space = Some(FreeSpaceStage {
                 check: p.free_space,
             });

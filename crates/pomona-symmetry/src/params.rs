@@ -440,6 +440,16 @@ impl StageParams {
             "cascade.histogram.second_bins",
         ];
         validate_histogram(&self.cascade.histogram, names)?;
+        if let Some((name, value, reason)) = self.free_space.invalid_reason() {
+            return Err(SymmetryError::InvalidParameter {
+                name: match name {
+                    "min_lead_radii" => "free_space.min_lead_radii",
+                    _ => "free_space.disc_radius_fraction",
+                },
+                value,
+                reason,
+            });
+        }
         let m = &self.merging;
         if m.min_score.is_nan() {
             return Err(SymmetryError::InvalidParameter {
@@ -628,5 +638,9 @@ mod tests {
         let mut p = StageParams::symmetry();
         p.histogram.angle_bins = 0;
         assert!(p.validate().is_err());
+        let mut p = StageParams::viewer_pose();
+        p.free_space.disc_radius_fraction = -1.0;
+        let err = p.validate().unwrap_err().to_string();
+        assert!(err.contains("free_space.disc_radius_fraction"), "{err}");
     }
 }

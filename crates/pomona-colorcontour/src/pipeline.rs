@@ -260,7 +260,7 @@ impl ColorContourDetector {
 
 impl ColorContourDetector {
     /// The first three stages: the fruit mask and the circles fitted on its outlines, before
-    /// the radius correction, the size test and the pruning.
+    /// the size test and the pruning.
     ///
     /// # Errors
     /// [`PipelineError::MissingColor`] for a frame without colour.
@@ -292,10 +292,15 @@ impl ColorContourDetector {
         run_stage(&self.edge_fit, contours.as_slice(), timings)
     }
 
+    /// The compiled colour table and the table value from which a pixel is fruit.
+    pub fn color_table(&self) -> (&HSigmaLut, u8) {
+        (&self.color.lut, self.color.threshold)
+    }
+
     /// The first three stages on a region of `image` only (the tracker's local re-detection,
     /// [`crate::SampledRegion`]): the circles fitted on the outlines of the region's fruit mask,
-    /// in image pixels, before the radius correction, the size test and the pruning. Outlines
-    /// that the region's border cuts run straight along it and give no circles there.
+    /// in image pixels, before the size test and the pruning. Outlines that the region's border
+    /// cuts run straight along it and give no circles there.
     ///
     /// # Errors
     /// Those of the stages (none at present).

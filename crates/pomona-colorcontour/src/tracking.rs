@@ -171,10 +171,9 @@ pub struct TrackEstimate {
 /// Follows one fruit from frame to frame (see the module docs).
 #[derive(Debug, Clone)]
 pub struct ApproachTracker {
-    lut: HSigmaLut,
-    threshold: u8,
     params: TrackParams,
-    /// The detector's stages, for the local re-detection.
+    /// The detector's stages: its colour table for the checks and scans, all of them for the
+    /// local re-detection.
     detector: ColorContourDetector,
     center_px: Point2<f64>,
     radius_px: f64,
@@ -228,7 +227,7 @@ impl ApproachTracker {
             color_threshold: f64::from(threshold) / 255.0,
             ..ColorContourParams::default()
         };
-        Self::with_stages(lut, threshold, &stage, params, center_px, radius_px)
+        Self::from_table(lut, threshold, &stage, params, center_px, radius_px)
     }
 
     /// A tracker with a `color-contour` model's colour table and, for the local re-detection,
@@ -245,10 +244,16 @@ impl ApproachTracker {
         radius_px: f64,
     ) -> Result<Self, PipelineError> {
         let (lut, threshold) = model.color_table()?;
-        Self::with_stages(lut, threshold, &model.params, params, center_px, radius_px)
+        Self::from_table(lut, threshold, &model.params, params, center_px, radius_px)
     }
 
-    fn with_stages(
+    /// As [`ApproachTracker::from_model`], from a colour table already compiled from the model
+    /// (`lut`, fruit from table value `threshold`) and the model's stage parameters `stage`, so
+    /// that many tracks of one model compile the table once.
+    ///
+    /// # Errors
+    /// As [`ApproachTracker::new`], and those of [`ColorContourDetector::from_table`].
+    pub fn from_table(
         lut: HSigmaLut,
         threshold: u8,
         stage: &ColorContourParams,
@@ -273,10 +278,8 @@ impl ApproachTracker {
                 format!("must be finite with a positive radius, got {center_px} r {radius_px}"),
             ));
         }
-        let detector = ColorContourDetector::from_table(lut.clone(), threshold, stage)?;
+        let detector = ColorContourDetector::from_table(lut, threshold, stage)?;
         Ok(Self {
-            lut,
-            threshold,
             params,
             detector,
             center_px,
@@ -292,12 +295,13 @@ impl ApproachTracker {
 
     /// Tracks the fruit into `image` (the next frame) and returns the estimate.
     pub fn update(&mut self, image: &ColorImage) -> TrackEstimate {
+        let (lut, threshold) = self.detector.color_table();
         let scan_threshold =
-            (f64::from(self.threshold) * self.params.scan_threshold_fraction).ceil() as u8;
+            (f64::from(threshold) * self.params.scan_threshold_fraction).ceil() as u8;
         let pixels = FruitPixels {
             image,
-            lut: &self.lut,
-            threshold: self.threshold,
+            lut,
+            threshold,
             scan_threshold,
         };
         let limits = self.radius_limits();

@@ -61,14 +61,18 @@ impl FreeSpaceCheck {
         }
     }
 
-    /// Which setting is unusable and why, if one is: `min_lead_radii` must be finite and
-    /// `disc_radius_fraction` finite and positive.
+    /// Which setting is unusable (its key under `free_space`), its value and why, if one is:
+    /// `min_lead_radii` must be finite and `disc_radius_fraction` finite and positive.
     pub fn invalid_reason(&self) -> Option<(&'static str, f64, &'static str)> {
         if !self.min_lead_radii.is_finite() {
-            Some(("min_lead_radii", self.min_lead_radii, "must be finite"))
+            Some((
+                "free_space.min_lead_radii",
+                self.min_lead_radii,
+                "must be finite",
+            ))
         } else if !(self.disc_radius_fraction.is_finite() && self.disc_radius_fraction > 0.0) {
             Some((
-                "disc_radius_fraction",
+                "free_space.disc_radius_fraction",
                 self.disc_radius_fraction,
                 "must be finite and > 0",
             ))
@@ -123,6 +127,22 @@ impl FreeSpaceCheck {
         Some((center_m.z - f64::from(*median)) / radius_m)
     }
 
+    /// Keeps the `items` that pass ([`Self::admits`]); `sphere` gives an item's centre and
+    /// radius. Every item is kept when the check is off.
+    pub fn retain_admitted<T>(
+        &self,
+        frame: &RgbdFrame,
+        items: &mut Vec<T>,
+        sphere: impl Fn(&T) -> (Point3<f64>, f64),
+    ) {
+        if self.enabled {
+            items.retain(|item| {
+                let (center_m, radius_m) = sphere(item);
+                self.admits(frame, &center_m, radius_m)
+            });
+        }
+    }
+
     /// Whether a fruit of `radius_m` centred at `center_m` passes: the check is off, there is no
     /// depth to judge by, or the seen surface leads the centre by at least
     /// [`Self::min_lead_radii`].
@@ -154,12 +174,10 @@ impl<'a> Stage<(&'a RgbdFrame, Vec<Detection>), Vec<Detection>> for FreeSpaceFil
         &self,
         (frame, mut detections): (&'a RgbdFrame, Vec<Detection>),
     ) -> Result<Vec<Detection>, PipelineError> {
-        if self.check.enabled {
-            detections.retain(|d| {
-                let radius_m = d.diameter_m.map_or(self.fallback_radius_m, |m| 0.5 * m);
-                self.check.admits(frame, &d.center_m, radius_m)
-            });
-        }
+        self.check.retain_admitted(frame, &mut detections, |d| {
+            let radius_m = d.diameter_m.map_or(self.fallback_radius_m, |m| 0.5 * m);
+            (d.center_m, radius_m)
+        });
         Ok(detections)
     }
 }
@@ -250,13 +268,14 @@ mod tests {
             min_lead_radii: f64::NAN,
             ..FreeSpaceCheck::default()
         };
-        assert_eq!(nan.invalid_reason().map(|r| r.0), Some("min_lead_radii"));
+        let reason = nan.invalid_reason().map(|r| r.0);
+        assert_eq!(reason, Some("free_space.min_lead_radii"));
         let flat = FreeSpaceCheck {
             disc_radius_fraction: 0.0,
             ..FreeSpaceCheck::default()
         };
         let reason = flat.invalid_reason().map(|r| r.0);
-        assert_eq!(reason, Some("disc_radius_fraction"));
+        assert_eq!(reason, Some("free_space.disc_radius_fraction"));
     }
 
     #[test]

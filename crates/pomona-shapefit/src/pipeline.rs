@@ -500,7 +500,7 @@ impl Pipeline for ShapeFitPipeline {
         if p.free_space.enabled {
             if let Some((name, value, reason)) = p.free_space.invalid_reason() {
                 return Err(PipelineError::InvalidParameter {
-                    name: format!("params.free_space.{name}"),
+                    name: format!("params.{name}"),
                     reason: format!("{value} {reason}"),
                 });
             }

@@ -329,12 +329,9 @@ impl<'a> Stage<(&'a RgbdFrame, Vec<Candidate>), Vec<Candidate>> for FreeSpaceSta
         &self,
         (frame, mut candidates): (&'a RgbdFrame, Vec<Candidate>),
     ) -> Result<Vec<Candidate>, PipelineError> {
-        if self.check.enabled {
-            candidates.retain(|c| {
-                self.check
-                    .admits(frame, &c.shape.center(), c.shape.radius_m())
-            });
-        }
+        self.check.retain_admitted(frame, &mut candidates, |c| {
+            (c.shape.center(), c.shape.radius_m())
+        });
         Ok(candidates)
     }
 }

@@ -442,10 +442,7 @@ impl StageParams {
         validate_histogram(&self.cascade.histogram, names)?;
         if let Some((name, value, reason)) = self.free_space.invalid_reason() {
             return Err(SymmetryError::InvalidParameter {
-                name: match name {
-                    "min_lead_radii" => "free_space.min_lead_radii",
-                    _ => "free_space.disc_radius_fraction",
-                },
+                name,
                 value,
                 reason,
             });

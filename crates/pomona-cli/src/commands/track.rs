@@ -25,7 +25,8 @@ use std::time::Instant;
 use anyhow::{bail, Context, Result};
 use clap::ValueEnum;
 use pomona_colorcontour::{
-    ApproachTracker, ColorContourStageParams, TrackParams, TrackStatus, PIPELINE_NAME,
+    ApproachTracker, ColorContourParams, ColorContourStageParams, HSigmaLut, TrackParams,
+    TrackStatus, PIPELINE_NAME,
 };
 use pomona_core::nalgebra::Point2;
 use pomona_core::{FruitTruth, PinholeCamera};
@@ -234,7 +235,7 @@ fn track_sequence(
     dir: &Path,
     args: &TrackArgs,
     params: TrackParams,
-    model: &ColorContourStageParams,
+    (table, stage): (&(HSigmaLut, u8), &ColorContourParams),
     detector: &pomona::Detector,
 ) -> Result<SequenceTrack> {
     let name = dir
@@ -291,8 +292,9 @@ fn track_sequence(
         return Ok(track);
     };
     track.init_circle_px = Some([c0.x, c0.y, r0]);
-    let mut tracker =
-        ApproachTracker::from_model(model, params, c0, r0).context("cannot start the tracker")?;
+    let (lut, threshold) = table.clone();
+    let mut tracker = ApproachTracker::from_table(lut, threshold, stage, params, c0, r0)
+        .context("cannot start the tracker")?;
     for stem in dataset.frames() {
         let color = dataset
             .load_color(stem)?
@@ -331,7 +333,7 @@ pub fn run(args: &TrackArgs) -> Result<TrackReport> {
     let dirs = sequences(&args.data)?;
     let model = model_file(args.model.as_deref())?;
     let stage = ColorContourStageParams::from_model(&model).context("the model's parameters")?;
-    stage.color_table().context("the model's colour table")?;
+    let table = stage.color_table().context("the model's colour table")?;
     let pipeline = pomona::pipeline(PIPELINE_NAME)?;
     let detector = load_detector(pipeline.as_ref(), args.model.as_deref(), &[])?;
     std::fs::create_dir_all(&args.out)
@@ -340,7 +342,7 @@ pub fn run(args: &TrackArgs) -> Result<TrackReport> {
     let mut times = Vec::new();
     let (mut searched, mut lost, mut redetected) = (0, 0, 0);
     for dir in &dirs {
-        let track = track_sequence(dir, args, params, &stage, &detector)
+        let track = track_sequence(dir, args, params, (&table, &stage.params), &detector)
             .with_context(|| format!("tracking {}", dir.display()))?;
         write_json(&args.out.join(format!("{}.json", track.sequence)), &track)?;
         for f in &track.frames {

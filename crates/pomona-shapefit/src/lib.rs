@@ -32,7 +32,6 @@ mod gpcd;
 mod negative_selection;
 mod params;
 mod pipeline;
-mod radius_calibration;
 mod region_growing;
 mod size_prior;
 pub mod stages;
@@ -45,9 +44,9 @@ pub use gpcd::{gpcd, GpcdParams, HueStatistics, GPCD_LEN};
 pub use negative_selection::MINING_MIN_SCORE;
 pub use params::{CoaxialMergeParams, LabelRule, ShapeFitParams};
 pub use pipeline::{ShapeFitDetector, ShapeFitPipeline, ShapeFitStageParams, PIPELINE_NAME};
+pub use pomona_consensus::{fit_center_fixed_radius, RadiusCalibration, MIN_CALIBRATION_SAMPLES};
 /// Re-exported from pomona-core, where the one RGB → HSV conversion lives.
 pub use pomona_core::rgb_to_hsv;
-pub use radius_calibration::{fit_center_fixed_radius, RadiusCalibration, MIN_CALIBRATION_SAMPLES};
 pub use region_growing::{grow_regions, MinFruitArea, RegionGrowingParams};
 pub use size_prior::{
     SizePrior, SizePriorMode, DEPTH_MARGIN, ELONGATED_RATIO, MIN_VISIBLE_FRACTION, RADIUS_MARGIN,

@@ -8,21 +8,25 @@
 //! on the thread count. The RBF C-SVC is chosen by cross-validated grid search
 //! (`TrainOptions::folds`; see docs/learning-and-evaluation.md for the fold count). After the
 //! first fit, hard-negative mining adds false boxes and refits (see `hard_negative_mining.rs`).
+//! Last, with the centre refinement on, the trained detector runs on the training frames and
+//! the refinement's radius calibration is learnt from its fits that lie inside an annotated
+//! fruit (see `centre_refinement.rs`).
 
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use nalgebra::{Point3, Vector3};
+use pomona_consensus::RadiusCalibration;
 use pomona_learn::{
     ClassWeights, CvMetric, GridAxis, GridSearchParams, ModelFile, SvmClassifier, SvmParams,
     TrainingSet,
 };
-use pomona_pipeline::{FrameSource, PipelineError, TrainOptions};
+use pomona_pipeline::{FrameSource, PipelineError, StageTimings, TrainOptions};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
 use crate::hard_negative_mining::mine_hard_negatives;
-use crate::{CascadeClassifier, StageParams, Stages};
+use crate::{BoxDetector, CascadeClassifier, StageParams, Stages};
 
 /// Positive and negative feature vectors of one training frame, for the main classifier and
 /// (empty unless the cascade is on) for the cascade's fixed-frame classifier.
@@ -140,7 +144,52 @@ pub(crate) fn train(
         },
     };
     mine_hard_negatives(name, &stages, frames, options, &mut samples, &mut models)?;
-    model_file(name, params, &models)
+    let mut params = params.clone();
+    params.refinement.radius_calibration = None;
+    if params.refinement.enabled {
+        params.refinement.radius_calibration =
+            learn_radius_calibration(name, &params, &models, frames)?;
+    }
+    model_file(name, &params, &models)
+}
+
+/// The refinement's radius calibration (see `centre_refinement.rs`): the detector of `params`
+/// (no calibration yet) and `models` runs on every training frame; per annotated fruit with a
+/// centre and a diameter, the nearest detection with a fitted sphere whose centre lies inside
+/// the fruit gives one (fitted radius, annotated radius) pair. Truth marked incomplete is fine
+/// here: only fits on annotated fruit are used. `None` with fewer than
+/// [`pomona_consensus::MIN_CALIBRATION_SAMPLES`] pairs.
+fn learn_radius_calibration(
+    name: &'static str,
+    params: &StageParams,
+    models: &TrainedModels,
+    frames: &dyn FrameSource,
+) -> Result<Option<RadiusCalibration>, PipelineError> {
+    let detector = BoxDetector::from_model(name, &model_file(name, params, models)?)?;
+    let per_frame: Vec<Vec<(f64, f64)>> = (0..frames.len())
+        .into_par_iter()
+        .map(|i| {
+            let labelled = frames.load(i)?;
+            let found = detector
+                .detect_frame(&labelled.frame, &mut StageTimings::default())?
+                .detections;
+            Ok(labelled
+                .truth
+                .fruits
+                .iter()
+                .filter_map(|fruit| {
+                    let (c, truth_radius_m) = (fruit.center_m?, fruit.diameter_m? / 2.0);
+                    found
+                        .iter()
+                        .filter_map(|d| Some(((d.center_m - c).norm(), d.diameter_m? / 2.0)))
+                        .filter(|&(distance_m, _)| distance_m <= truth_radius_m)
+                        .min_by(|a, b| a.0.total_cmp(&b.0))
+                        .map(|(_, fitted_radius_m)| (fitted_radius_m, truth_radius_m))
+                })
+                .collect())
+        })
+        .collect::<Result<_, PipelineError>>()?;
+    Ok(RadiusCalibration::fit(&per_frame.concat()))
 }
 
 /// Positive and negative rows (`(positives, negatives)`) of the main classifier and of the

@@ -88,6 +88,14 @@ fn symmetry_pipeline_finds_peppers() {
         .all(|d| d.symmetry_plane_normal.is_some() && d.fruit_axis.is_none()));
     assert!(dets.iter().any(|d| d.diameter_m.is_some()));
     assert!(dets.windows(2).all(|w| w[0].score >= w[1].score));
+    // The refinement's radius calibration is learnt from the training fits on the peppers.
+    let calibration = &model.stage_params["refinement"]["radius_calibration"];
+    assert!(
+        calibration["samples"].as_u64().unwrap() >= 5,
+        "{calibration}"
+    );
+    let slope = calibration["slope"].as_f64().unwrap();
+    assert!((0.0..=1.0).contains(&slope), "{calibration}");
 }
 
 #[test]
@@ -97,6 +105,8 @@ fn viewer_pose_pipeline_finds_peppers() {
     let detector = pipeline.load(&model).unwrap();
     let ap = ap(detector.as_ref(), &data().1);
     eprintln!("viewer-pose AP@50mm = {ap}");
+    // Refined (with a learnt radius calibration), so detections carry diameters.
+    assert!(model.stage_params["refinement"]["radius_calibration"].is_object());
     assert!(ap >= 0.55, "AP@50mm = {ap}");
 }
 

@@ -1,19 +1,21 @@
 //! Radius calibration: how well a fitted sphere's radius predicts the caliper radius, learnt on
-//! the training candidates that match an annotated fruit, and the fixed-radius centre refit
-//! that uses it.
+//! the training fits that match an annotated fruit, and the fixed-radius centre refit that uses
+//! it. Shared by the detectors that fit spheres to fruit (`shape-fit`'s candidates, the box
+//! detectors' centre refinement), hence here beside [`Sphere`].
 //!
 //! A sphere fitted to the visible cap of a fruit pins the radius poorly, and depth at the
 //! silhouette (flying pixels, depth registered to a larger colour image) biases it upwards: on
 //! the Azure Kinect apples free fits come out about 10 mm too large in diameter, and the centre
 //! is pushed away from the camera with it. Training regresses the true radius on the fitted one
-//! over its positive sphere candidates (ordinary least squares, slope clamped to `[0, 1]`: from
+//! over its positive sphere fits (ordinary least squares, slope clamped to `[0, 1]`: from
 //! "the fit says nothing, use the training mean" to "trust the fit"); detection replaces each
 //! sphere's radius by the calibrated one (clamped to the radius range) and refits the centre
 //! with the radius held fixed, by Gauss–Newton on the candidate's inliers — how the truth
 //! centres of `ak-apples` were derived from the caliper radius. Cylinders are left as fitted.
 
-use pomona_consensus::nalgebra::{Matrix3, Point3, Vector3};
-use pomona_consensus::{Shape, Sphere};
+use nalgebra::{Matrix3, Point3, Vector3};
+
+use crate::{Shape, Sphere};
 use serde::{Deserialize, Serialize};
 
 /// Fewest matched candidates a calibration is learnt from.
@@ -68,14 +70,25 @@ impl RadiusCalibration {
     /// (spheres only; the centre is kept when the refit fails or moves it by more than the
     /// radius).
     pub fn apply(&self, shape: &Shape, points: &[Point3<f64>], range_m: (f64, f64)) -> Shape {
-        let Shape::Sphere(s) = shape else {
-            return *shape;
-        };
-        let radius_m = self.radius_m(s.radius_m, range_m);
-        let center = fit_center_fixed_radius(points, s.center, radius_m)
-            .filter(|c| (c - s.center).norm() <= radius_m)
-            .unwrap_or(s.center);
-        Shape::Sphere(Sphere { center, radius_m })
+        match shape {
+            Shape::Sphere(s) => Shape::Sphere(self.apply_to_sphere(s, points, range_m)),
+            Shape::Cylinder(_) => *shape,
+        }
+    }
+
+    /// `sphere` with the calibrated radius and its centre refitted to `points` at that radius
+    /// (the centre is kept when the refit fails or moves it by more than the radius).
+    pub fn apply_to_sphere(
+        &self,
+        sphere: &Sphere,
+        points: &[Point3<f64>],
+        range_m: (f64, f64),
+    ) -> Sphere {
+        let radius_m = self.radius_m(sphere.radius_m, range_m);
+        let center = fit_center_fixed_radius(points, sphere.center, radius_m)
+            .filter(|c| (c - sphere.center).norm() <= radius_m)
+            .unwrap_or(sphere.center);
+        Sphere { center, radius_m }
     }
 }
 

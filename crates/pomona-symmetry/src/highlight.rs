@@ -78,12 +78,15 @@ pub struct Highlights {
 #[derive(Debug, Clone, PartialEq)]
 pub struct HighlightDetector {
     params: HighlightParams,
+    /// Eq. 1 per (largest, smallest) channel byte, `max · 256 + min` (see [`eq1_table`]).
+    eq1: Vec<bool>,
 }
 
 impl HighlightDetector {
     /// A detector with validated parameters (see [`crate::StageParams::validate`]).
     pub fn new(params: HighlightParams) -> Self {
-        Self { params }
+        let eq1 = eq1_table(&params);
+        Self { params, eq1 }
     }
 
     /// Dilation radius in pixels for `camera`.
@@ -97,10 +100,10 @@ impl HighlightDetector {
         let (w, h) = (image.width() as usize, image.height() as usize);
         let mut value = vec![0f32; w * h];
         let mut candidate = vec![false; w * h];
-        for (i, px) in image.pixels().enumerate() {
-            let [_, sat, max] = rgb_to_hsv(px);
-            value[i] = max as f32;
-            candidate[i] = max >= p.min_value && (sat <= 0.0 || max / sat > p.ratio_threshold);
+        for ((px, value), candidate) in image.pixels().zip(&mut value).zip(&mut candidate) {
+            let (max, min) = (px[0].max(px[1]).max(px[2]), px[0].min(px[1]).min(px[2]));
+            *value = (f64::from(max) / 255.0) as f32;
+            *candidate = self.eq1[usize::from(max) << 8 | usize::from(min)];
         }
         let candidates = candidate.iter().filter(|&&c| c).count();
         // Orientations are read only on the circles around candidates, so they are computed
@@ -124,11 +127,14 @@ impl HighlightDetector {
             let u0 = (mu - r).floor().max(0.0) as usize;
             let u1 = ((mu + r).ceil().max(0.0) as usize).min(w.saturating_sub(1));
             for v in v0..=v1 {
-                for u in u0..=u1 {
-                    let (du, dv) = (u as f64 - mu, v as f64 - mv);
-                    if du * du + dv * dv <= r2 {
-                        data[v * w + u] = true;
-                    }
+                let dv = v as f64 - mv;
+                let inside = |u: usize| {
+                    let du = u as f64 - mu;
+                    du * du + dv * dv <= r2
+                };
+                let half = (r2 - dv * dv).sqrt();
+                if let Some((lo, hi)) = disc_span(inside, (u0, u1), mu, half) {
+                    data[v * w + lo..=v * w + hi].fill(true);
                 }
             }
         }
@@ -143,11 +149,11 @@ impl HighlightDetector {
         }
     }
 
-    /// Per circle: pixel offsets of the samples with the expected (radial) orientation as a
-    /// doubled-angle unit vector, computed once per image.
-    fn circles(&self) -> Vec<Vec<(isize, isize, f32, f32)>> {
+    /// The pinwheel's circles for this detector's parameters, computed once per image.
+    fn circles(&self) -> Pinwheel {
         let m = self.params.samples_per_circle;
-        self.params
+        let circles = self
+            .params
             .radii_px
             .iter()
             .map(|&r| {
@@ -163,17 +169,23 @@ impl HighlightDetector {
                     })
                     .collect()
             })
-            .collect()
+            .collect();
+        // Eq. 5 as a count: the fewest agreeing samples whose fraction exceeds `Ts`.
+        let needed = (0..=m)
+            .find(|&a| a as f64 / m.max(1) as f64 > self.params.t_s)
+            .unwrap_or(m + 1);
+        Pinwheel { circles, needed }
     }
 
     /// Eqs. 3–6 at pixel `(u, v)`; `doubled` caches `(cos 2o, sin 2o)` of the orientation map
-    /// ([`NOT_YET`] where not computed yet).
+    /// ([`NOT_YET`] where not computed yet). A circle stops being read once its verdict is
+    /// settled (enough samples agree, or too few remain to agree), which changes no verdict.
     #[allow(clippy::too_many_arguments)]
     fn is_pinwheel(
         &self,
         tensor: &StructureTensor,
         doubled: &mut [(f32, f32)],
-        circles: &[Vec<(isize, isize, f32, f32)>],
+        pinwheel: &Pinwheel,
         w: usize,
         h: usize,
         u: usize,
@@ -181,10 +193,14 @@ impl HighlightDetector {
     ) -> bool {
         let p = &self.params;
         let t2 = (p.t_alpha * p.t_alpha) as f32;
+        let needed = pinwheel.needed;
         let mut supporting = 0;
-        for circle in circles {
+        for circle in &pinwheel.circles {
             let mut agree = 0;
-            for &(du, dv, ce, se) in circle {
+            for (j, &(du, dv, ce, se)) in circle.iter().enumerate() {
+                if agree >= needed || agree + (circle.len() - j) < needed {
+                    break;
+                }
                 let (x, y) = (u as isize + du, v as isize + dv);
                 if x < 0 || y < 0 || x >= w as isize || y >= h as isize {
                     continue;
@@ -200,7 +216,7 @@ impl HighlightDetector {
                     agree += 1;
                 }
             }
-            if agree as f64 / circle.len().max(1) as f64 > p.t_s {
+            if agree >= needed {
                 supporting += 1;
                 if supporting > p.t_h {
                     return true;
@@ -209,6 +225,14 @@ impl HighlightDetector {
         }
         false
     }
+}
+
+/// The circles of the multi-scale pinwheel: per circle the pixel offsets of its samples with the
+/// expected (radial) orientation as a doubled-angle unit vector, and the number of agreeing
+/// samples a circle needs (Eq. 5).
+struct Pinwheel {
+    circles: Vec<Vec<(isize, isize, f32, f32)>>,
+    needed: usize,
 }
 
 impl Stage<&RgbdFrame, Option<Highlights>> for HighlightDetector {
@@ -223,6 +247,57 @@ impl Stage<&RgbdFrame, Option<Highlights>> for HighlightDetector {
         }
         Ok(frame.color().map(|c| self.detect(c, frame.camera())))
     }
+}
+
+/// Eq. 1 (`V ≥ min_value` and `V/S > t`, grey always passing) for every pair of largest and
+/// smallest channel bytes, indexed `max · 256 + min`: a pixel's V and S depend on those two
+/// only, so one table per detector replaces a conversion per pixel, with the same arithmetic
+/// ([`rgb_to_hsv`] of a pixel holding those two values).
+fn eq1_table(p: &HighlightParams) -> Vec<bool> {
+    (0..=255u8)
+        .flat_map(|max| (0..=255u8).map(move |min| (max, min)))
+        .map(|(max, min)| {
+            if min > max {
+                return false;
+            }
+            let [_, sat, value] = rgb_to_hsv([max, min, min]);
+            value >= p.min_value && (sat <= 0.0 || value / sat > p.ratio_threshold)
+        })
+        .collect()
+}
+
+/// The run of columns `u0..=u1` for which `inside(u)` holds on one row of a disc centred at
+/// column `centre` whose half-width on this row is `half` (`√(r² − dv²)`, NaN when the row
+/// misses the disc). The run is contiguous (a disc row is convex); its ends come from the closed
+/// form and are then corrected with the exact test, so the row gets the same pixels as a test
+/// of every pixel of the disc's bounding box, at the cost of a few tests per row.
+fn disc_span(
+    inside: impl Fn(usize) -> bool,
+    (u0, u1): (usize, usize),
+    centre: f64,
+    half: f64,
+) -> Option<(usize, usize)> {
+    if u0 > u1 || half.is_nan() {
+        return None;
+    }
+    let clamp = |x: f64| x.clamp(u0 as f64, u1 as f64) as usize;
+    let (mut lo, mut hi) = (
+        clamp((centre - half).ceil()),
+        clamp((centre + half).floor()),
+    );
+    while lo > u0 && inside(lo - 1) {
+        lo -= 1;
+    }
+    while lo <= hi && !inside(lo) {
+        lo += 1;
+    }
+    while hi < u1 && inside(hi + 1) {
+        hi += 1;
+    }
+    while hi > lo && !inside(hi) {
+        hi -= 1;
+    }
+    (lo <= hi && inside(lo)).then_some((lo, hi))
 }
 
 /// Marks an orientation not computed yet (real entries are finite or NaN).
@@ -450,6 +525,47 @@ mod tests {
         assert!(markers.len() > 5, "{}", markers.len());
         assert_eq!(got.markers, markers);
         assert_eq!(got.candidates, candidate.iter().filter(|&&c| c).count());
+    }
+
+    /// The row spans paint exactly the pixels of a per-pixel test over each disc's bounding box
+    /// (the code before), for fractional and integer centres and radii, at the image borders.
+    #[test]
+    fn disc_spans_paint_the_per_pixel_discs() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+        let (w, h) = (97usize, 61usize);
+        for case in 0..400 {
+            let (mu, mv) = if case % 4 == 0 {
+                (rng.gen_range(-5..100) as f64, rng.gen_range(-5..65) as f64)
+            } else {
+                (rng.gen_range(-5.0..100.0), rng.gen_range(-5.0..65.0))
+            };
+            let r: f64 = match case % 3 {
+                0 => rng.gen_range(0..30) as f64,
+                1 => rng.gen_range(0..30) as f64 + 0.5,
+                _ => rng.gen_range(0.0..30.0),
+            };
+            let r2 = r * r;
+            let v0 = (mv - r).floor().max(0.0) as usize;
+            let v1 = ((mv + r).ceil().max(0.0) as usize).min(h - 1);
+            let u0 = (mu - r).floor().max(0.0) as usize;
+            let u1 = ((mu + r).ceil().max(0.0) as usize).min(w - 1);
+            let (mut fast, mut slow) = (vec![false; w * h], vec![false; w * h]);
+            for v in v0..=v1 {
+                let dv = v as f64 - mv;
+                let inside = |u: usize| {
+                    let du = u as f64 - mu;
+                    du * du + dv * dv <= r2
+                };
+                for u in u0..=u1 {
+                    slow[v * w + u] |= inside(u);
+                }
+                if let Some((lo, hi)) = disc_span(inside, (u0, u1), mu, (r2 - dv * dv).sqrt()) {
+                    fast[v * w + lo..=v * w + hi].fill(true);
+                }
+            }
+            assert_eq!(fast, slow, "centre ({mu}, {mv}) radius {r}");
+        }
     }
 
     #[test]

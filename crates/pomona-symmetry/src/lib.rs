@@ -62,7 +62,7 @@ pub use nms::{non_maximum_suppression, ScoredBox};
 pub use normal_histogram::{normal_histogram, BinnedHistograms, FeatureStage};
 pub use params::{
     CascadeClassifier, CascadeParams, FrameKind, HighlightParams, HistogramParams, MergeKind,
-    MergeParams, SlidingBoxParams, StageParams, SymmetryPlaneParams, TrainingParams,
+    MergeParams, SlidingBoxParams, StageParams, SymmetryPlaneParams, TrainingParams, WorkingRange,
 };
 pub use reference_frame::{
     plane_frame, up, FixedFrame, FrameStage, LocalFrame, ReferenceFrame, SymmetryFrame, ViewerFrame,

@@ -264,6 +264,23 @@ pub struct TrainingParams {
     /// Mined negatives per frame and round at most (the highest-scoring first).
     #[serde(default = "default_max_hard_negatives_per_frame")]
     pub max_hard_negatives_per_frame: usize,
+    /// Whether training widens the sliding box's working range to the annotated fruit (see
+    /// [`WorkingRange`]).
+    #[serde(default)]
+    pub working_range: WorkingRange,
+}
+
+/// How training sets the sliding box's working range (`boxes.max_range_m`).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum WorkingRange {
+    /// Widened to the distance of the farthest annotated fruit centre when that lies beyond
+    /// the configured range (ours, as `shape-fit` learns its depth limit from the truth): a
+    /// camera that sees fruit at 1.9 m needs boxes centred there. Never narrowed.
+    #[default]
+    FromTruth,
+    /// The configured `boxes.max_range_m` as it is.
+    Fixed,
 }
 
 /// Default of [`TrainingParams::max_hard_negatives_per_frame`].
@@ -281,6 +298,7 @@ impl Default for TrainingParams {
             hard_negatives_per_frame: 0,
             hard_negative_rounds: 1,
             max_hard_negatives_per_frame: default_max_hard_negatives_per_frame(),
+            working_range: WorkingRange::default(),
         }
     }
 }

@@ -26,7 +26,7 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
 use crate::hard_negative_mining::mine_hard_negatives;
-use crate::{BoxDetector, CascadeClassifier, StageParams, Stages};
+use crate::{BoxDetector, CascadeClassifier, StageParams, Stages, WorkingRange};
 
 /// Positive and negative feature vectors of one training frame, for the main classifier and
 /// (empty unless the cascade is on) for the cascade's fixed-frame classifier.
@@ -99,6 +99,35 @@ fn frame_samples(
     })
 }
 
+/// `params` with `boxes.max_range_m` widened to the annotated fruit when
+/// `training.working_range` says so ([`WorkingRange::FromTruth`]).
+fn with_working_range(
+    params: &StageParams,
+    frames: &dyn FrameSource,
+) -> Result<StageParams, PipelineError> {
+    let mut params = params.clone();
+    if params.training.working_range == WorkingRange::FromTruth {
+        let farthest_m = (0..frames.len())
+            .into_par_iter()
+            .map(|i| {
+                Ok(frames
+                    .load(i)?
+                    .truth
+                    .fruits
+                    .iter()
+                    .filter_map(|f| f.center_m)
+                    .map(|c| c.coords.norm())
+                    .fold(0.0, f64::max))
+            })
+            .collect::<Result<Vec<f64>, PipelineError>>()?
+            .into_iter()
+            .fold(0.0, f64::max);
+        let boxes = &mut params.boxes;
+        boxes.max_range_m = boxes.max_range_m.max(farthest_m);
+    }
+    Ok(params)
+}
+
 /// A seeded random subset of `items` of size at most `n` (partial Fisher–Yates).
 fn pick(rng: &mut ChaCha8Rng, mut items: Vec<Point3<f64>>, n: usize) -> Vec<Point3<f64>> {
     let want = n.min(items.len());
@@ -118,6 +147,7 @@ pub(crate) fn train(
     options: &TrainOptions,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<ModelFile, PipelineError> {
+    let params = &with_working_range(params, frames)?;
     let stages = Stages::new(params)?;
     let total = frames.len();
     let done = AtomicUsize::new(0);
@@ -285,6 +315,46 @@ pub(crate) fn fit_classifier(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use pomona_core::{DepthImage, FrameTruth, PinholeCamera, RgbdFrame};
+    use pomona_pipeline::LabelledFrame;
+
+    /// A tiny frame whose truth holds fruit centred at `centres`.
+    fn frame_with_fruit(centres: &[[f64; 3]]) -> LabelledFrame {
+        let camera = PinholeCamera::new(2, 2, 1.0, 1.0, 0.5, 0.5).unwrap();
+        let depth = DepthImage::from_meters(2, 2, vec![1.0; 4]).unwrap();
+        let fruits: Vec<serde_json::Value> = centres
+            .iter()
+            .enumerate()
+            .map(|(i, c)| serde_json::json!({"id": i.to_string(), "kind": "apple", "center_m": c}))
+            .collect();
+        let truth: FrameTruth =
+            serde_json::from_value(serde_json::json!({"complete": false, "fruits": fruits}))
+                .unwrap();
+        LabelledFrame {
+            name: "t".into(),
+            frame: RgbdFrame::new(camera, depth, None).unwrap(),
+            truth,
+            mask: None,
+        }
+    }
+
+    #[test]
+    fn the_working_range_reaches_the_farthest_annotated_fruit_and_never_shrinks() {
+        let params = StageParams::symmetry();
+        assert_eq!(params.training.working_range, WorkingRange::FromTruth);
+        assert_eq!(params.boxes.max_range_m, 1.6);
+        let far = vec![
+            frame_with_fruit(&[[0.0, 0.0, 1.0]]),
+            frame_with_fruit(&[[0.6, 0.0, 1.8], [0.0, 0.0, 0.5]]),
+        ];
+        let widened = with_working_range(&params, &far).unwrap();
+        assert!((widened.boxes.max_range_m - (0.36f64 + 1.8 * 1.8).sqrt()).abs() < 1e-12);
+        let near = vec![frame_with_fruit(&[[0.0, 0.0, 0.9]])];
+        assert_eq!(with_working_range(&params, &near).unwrap(), params);
+        let mut fixed = params.clone();
+        fixed.training.working_range = WorkingRange::Fixed;
+        assert_eq!(with_working_range(&fixed, &far).unwrap(), fixed);
+    }
 
     #[test]
     fn zero_rounds_leave_no_mining_keys_and_read_back_as_zero() {

@@ -6,7 +6,17 @@
 //! R (1 − √(1 − ρ²)) behind the front point, so subtracting that gives one estimate of the front
 //! point's depth per pixel; their median is the surface point on the central ray, and the centre
 //! lies R further along the ray. R comes from the pixel radius at the estimated depth (two rounds).
+//!
+//! That centre lies on the ray through the circle's centre, so a circle a few pixels off its
+//! fruit (a leaf over one side, a neighbour's outline) puts it beside the fruit: on the real
+//! Azure Kinect apples the centres were 12–31 mm off sideways at 1.1–1.5 m. Ours, beyond seed
+//! 004: the centre is then refitted to the same fruit pixels' 3D points with the radius held
+//! (Gauss–Newton from that centre; a second fit without the points farther than a tolerance from
+//! the first sphere), and kept only when it stays within one radius of the ray's estimate and
+//! behind the nearest surface it could have. On those apples the median centre error fell from
+//! 20.2 to 9.7 mm; on synthetic oranges, whose circles are already good, it moved by under 1 mm.
 
+use pomona_consensus::fit_center_fixed_radius;
 use pomona_core::nalgebra::{Point2, Point3};
 use pomona_core::{PinholeCamera, RgbdFrame};
 
@@ -29,7 +39,8 @@ fn median(values: &mut [f64]) -> Option<f64> {
 }
 
 /// The sphere behind the circle `(center_px, radius_px)` from the depth of the fruit pixels
-/// (`fruit[i]`) within `core_fraction` of the radius; `None` when none has depth. At most about
+/// (`fruit[i]`) within `core_fraction` of the radius, its centre refitted to their points when
+/// `refit_tolerance_m > 0` (see the module docs); `None` when none has depth. At most about
 /// 400 pixels are read (a regular grid) so large circles cost no more than small ones.
 pub fn sphere_from_depth(
     frame: &RgbdFrame,
@@ -37,12 +48,14 @@ pub fn sphere_from_depth(
     center_px: Point2<f64>,
     radius_px: f64,
     core_fraction: f64,
+    refit_tolerance_m: f64,
 ) -> Option<SphereFromCircle> {
     let camera = frame.camera();
     let depth = frame.depth();
     let reach = radius_px * core_fraction;
     let step = (reach / 10.0).max(1.0);
     let mut samples: Vec<(f64, f64)> = Vec::new(); // (ρ, depth)
+    let mut points: Vec<Point3<f64>> = Vec::new();
     let steps = (reach / step).ceil() as i64;
     for j in -steps..=steps {
         for i in -steps..=steps {
@@ -60,6 +73,7 @@ pub fn sphere_from_depth(
             }
             if let Some(z) = depth.get(u, v).filter(|z| z.is_finite() && *z > 0.0) {
                 samples.push((rho, f64::from(z)));
+                points.push(camera.back_project(f64::from(u), f64::from(v), f64::from(z)));
             }
         }
     }
@@ -74,10 +88,39 @@ pub fn sphere_from_depth(
         front = median(&mut fronts)?;
         radius_m = radius_px * (front + radius_m) / camera.mean_focal_px();
     }
-    Some(SphereFromCircle {
-        center_m: along_ray(camera, center_px, front, radius_m),
-        radius_m,
-    })
+    let mut center_m = along_ray(camera, center_px, front, radius_m);
+    if refit_tolerance_m > 0.0 {
+        center_m = refit_centre(&points, center_m, radius_m, refit_tolerance_m);
+    }
+    Some(SphereFromCircle { center_m, radius_m })
+}
+
+/// The centre of the sphere of radius `radius_m` that best fits `points`, from `start`: one
+/// fixed-radius fit on every point, a second on those within `tolerance_m` of the first sphere;
+/// `start` when a fit fails, moves the centre more than the radius, or brings it nearer to the
+/// camera than the surface in front of `start` (the refit must stay behind the visible cap).
+fn refit_centre(
+    points: &[Point3<f64>],
+    start: Point3<f64>,
+    radius_m: f64,
+    tolerance_m: f64,
+) -> Point3<f64> {
+    let Some(first) = fit_center_fixed_radius(points, start, radius_m) else {
+        return start;
+    };
+    let near: Vec<Point3<f64>> = points
+        .iter()
+        .copied()
+        .filter(|p| ((p - first).norm() - radius_m).abs() < tolerance_m)
+        .collect();
+    let refit = fit_center_fixed_radius(&near, first, radius_m).unwrap_or(first);
+    let believable =
+        (refit - start).norm() <= radius_m && refit.coords.norm() > start.coords.norm() - radius_m;
+    if believable {
+        refit
+    } else {
+        start
+    }
 }
 
 /// The sphere of radius `radius_m` whose image is the circle, without depth: its centre is at
@@ -141,12 +184,26 @@ mod tests {
             RgbdFrame::new(camera, DepthImage::from_meters(w, h, depth).unwrap(), None).unwrap();
         let c_px = camera.project(&center).unwrap();
         let r_px = 300.0 * r / center.z;
-        let s = sphere_from_depth(&frame, &fruit, c_px, r_px, 0.8).unwrap();
+        let s = sphere_from_depth(&frame, &fruit, c_px, r_px, 0.8, 0.01).unwrap();
         assert!((s.center_m - center).norm() < 0.003, "{:?}", s.center_m);
         assert!((s.radius_m - r).abs() < 0.002, "{}", s.radius_m);
+        // A circle 7 px off the fruit (19 mm at 0.8 m): the ray's estimate lies beside the
+        // fruit, the refit to the fruit points does not; tolerance 0 is the ray's estimate.
+        let off = c_px + pomona_core::nalgebra::Vector2::new(6.0, -3.5);
+        let ray = sphere_from_depth(&frame, &fruit, off, r_px, 0.8, 0.0).unwrap();
+        let refit = sphere_from_depth(&frame, &fruit, off, r_px, 0.8, 0.01).unwrap();
+        assert!((ray.center_m - center).norm() > 0.012, "{:?}", ray.center_m);
+        assert!(
+            (refit.center_m - center).norm() < 0.004,
+            "{:?}",
+            refit.center_m
+        );
+        assert_eq!(refit.radius_m, ray.radius_m);
         // Without depth, the prior radius places it at f R / r.
         let p = sphere_from_size(&camera, c_px, r_px, r);
         assert!((p.center_m - center).norm() < 0.002, "{:?}", p.center_m);
-        assert!(sphere_from_depth(&frame, &vec![false; fruit.len()], c_px, r_px, 0.8).is_none());
+        assert!(
+            sphere_from_depth(&frame, &vec![false; fruit.len()], c_px, r_px, 0.8, 0.01).is_none()
+        );
     }
 }

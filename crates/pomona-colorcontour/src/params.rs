@@ -70,6 +70,13 @@ pub struct ColorContourParams {
     pub prior_radius_m: f64,
     /// Depth is read from fruit pixels within this fraction of the radius from the centre.
     pub depth_core_fraction: f64,
+    /// The 3D centre is refitted to those fruit pixels' points at the measured radius (ours,
+    /// see [`crate::sphere_from_depth`]): a circle a few pixels off its fruit puts the centre
+    /// beside the fruit, the points do not. `0` turns it off; otherwise points farther than
+    /// this from the first refit's sphere are left out of the second, metres. Absent in older
+    /// model files: on, 10 mm (a geometric step, nothing learnt).
+    #[serde(default = "ten_mm")]
+    pub depth_refit_tolerance_m: f64,
 }
 
 impl Default for ColorContourParams {
@@ -92,8 +99,13 @@ impl Default for ColorContourParams {
             working_distance_m: (0.3, 2.0),
             prior_radius_m: 0.04,
             depth_core_fraction: 0.8,
+            depth_refit_tolerance_m: ten_mm(),
         }
     }
+}
+
+fn ten_mm() -> f64 {
+    0.01
 }
 
 fn one() -> f64 {

@@ -247,6 +247,12 @@ impl ColorContourDetector {
         if p.prior_radius_m.is_nan() || p.prior_radius_m <= 0.0 {
             return Err(invalid("prior_radius_m", "must be positive"));
         }
+        if !(p.depth_refit_tolerance_m.is_finite() && p.depth_refit_tolerance_m >= 0.0) {
+            return Err(invalid(
+                "depth_refit_tolerance_m",
+                "must be 0 (off) or positive",
+            ));
+        }
         Ok(Self {
             color: ColorClassStage::from_params(lut, threshold, p),
             smoothing_half_window: p.edge_fit.smoothing_half_window,

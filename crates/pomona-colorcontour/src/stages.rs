@@ -179,7 +179,8 @@ fn color_purity(fruit: &[bool], width: usize, height: usize, c: &ContourCircle) 
 ///   so an implausible circle cannot remove a plausible one;
 /// * overlap (§3.2): see [`crate::prune_overlapping`], circles ranked by `prune_rank`
 ///   ([`crate::PruneRank`]), pairs tested by [`crate::clash`] with `prune_center_reach`;
-/// * 3D: [`crate::sphere_from_depth`], or [`crate::sphere_from_size`] with `prior_radius_m`
+/// * 3D: [`crate::sphere_from_depth`] (centre refitted to the fruit points unless
+///   `depth_refit_tolerance_m` is 0), or [`crate::sphere_from_size`] with `prior_radius_m`
 ///   when the circle has no depth (then `diameter_m` is `None`: it was not measured).
 ///
 /// `bbox_px` is the square around the circle (not clipped to the image), so the image circle is
@@ -224,6 +225,7 @@ impl<'a> Stage<(&'a RgbdFrame, &'a [bool], &'a [ContourCircle]), Vec<Detection>>
                     c.center_px,
                     c.radius_px,
                     p.depth_core_fraction,
+                    p.depth_refit_tolerance_m,
                 ) {
                     Some(s) => {
                         if s.radius_m < r_lo || s.radius_m > r_hi {

@@ -388,6 +388,11 @@ mod tests {
         );
         assert_eq!(stage.params.prune_rank, defaults.prune_rank);
         assert_eq!(stage.params.prune_center_reach, defaults.prune_center_reach);
+        // Written before the centre refit existed: runs it with the default tolerance.
+        assert_eq!(
+            stage.params.depth_refit_tolerance_m,
+            defaults.depth_refit_tolerance_m
+        );
         assert!(ColorContourDetector::new(&stage).is_ok());
         for (name, change) in [
             (
@@ -401,6 +406,12 @@ mod tests {
             }),
             ("prune_center_reach", |p| p.prune_center_reach = -0.5),
             ("prune_center_reach", |p| p.prune_center_reach = f64::NAN),
+            ("depth_refit_tolerance_m", |p| {
+                p.depth_refit_tolerance_m = -0.01
+            }),
+            ("depth_refit_tolerance_m", |p| {
+                p.depth_refit_tolerance_m = f64::INFINITY
+            }),
         ] {
             let mut bad = stage.clone();
             change(&mut bad.params);

@@ -14,9 +14,9 @@
 //! centres of `ak-apples` were derived from the caliper radius. Cylinders are left as fitted.
 
 use nalgebra::{Matrix3, Point3, Vector3};
+use serde::{Deserialize, Serialize};
 
 use crate::{Shape, Sphere};
-use serde::{Deserialize, Serialize};
 
 /// Fewest matched candidates a calibration is learnt from.
 pub const MIN_CALIBRATION_SAMPLES: usize = 5;

@@ -120,22 +120,33 @@ struct FrameSubset<'a> {
     indices: Vec<usize>,
 }
 
+impl FrameSubset<'_> {
+    /// The index in the source of the subset's frame `i`.
+    fn source_index(&self, i: usize) -> Result<usize, PipelineError> {
+        self.indices
+            .get(i)
+            .copied()
+            .ok_or_else(|| PipelineError::InvalidParameter {
+                name: "frame index".into(),
+                reason: format!(
+                    "{i} is past the {} frames of the subset",
+                    self.indices.len()
+                ),
+            })
+    }
+}
+
 impl FrameSource for FrameSubset<'_> {
     fn len(&self) -> usize {
         self.indices.len()
     }
 
     fn load(&self, i: usize) -> Result<LabelledFrame, PipelineError> {
-        match self.indices.get(i) {
-            Some(&j) => self.source.load(j),
-            None => Err(PipelineError::InvalidParameter {
-                name: "frame index".into(),
-                reason: format!(
-                    "{i} is past the {} frames of the subset",
-                    self.indices.len()
-                ),
-            }),
-        }
+        self.source.load(self.source_index(i)?)
+    }
+
+    fn truth(&self, i: usize) -> Result<pomona_core::FrameTruth, PipelineError> {
+        self.source.truth(self.source_index(i)?)
     }
 }
 

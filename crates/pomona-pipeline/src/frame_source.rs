@@ -37,6 +37,15 @@ pub trait FrameSource: Sync {
     /// Dataset errors naming the file.
     fn load(&self, i: usize) -> Result<LabelledFrame, PipelineError>;
 
+    /// Frame `i`'s truth alone (training passes that read only the annotations). By default
+    /// the whole frame is loaded; sources that can read the annotation by itself override it.
+    ///
+    /// # Errors
+    /// As [`FrameSource::load`].
+    fn truth(&self, i: usize) -> Result<FrameTruth, PipelineError> {
+        Ok(self.load(i)?.truth)
+    }
+
     /// Loads every frame, in order (for sets rendered or read once and reused).
     ///
     /// # Errors
@@ -80,16 +89,13 @@ impl FrameSource for Vec<LabelledFrame> {
 #[derive(Debug, Clone, Default)]
 pub struct ChainedFrames<S>(pub Vec<S>);
 
-impl<S: FrameSource> FrameSource for ChainedFrames<S> {
-    fn len(&self) -> usize {
-        self.0.iter().map(FrameSource::len).sum()
-    }
-
-    fn load(&self, i: usize) -> Result<LabelledFrame, PipelineError> {
+impl<S: FrameSource> ChainedFrames<S> {
+    /// The part holding frame `i` and the frame's index in it.
+    fn locate(&self, i: usize) -> Result<(&S, usize), PipelineError> {
         let mut rest = i;
         for part in &self.0 {
             if rest < part.len() {
-                return part.load(rest);
+                return Ok((part, rest));
             }
             rest -= part.len();
         }
@@ -97,6 +103,22 @@ impl<S: FrameSource> FrameSource for ChainedFrames<S> {
             name: "frame index".into(),
             reason: format!("{i} is past the {} chained frames", self.len()),
         })
+    }
+}
+
+impl<S: FrameSource> FrameSource for ChainedFrames<S> {
+    fn len(&self) -> usize {
+        self.0.iter().map(FrameSource::len).sum()
+    }
+
+    fn load(&self, i: usize) -> Result<LabelledFrame, PipelineError> {
+        let (part, j) = self.locate(i)?;
+        part.load(j)
+    }
+
+    fn truth(&self, i: usize) -> Result<FrameTruth, PipelineError> {
+        let (part, j) = self.locate(i)?;
+        part.truth(j)
     }
 }
 
@@ -144,6 +166,15 @@ impl DatasetFrames {
         let (d, f) = self.frames.get(i)?;
         Some((&self.datasets[*d], f.as_str()))
     }
+
+    /// [`DatasetFrames::frame_ref`], or the error for an index past the frames.
+    fn indexed(&self, i: usize) -> Result<(&Dataset, &str), PipelineError> {
+        self.frame_ref(i)
+            .ok_or_else(|| PipelineError::InvalidParameter {
+                name: "frame index".into(),
+                reason: format!("{i} is beyond the {} frames", self.frames.len()),
+            })
+    }
 }
 
 impl FrameSource for DatasetFrames {
@@ -152,19 +183,9 @@ impl FrameSource for DatasetFrames {
     }
 
     fn load(&self, i: usize) -> Result<LabelledFrame, PipelineError> {
-        let (ds, stem) = self
-            .frame_ref(i)
-            .ok_or_else(|| PipelineError::InvalidParameter {
-                name: "frame index".into(),
-                reason: format!("{i} is beyond the {} frames", self.frames.len()),
-            })?;
+        let (ds, stem) = self.indexed(i)?;
         let frame = ds.load_frame(stem)?;
-        let truth = ds
-            .load_truth(stem)?
-            .ok_or_else(|| PipelineError::NotEnoughTrainingData {
-                pipeline: "any",
-                reason: format!("{} has no truth", ds.truth_path(stem).display()),
-            })?;
+        let truth = self.truth(i)?;
         let mask = ds.load_mask(stem)?;
         Ok(LabelledFrame {
             name: format!("{}/{stem}", ds.root().display()),
@@ -172,6 +193,16 @@ impl FrameSource for DatasetFrames {
             truth,
             mask,
         })
+    }
+
+    /// Reads only the truth file.
+    fn truth(&self, i: usize) -> Result<FrameTruth, PipelineError> {
+        let (ds, stem) = self.indexed(i)?;
+        ds.load_truth(stem)?
+            .ok_or_else(|| PipelineError::NotEnoughTrainingData {
+                pipeline: "any",
+                reason: format!("{} has no truth", ds.truth_path(stem).display()),
+            })
     }
 }
 
@@ -204,5 +235,39 @@ mod tests {
         let names: Vec<String> = (0..5).map(|i| chained.load(i).unwrap().name).collect();
         assert_eq!(names, ["0", "1", "0", "1", "2"]);
         assert!(chained.load(5).is_err());
+        // Truth alone goes through the same parts.
+        for i in 0..5 {
+            assert_eq!(chained.truth(i).unwrap(), chained.load(i).unwrap().truth);
+        }
+        assert!(chained.truth(5).is_err());
+    }
+
+    /// A dataset's truth is read without its images: a frame whose depth image is unreadable
+    /// still gives its truth, and its `load` names the broken file.
+    #[test]
+    fn dataset_truth_is_read_alone() {
+        let dir = tempfile::tempdir().unwrap();
+        let root = dir.path();
+        for sub in ["depth", "truth"] {
+            std::fs::create_dir_all(root.join(sub)).unwrap();
+        }
+        std::fs::write(
+            root.join("camera.json"),
+            r#"{"width": 2, "height": 2, "fx": 1.0, "fy": 1.0, "cx": 0.5, "cy": 0.5, "depth_unit_m": 0.001}"#,
+        )
+        .unwrap();
+        std::fs::write(root.join("depth/000000.png"), b"not a png").unwrap();
+        std::fs::write(
+            root.join("truth/000000.json"),
+            r#"{"complete": true, "fruits": [{"id": "a", "kind": "apple", "center_m": [0, 0, 1]}]}"#,
+        )
+        .unwrap();
+        let frames = DatasetFrames::new(vec![Dataset::open(root).unwrap()]);
+        assert_eq!(frames.len(), 1);
+        let truth = frames.truth(0).unwrap();
+        assert_eq!(truth.fruits.len(), 1);
+        let err = frames.load(0).unwrap_err().to_string();
+        assert!(err.contains("000000.png"), "{err}");
+        assert!(frames.truth(1).is_err());
     }
 }

@@ -264,9 +264,13 @@ impl ShapeFitPipeline {
         let per_frame: Result<Vec<FramePrior>, PipelineError> = (0..frames.len())
             .into_par_iter()
             .map(|i| {
+                if !use_color {
+                    // The size prior alone: the annotations are enough.
+                    return frames.truth(i).map(|t| (None, t.fruits));
+                }
                 frames.load(i).map(|lf| {
-                    let h = use_color.then(|| color_histograms(&lf, self.params.color.bins, refs));
-                    (h, lf.truth.fruits)
+                    let h = color_histograms(&lf, self.params.color.bins, refs);
+                    (Some(h), lf.truth.fruits)
                 })
             })
             .collect();

@@ -111,8 +111,7 @@ fn with_working_range(
             .into_par_iter()
             .map(|i| {
                 Ok(frames
-                    .load(i)?
-                    .truth
+                    .truth(i)?
                     .fruits
                     .iter()
                     .filter_map(|f| f.center_m)

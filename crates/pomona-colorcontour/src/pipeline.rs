@@ -276,16 +276,23 @@ impl ColorContourDetector {
         timings: &mut StageTimings,
     ) -> Result<(Vec<bool>, Vec<ContourCircle>), PipelineError> {
         let fruit = run_stage(&self.color, frame, timings)?;
-        let circles = self.circles_of_mask(&fruit, frame.camera().width as usize, timings)?;
+        let camera = frame.camera();
+        // Merged circles no larger than the largest fruit the size test accepts: radius
+        // `radius_range_m.1` at the near end of `working_distance_m`.
+        let p = &self.fruit.params;
+        let max_radius_px = camera.mean_focal_px() * p.radius_range_m.1 / p.working_distance_m.0;
+        let circles =
+            self.circles_of_mask(&fruit, camera.width as usize, max_radius_px, timings)?;
         Ok((fruit, circles))
     }
 
     /// The circles fitted on the outlines of a fruit mask (row-major, `width` wide): the
-    /// contour and edge-fit stages.
+    /// contour and edge-fit stages, merged circles at most `max_radius_px` in radius.
     fn circles_of_mask(
         &self,
         fruit: &[bool],
         width: usize,
+        max_radius_px: f64,
         timings: &mut StageTimings,
     ) -> Result<Vec<ContourCircle>, PipelineError> {
         let contour_stage = ContourStage {
@@ -295,7 +302,11 @@ impl ColorContourDetector {
             width,
         };
         let contours = run_stage(&contour_stage, fruit, timings)?;
-        run_stage(&self.edge_fit, contours.as_slice(), timings)
+        run_stage(
+            &self.edge_fit,
+            (contours.as_slice(), max_radius_px),
+            timings,
+        )
     }
 
     /// The compiled colour table and the table value from which a pixel is fruit.
@@ -319,7 +330,8 @@ impl ColorContourDetector {
         let (cols, rows) = region.size();
         let fruit = self.color.classify(region.pixels(image), cols, rows);
         Ok(self
-            .circles_of_mask(&fruit, cols, timings)?
+            // No cap on merged circles: the region is a few fruit across.
+            .circles_of_mask(&fruit, cols, f64::INFINITY, timings)?
             .into_iter()
             .map(|c| region.circle_to_image(c))
             .collect())

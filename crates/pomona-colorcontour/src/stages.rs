@@ -122,12 +122,17 @@ pub struct EdgeFitStage {
     pub params: EdgeFitParams,
 }
 
-impl Stage<&[Contour], Vec<ContourCircle>> for EdgeFitStage {
+/// Input: the contours and the largest circle radius, in the mask's pixels, that merging may
+/// produce (see [`crate::merge_arcs`]; `f64::INFINITY` for no limit).
+impl Stage<(&[Contour], f64), Vec<ContourCircle>> for EdgeFitStage {
     fn name(&self) -> &'static str {
         "edge-fit"
     }
 
-    fn run(&self, contours: &[Contour]) -> Result<Vec<ContourCircle>, PipelineError> {
+    fn run(
+        &self,
+        (contours, max_radius_px): (&[Contour], f64),
+    ) -> Result<Vec<ContourCircle>, PipelineError> {
         let arcs: Vec<(usize, ContourArc)> = contours
             .iter()
             .enumerate()
@@ -137,7 +142,12 @@ impl Stage<&[Contour], Vec<ContourCircle>> for EdgeFitStage {
                     .map(move |a| (k, a))
             })
             .collect();
-        Ok(merge_arcs(contours, arcs, self.params.merge_max_rms))
+        Ok(merge_arcs(
+            contours,
+            arcs,
+            self.params.merge_max_rms,
+            max_radius_px,
+        ))
     }
 }
 

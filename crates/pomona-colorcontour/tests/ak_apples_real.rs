@@ -4,39 +4,25 @@
 //! centre on the circle's ray lies about 2 cm beside them. Skips with a message when the data
 //! folder is absent; fails instead when `POMONA_REQUIRE_DATA=1`.
 
-#![allow(clippy::unwrap_used, clippy::expect_used)] // test helpers outside #[test] functions
+#![allow(clippy::unwrap_used, clippy::expect_used)] // test helpers outside test functions
 
 use pomona_colorcontour::ColorContourPipeline;
-use pomona_eval::{evaluate, EvalConfig, FrameInput};
+use pomona_eval::EvalConfig;
 use pomona_io::Dataset;
 use pomona_learn::ModelFile;
-use pomona_pipeline::{DatasetFrames, FrameSource, LabelledFrame, Pipeline, StageTimings};
+use pomona_pipeline::{detect_and_evaluate, DatasetFrames, FrameSource, Pipeline};
 
-/// Centre error median (metres) and true positives of `model` over the three frames, every
-/// detection kept.
-fn centre_error(model: &ModelFile, frames: &[LabelledFrame]) -> (f64, usize) {
+/// Centre error median (metres) and true positives of `model` over `frames`, every detection
+/// kept.
+fn centre_error(model: &ModelFile, frames: &dyn FrameSource) -> (f64, usize) {
     let detector = ColorContourPipeline::default().load(model).unwrap();
-    let inputs: Vec<FrameInput> = frames
-        .iter()
-        .map(|lf| {
-            let detections = detector
-                .detect(&lf.frame, &mut StageTimings::default())
-                .unwrap();
-            let mut truth = lf.truth.clone();
-            truth.fruits.retain(|f| f.kind == "apple");
-            FrameInput {
-                frame: lf.name.clone(),
-                truth,
-                detections,
-            }
-        })
-        .collect();
-    let camera = *frames[0].frame.camera();
     let config = EvalConfig {
         threshold: f64::NEG_INFINITY,
         ..EvalConfig::default()
     };
-    let report = evaluate(&inputs, &camera, &config).unwrap();
+    let report = detect_and_evaluate(detector.as_ref(), frames, &config)
+        .unwrap()
+        .report;
     (report.center_error_m.median.unwrap(), report.true_positives)
 }
 
@@ -48,16 +34,21 @@ fn built_in_model_places_real_apples_from_their_points() {
     ) else {
         return;
     };
-    let frames = DatasetFrames::new(vec![Dataset::open(&root).unwrap()])
+    let mut frames = DatasetFrames::new(vec![Dataset::open(&root).unwrap()])
         .load_all()
         .unwrap();
+    for lf in &mut frames {
+        lf.truth.fruits.retain(|f| f.kind == "apple");
+    }
     let text = ColorContourPipeline::default().default_model().unwrap();
     let model = ModelFile::from_json(text, "built-in".as_ref(), "color-contour").unwrap();
     let mut on_ray = model.clone();
     on_ray.stage_params["params"]["depth_refit_tolerance_m"] = serde_json::json!(0.0);
     let (refit, found) = centre_error(&model, &frames);
     let (ray, found_on_ray) = centre_error(&on_ray, &frames);
-    eprintln!("centre median: refitted {refit:.4} m ({found} apples), on the ray {ray:.4} m ({found_on_ray})");
+    eprintln!(
+        "centre median: refitted {refit:.4} m ({found} apples), on the ray {ray:.4} m ({found_on_ray})"
+    );
     // Measured: 9.7 mm against 20.2 mm, 63 apples either way (docs/results.md).
     assert!(refit <= 0.012, "refitted {refit}");
     assert!(ray >= 0.016, "on the ray {ray}");

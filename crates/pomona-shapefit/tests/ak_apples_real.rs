@@ -8,9 +8,9 @@
 use std::path::PathBuf;
 
 use pomona_consensus::ShapeChoice;
-use pomona_eval::{evaluate, EvalConfig, FrameInput};
+use pomona_eval::EvalConfig;
 use pomona_io::Dataset;
-use pomona_pipeline::{DatasetFrames, FrameSource, Pipeline, StageTimings, TrainOptions};
+use pomona_pipeline::{detect_and_evaluate, DatasetFrames, FrameSource, Pipeline, TrainOptions};
 use pomona_shapefit::{ShapeFitPipeline, ShapeFitStageParams};
 
 fn shared_data(rel: &str) -> Option<PathBuf> {
@@ -46,22 +46,11 @@ fn learns_the_apple_size_prior_and_finds_the_held_out_apples() {
     assert!(p.radius_calibration.is_some());
 
     let detector = pipeline.load(&model).unwrap();
-    let lf = all.load(2).unwrap();
-    let detections = detector
-        .detect(&lf.frame, &mut StageTimings::default())
-        .unwrap();
-    let mut truth = lf.truth;
-    truth.fruits.retain(|f| f.kind == "apple");
-    let report = evaluate(
-        &[FrameInput {
-            frame: lf.name,
-            truth,
-            detections,
-        }],
-        lf.frame.camera(),
-        &EvalConfig::default(),
-    )
-    .unwrap();
+    let mut held_out = all.load(2).unwrap();
+    held_out.truth.fruits.retain(|f| f.kind == "apple");
+    let report = detect_and_evaluate(detector.as_ref(), &vec![held_out], &EvalConfig::default())
+        .unwrap()
+        .report;
     let recall = report.recall.unwrap();
     let center = report.center_error_m.median.unwrap();
     let diameter = report.diameter_error_m.mean_abs.unwrap();

@@ -6,9 +6,9 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used)] // test helpers outside #[test] functions
 
-use pomona_eval::{evaluate, EvalConfig, FrameInput};
+use pomona_eval::EvalConfig;
 use pomona_io::Dataset;
-use pomona_pipeline::{DatasetFrames, FrameSource, Pipeline, StageTimings, TrainOptions};
+use pomona_pipeline::{detect_and_evaluate, DatasetFrames, FrameSource, Pipeline, TrainOptions};
 use pomona_symmetry::{StageParams, SymmetryPipeline};
 
 #[test]
@@ -38,22 +38,11 @@ fn learns_range_and_radius_from_real_apples_and_finds_the_held_out_ones() {
     );
 
     let detector = pipeline.load(&model).unwrap();
-    let lf = all.load(2).unwrap();
-    let detections = detector
-        .detect(&lf.frame, &mut StageTimings::default())
-        .unwrap();
-    let mut truth = lf.truth;
-    truth.fruits.retain(|f| f.kind == "apple");
-    let report = evaluate(
-        &[FrameInput {
-            frame: lf.name,
-            truth,
-            detections,
-        }],
-        lf.frame.camera(),
-        &EvalConfig::default(),
-    )
-    .unwrap();
+    let mut held_out = all.load(2).unwrap();
+    held_out.truth.fruits.retain(|f| f.kind == "apple");
+    let report = detect_and_evaluate(detector.as_ref(), &vec![held_out], &EvalConfig::default())
+        .unwrap()
+        .report;
     let recall = report.recall.unwrap();
     let center = report.center_error_m.median.unwrap();
     let diameter = report.diameter_error_m.mean_abs.unwrap();

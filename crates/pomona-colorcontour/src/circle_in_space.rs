@@ -73,7 +73,9 @@ pub fn sphere_from_depth(
             }
             if let Some(z) = depth.get(u, v).filter(|z| z.is_finite() && *z > 0.0) {
                 samples.push((rho, f64::from(z)));
-                points.push(camera.back_project(f64::from(u), f64::from(v), f64::from(z)));
+                if refit_tolerance_m > 0.0 {
+                    points.push(camera.back_project(f64::from(u), f64::from(v), f64::from(z)));
+                }
             }
         }
     }

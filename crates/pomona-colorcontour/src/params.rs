@@ -79,6 +79,17 @@ pub struct ColorContourParams {
     pub depth_refit_tolerance_m: f64,
 }
 
+impl ColorContourParams {
+    /// The circle radii in pixels a fruit can have for a camera of focal length `focal_px`:
+    /// `radius_range_m` seen from the far and the near end of `working_distance_m`. The size
+    /// test of circles without depth, and the cap on merged circles.
+    pub fn radius_px_range(&self, focal_px: f64) -> (f64, f64) {
+        let (r_lo, r_hi) = self.radius_range_m;
+        let (z_near, z_far) = self.working_distance_m;
+        (focal_px * r_lo / z_far, focal_px * r_hi / z_near.max(1e-6))
+    }
+}
+
 impl Default for ColorContourParams {
     fn default() -> Self {
         Self {

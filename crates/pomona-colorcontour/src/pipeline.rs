@@ -277,10 +277,8 @@ impl ColorContourDetector {
     ) -> Result<(Vec<bool>, Vec<ContourCircle>), PipelineError> {
         let fruit = run_stage(&self.color, frame, timings)?;
         let camera = frame.camera();
-        // Merged circles no larger than the largest fruit the size test accepts: radius
-        // `radius_range_m.1` at the near end of `working_distance_m`.
-        let p = &self.fruit.params;
-        let max_radius_px = camera.mean_focal_px() * p.radius_range_m.1 / p.working_distance_m.0;
+        // Merged circles no larger than the largest fruit the size test accepts.
+        let (_, max_radius_px) = self.fruit.params.radius_px_range(camera.mean_focal_px());
         let circles =
             self.circles_of_mask(&fruit, camera.width as usize, max_radius_px, timings)?;
         Ok((fruit, circles))

@@ -221,10 +221,8 @@ impl<'a> Stage<(&'a RgbdFrame, &'a [bool], &'a [ContourCircle]), Vec<Detection>>
         let p = &self.params;
         let camera = frame.camera();
         let (w, h) = (camera.width as usize, camera.height as usize);
-        let f = camera.mean_focal_px();
         let (r_lo, r_hi) = p.radius_range_m;
-        let (z_near, z_far) = p.working_distance_m;
-        let px_range = (f * r_lo / z_far, f * r_hi / z_near.max(1e-6));
+        let px_range = p.radius_px_range(camera.mean_focal_px());
         let measured: Vec<Measured> = circles
             .iter()
             .filter(|c| c.support >= p.min_support)

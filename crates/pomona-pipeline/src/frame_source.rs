@@ -62,16 +62,23 @@ impl FrameSource for [LabelledFrame] {
     }
 
     fn load(&self, i: usize) -> Result<LabelledFrame, PipelineError> {
-        self.get(i)
-            .cloned()
-            .ok_or_else(|| PipelineError::InvalidParameter {
-                name: "frame index".into(),
-                reason: format!(
-                    "{i} is past the {} frames held",
-                    <[LabelledFrame]>::len(self)
-                ),
-            })
+        held(self, i).cloned()
     }
+
+    /// Clones the truth only, not the images.
+    fn truth(&self, i: usize) -> Result<FrameTruth, PipelineError> {
+        held(self, i).map(|lf| lf.truth.clone())
+    }
+}
+
+/// Frame `i` of frames held in memory, or the error for an index past them.
+fn held(frames: &[LabelledFrame], i: usize) -> Result<&LabelledFrame, PipelineError> {
+    frames
+        .get(i)
+        .ok_or_else(|| PipelineError::InvalidParameter {
+            name: "frame index".into(),
+            reason: format!("{i} is past the {} frames held", frames.len()),
+        })
 }
 
 impl FrameSource for Vec<LabelledFrame> {
@@ -81,6 +88,10 @@ impl FrameSource for Vec<LabelledFrame> {
 
     fn load(&self, i: usize) -> Result<LabelledFrame, PipelineError> {
         self.as_slice().load(i)
+    }
+
+    fn truth(&self, i: usize) -> Result<FrameTruth, PipelineError> {
+        self.as_slice().truth(i)
     }
 }
 

@@ -261,20 +261,6 @@ impl CentreRefinement {
     /// The accepted sphere of the points around `center`, its radius calibrated when the
     /// parameters hold a calibration, or `None` (see the module docs).
     pub fn fit(&self, cloud: &SceneCloud, center: &Point3<f64>) -> Option<Sphere> {
-        let (sphere, inliers) = self.free_fit(cloud, center)?;
-        Some(match &self.params.radius_calibration {
-            Some(c) => c.apply_to_sphere(&sphere, &inliers, self.params.radius_range_m),
-            None => sphere,
-        })
-    }
-
-    /// The accepted sphere of the points around `center` as fitted (no radius calibration),
-    /// with its inlier points.
-    pub fn free_fit(
-        &self,
-        cloud: &SceneCloud,
-        center: &Point3<f64>,
-    ) -> Option<(Sphere, Vec<Point3<f64>>)> {
         let p = &self.params;
         let points = self.gather(cloud, center);
         if points.len() < p.min_inliers {
@@ -299,7 +285,17 @@ impl CentreRefinement {
             && (lo..=hi).contains(&sphere.radius_m)
             && sphere.center.coords.norm() > mean_range_m
             && (sphere.center - center).norm() <= p.max_shift_m;
-        believable.then(|| (sphere, fit.inliers.iter().map(|&i| points[i]).collect()))
+        if !believable {
+            return None;
+        }
+        Some(match &p.radius_calibration {
+            Some(c) => {
+                let inlier_points: Vec<Point3<f64>> =
+                    fit.inliers.iter().map(|&i| points[i]).collect();
+                c.apply_to_sphere(&sphere, &inlier_points, p.radius_range_m)
+            }
+            None => sphere,
+        })
     }
 
     /// Every merged box, refined when enabled (boxes in, same order out).

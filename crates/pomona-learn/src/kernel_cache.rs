@@ -22,8 +22,29 @@ pub(crate) fn rbf(gamma: f64, x: &[f64], z: &[f64]) -> f64 {
     (-gamma * d2).exp()
 }
 
+/// `x · z` with four running sums (lanes `k mod 4`), added pairwise at the end.
+///
+/// A single running sum makes every multiply-add wait for the previous one; four independent
+/// sums let the processor (and the compiler's vector units) overlap them. Kernel columns are
+/// most of the solver's time: the `svm/train_2000x100` bench fell from 172 to 128 ms. The result
+/// differs from the sequential sum only by rounding (a few 1e-16 relative), far below the single
+/// precision the columns are cached in; shape-fit and symmetry models trained on two synthetic
+/// sets came out byte-identical.
 fn dot(x: &[f64], z: &[f64]) -> f64 {
-    x.iter().zip(z).map(|(a, b)| a * b).sum()
+    let mut lanes = [0.0f64; 4];
+    let (xs, zs) = (x.chunks_exact(4), z.chunks_exact(4));
+    let tail: f64 = xs
+        .remainder()
+        .iter()
+        .zip(zs.remainder())
+        .map(|(a, b)| a * b)
+        .sum();
+    for (a, b) in xs.zip(zs) {
+        for k in 0..4 {
+            lanes[k] += a[k] * b[k];
+        }
+    }
+    (lanes[0] + lanes[1]) + (lanes[2] + lanes[3]) + tail
 }
 
 /// Signed kernel matrix of a training problem, with an LRU column cache.
@@ -107,5 +128,24 @@ impl<'a> QMatrix<'a> {
         self.columns[i] = Some(Arc::clone(&c));
         self.cached += 1;
         c
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn four_lane_dot_matches_the_sequential_sum_for_every_tail_length() {
+        for n in 0..=11 {
+            let x: Vec<f64> = (0..n).map(|k| 0.3 + f64::from(k) * 1.7).collect();
+            let z: Vec<f64> = (0..n).map(|k| 2.0 - f64::from(k) * 0.45).collect();
+            let sequential: f64 = x.iter().zip(&z).map(|(a, b)| a * b).sum();
+            let fast = dot(&x, &z);
+            assert!(
+                (fast - sequential).abs() <= 1e-12 * sequential.abs().max(1.0),
+                "n = {n}: {fast} vs {sequential}"
+            );
+        }
     }
 }

@@ -241,6 +241,24 @@ pub struct WindowNormalParams {
     /// dominate the surface's shape.
     #[serde(default)]
     pub reference_focal_px: Option<f64>,
+    /// Pixels between the window's samples along each axis (default 1: every pixel of the
+    /// window). [`WindowNormals::for_focal`] sets it when `keep_sample_count` is on.
+    #[serde(default = "one")]
+    pub sample_step_px: u32,
+    /// With `reference_focal_px`: scale the window's *span* to the focal length but keep about
+    /// the number of samples the reference window has, by sampling every
+    /// `s = ⌊fx / reference_focal_px⌋`-th pixel (default off, and in older files: every pixel).
+    /// On a 1080p Azure Kinect (917 px against 365) the 5×5 reference window becomes 11×11
+    /// pixels, 121 samples, when off; when on, 7×7 samples two pixels apart (a 13-pixel span),
+    /// 49 samples. Depth pixels next to each other on such a camera see nearly the same surface
+    /// point, so the extra samples add little but time: the normal is a plane fit to the
+    /// patch, and the patch is what the reference window defines.
+    #[serde(default)]
+    pub keep_sample_count: bool,
+}
+
+fn one() -> u32 {
+    1
 }
 
 impl Default for WindowNormalParams {
@@ -251,6 +269,8 @@ impl Default for WindowNormalParams {
             min_neighbors: 5,
             viewpoint: Point3::origin(),
             reference_focal_px: None,
+            sample_step_px: 1,
+            keep_sample_count: false,
         }
     }
 }
@@ -268,6 +288,13 @@ impl WindowNormalParams {
         if self.half_window == 0 {
             return Err(ConsensusError::InvalidParameter {
                 name: "half_window",
+                value: 0.0,
+                reason: "must be at least 1",
+            });
+        }
+        if self.sample_step_px == 0 {
+            return Err(ConsensusError::InvalidParameter {
+                name: "sample_step_px",
                 value: 0.0,
                 reason: "must be at least 1",
             });
@@ -299,7 +326,9 @@ impl WindowNormals {
     /// These normals for a camera of focal length `fx_px`: the half window scaled by
     /// `fx_px / reference_focal_px` (rounded, at least 1, at most 32) when
     /// [`WindowNormalParams::reference_focal_px`] is set; unchanged otherwise, or when `fx_px`
-    /// is not a positive number.
+    /// is not a positive number. With [`WindowNormalParams::keep_sample_count`] the samples are
+    /// `s = ⌊fx_px / reference_focal_px⌋` pixels apart and the half window, counted in samples,
+    /// is scaled by the ratio over `s`.
     ///
     /// ```
     /// use pomona_consensus::WindowNormalParams;
@@ -310,15 +339,32 @@ impl WindowNormals {
     /// .check()?;
     /// assert_eq!(normals.for_focal(917.0).params().half_window, 5);
     /// assert_eq!(normals.for_focal(220.0).params().half_window, 1);
+    /// let sparse = WindowNormalParams {
+    ///     reference_focal_px: Some(365.0),
+    ///     keep_sample_count: true,
+    ///     ..WindowNormalParams::default()
+    /// }
+    /// .check()?;
+    /// let on_azure_kinect = sparse.for_focal(917.0);
+    /// assert_eq!(on_azure_kinect.params().sample_step_px, 2);
+    /// assert_eq!(on_azure_kinect.params().half_window, 3); // 7×7 samples over 13×13 pixels
+    /// assert_eq!(sparse.for_focal(365.0).params().sample_step_px, 1);
     /// # Ok::<(), pomona_consensus::ConsensusError>(())
     /// ```
     pub fn for_focal(&self, fx_px: f64) -> Self {
         match self.params.reference_focal_px {
             Some(reference) if fx_px.is_finite() && fx_px > 0.0 => {
-                let scaled = (f64::from(self.params.half_window) * fx_px / reference).round();
+                let ratio = fx_px / reference;
+                let step = if self.params.keep_sample_count {
+                    ratio.floor().clamp(1.0, MAX_SCALED_HALF_WINDOW)
+                } else {
+                    1.0
+                };
+                let scaled = (f64::from(self.params.half_window) * ratio / step).round();
                 Self {
                     params: WindowNormalParams {
                         half_window: scaled.clamp(1.0, MAX_SCALED_HALF_WINDOW) as u32,
+                        sample_step_px: step as u32,
                         ..self.params
                     },
                 }
@@ -423,15 +469,22 @@ impl WindowNormals {
         neigh: &mut Vec<Point3<f64>>,
     ) -> Option<Unit<Vector3<f64>>> {
         let p = &self.params;
-        let hw = p.half_window as usize;
+        let step = p.sample_step_px.max(1) as usize;
+        // The window's reach in pixels, trimmed at the image border to whole steps so that the
+        // samples stay on the lattice through (u, v).
+        let reach = p.half_window as usize * step;
+        let (u0, v0) = (
+            u - (u.min(reach) / step) * step,
+            v - (v.min(reach) / step) * step,
+        );
         let max_d2 = p.max_neighbor_distance_m * p.max_neighbor_distance_m;
         let centre = point(v * w + u);
         if !centre.iter().all(|c| c.is_finite()) {
             return None;
         }
         neigh.clear();
-        for vv in v.saturating_sub(hw)..(v + hw + 1).min(h) {
-            for uu in u.saturating_sub(hw)..(u + hw + 1).min(w) {
+        for vv in (v0..(v + reach + 1).min(h)).step_by(step) {
+            for uu in (u0..(u + reach + 1).min(w)).step_by(step) {
                 let q = point(vv * w + uu);
                 // NaN fails the comparison, so invalid pixels drop out here.
                 if (q - centre).norm_squared() <= max_d2 {
@@ -535,6 +588,52 @@ mod tests {
             }
             assert!(checked > 500, "{surface}: {checked}");
         }
+    }
+
+    /// A strided window is the plain window over the sub-grid of every `step`-th pixel through
+    /// the point (also at the image border), and still gives the surface's normal.
+    #[test]
+    fn strided_window_samples_the_lattice_through_each_point() {
+        let (cloud, truth) = organised_scene("sphere");
+        let (w, h) = (80usize, 60usize);
+        let step = 2;
+        let strided = WindowNormalParams {
+            half_window: 3,
+            sample_step_px: step as u32,
+            ..WindowNormalParams::default()
+        }
+        .check()
+        .unwrap();
+        let plain = WindowNormalParams {
+            half_window: 3,
+            ..WindowNormalParams::default()
+        }
+        .check()
+        .unwrap();
+        let pts = cloud_points_f64(&cloud);
+        let mut checked = 0;
+        for (u, v) in [(0, 0), (1, 1), (40, 30), (41, 29), (79, 59), (3, 58)] {
+            // The sub-grid of pixels congruent to (u, v) modulo the step, as its own cloud.
+            let (su, sv) = (u % step, v % step);
+            let (gw, gh) = ((w - su).div_ceil(step), (h - sv).div_ceil(step));
+            let sub: Vec<Point3<f32>> = (0..gh)
+                .flat_map(|gv| (0..gw).map(move |gu| (su + gu * step, sv + gv * step)))
+                .map(|(x, y)| cloud.points()[y * w + x])
+                .collect();
+            let sub = PointCloud::organized(gw as u32, gh as u32, sub).unwrap();
+            let want = plain
+                .estimate_at(&sub, &[(v / step) * gw + u / step])
+                .unwrap()[0];
+            let got = strided.estimate_at(&cloud, &[v * w + u]).unwrap()[0];
+            assert_eq!(got, want, "pixel ({u}, {v})");
+            if let (Some(n), Some(t)) = (got, truth[v * w + u]) {
+                if t.dot(&(-pts[v * w + u].coords.normalize())) > 0.5 {
+                    assert!(angle_deg(&n, &t) < 2.0);
+                    checked += 1;
+                }
+            }
+        }
+        assert!(checked >= 2, "{checked}");
     }
 
     #[test]

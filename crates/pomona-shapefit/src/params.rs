@@ -29,7 +29,9 @@ pub struct ShapeFitParams {
     /// (`normals.reference_focal_px`, not in the paper), as the minimum cluster size already
     /// does: on the real 1080p Azure Kinect frames a fixed 5×5 window spans about 7 mm of fruit,
     /// where 1 mm depth steps and noise decide the normal. Models written before it keep fixed
-    /// pixels.
+    /// pixels. New models also sample the scaled window sparsely where the camera has at least
+    /// twice the reference focal length (`normals.keep_sample_count`: 7×7 samples two pixels
+    /// apart instead of 11×11 on the Azure Kinect); older files sample every pixel.
     pub normals: WindowNormalParams,
     /// Clusters thinned to a pixel lattice before normals and MSAC on cameras of higher
     /// resolution than seed 002's Kinect v2 (not in the paper; see [`ClusterLattice`]). Off by
@@ -111,8 +113,11 @@ impl Default for ShapeFitParams {
             color: ColorBayesParams::default(),
             max_depth_m: 1.5,
             regions: RegionGrowingParams::default(),
+            // Scaled to each camera's focal length, sampled sparsely on high-resolution ones
+            // (`keep_sample_count`, see docs/results.md "Window normals at sensor resolution").
             normals: WindowNormalParams {
                 reference_focal_px: Some(RegionGrowingParams::default().reference_focal_px),
+                keep_sample_count: true,
                 ..WindowNormalParams::default()
             },
             cluster_lattice: ClusterLattice::off(),
@@ -291,6 +296,17 @@ mod tests {
         assert_eq!(old.normals.reference_focal_px, None);
         let window = old.normals.check().unwrap();
         assert_eq!(window.for_focal(917.0), window, "fixed pixels, as trained");
+
+        let sparse = fresh.normals.check().unwrap().for_focal(917.0);
+        assert_eq!(sparse.params().sample_step_px, 2);
+        let mut json = serde_json::to_value(&fresh).unwrap();
+        let normals = json["normals"].as_object_mut().unwrap();
+        assert!(normals.remove("keep_sample_count").is_some());
+        assert!(normals.remove("sample_step_px").is_some());
+        let old: ShapeFitParams = serde_json::from_value(json).unwrap();
+        let dense = old.normals.check().unwrap().for_focal(917.0);
+        assert_eq!(dense.params().sample_step_px, 1, "every pixel, as trained");
+        assert_eq!(dense.params().half_window, 5);
     }
 
     #[test]

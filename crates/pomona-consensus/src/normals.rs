@@ -242,7 +242,8 @@ pub struct WindowNormalParams {
     #[serde(default)]
     pub reference_focal_px: Option<f64>,
     /// Pixels between the window's samples along each axis (default 1: every pixel of the
-    /// window). [`WindowNormals::for_focal`] sets it when `keep_sample_count` is on.
+    /// window); `half_window` counts samples. [`WindowNormals::for_focal`] sets it when
+    /// `keep_sample_count` is on and keeps it otherwise.
     #[serde(default = "one")]
     pub sample_step_px: u32,
     /// With `reference_focal_px`: scale the window's *span* to the focal length but keep about
@@ -349,22 +350,30 @@ impl WindowNormals {
     /// assert_eq!(on_azure_kinect.params().sample_step_px, 2);
     /// assert_eq!(on_azure_kinect.params().half_window, 3); // 7×7 samples over 13×13 pixels
     /// assert_eq!(sparse.for_focal(365.0).params().sample_step_px, 1);
+    /// let every_third = WindowNormalParams {
+    ///     reference_focal_px: Some(365.0),
+    ///     sample_step_px: 3,
+    ///     ..WindowNormalParams::default()
+    /// }
+    /// .check()?;
+    /// assert_eq!(every_third.for_focal(917.0).params().sample_step_px, 3); // kept as set
     /// # Ok::<(), pomona_consensus::ConsensusError>(())
     /// ```
     pub fn for_focal(&self, fx_px: f64) -> Self {
         match self.params.reference_focal_px {
             Some(reference) if fx_px.is_finite() && fx_px > 0.0 => {
                 let ratio = fx_px / reference;
-                let step = if self.params.keep_sample_count {
-                    ratio.floor().clamp(1.0, MAX_SCALED_HALF_WINDOW)
+                let (step, samples_per_step) = if self.params.keep_sample_count {
+                    let step = ratio.floor().clamp(1.0, MAX_SCALED_HALF_WINDOW);
+                    (step as u32, ratio / step)
                 } else {
-                    1.0
+                    (self.params.sample_step_px, ratio)
                 };
-                let scaled = (f64::from(self.params.half_window) * ratio / step).round();
+                let scaled = (f64::from(self.params.half_window) * samples_per_step).round();
                 Self {
                     params: WindowNormalParams {
                         half_window: scaled.clamp(1.0, MAX_SCALED_HALF_WINDOW) as u32,
-                        sample_step_px: step as u32,
+                        sample_step_px: step,
                         ..self.params
                     },
                 }

@@ -71,6 +71,7 @@ fn approach_sequences_are_tracked_to_the_target() {
     assert!(track["frames"][11]["error_radii"].is_number(), "{track}");
     assert_eq!(report["params"]["scan_threshold_fraction"], 0.75);
     assert_eq!(report["params"]["redetect"], "on-doubt");
+    assert_eq!(report["params"]["max_search_radii"], 2.0);
 
     // `--set` overrides a tracker parameter, recorded in the report; a typo or an invalid
     // value is an error that says so.

@@ -39,7 +39,11 @@
 //! scans from one point cannot tell a touching neighbour or a leaf from the fruit's outline; the
 //! edge fit sees pieces of outline and their curvature. The expected circle is the last one (a
 //! constant-velocity and growth-rate prediction was tried with the re-detection and lowered the
-//! success rate on the tuning set; docs/results.md, "Local contour re-detection").
+//! success rate on the tuning set; docs/results.md, "Local contour re-detection"); and a
+//! **bounded spiral search** (`max_search_radii`, default 2 radii): while tracking, the search
+//! does not reach past twice the fruit's radius, so it cannot hand the track to another fruit
+//! across the image; once the track is lost it searches everywhere again. `--set
+//! 'redetect="off"' --set max_search_radii=null` is the paper's tracker.
 
 use pomona_core::nalgebra::Point2;
 use pomona_core::ColorImage;
@@ -92,6 +96,14 @@ pub struct TrackParams {
     /// The local re-detection's window and choice of circle.
     #[serde(default)]
     pub local_redetect: LocalRedetectParams,
+    /// Not in the paper: the spiral search stops at this many current radii from the expected
+    /// position (Chebyshev distance in pixels) while tracking, so another fruit across the
+    /// image cannot take over the track in one frame; after `relax_after_lost` lost frames in a
+    /// row it covers the whole image again, as the paper's does. Default 2 (chosen among none,
+    /// 2, 3, 5 and 8 on the approaches of seed 41; docs/results.md, "Bounded spiral search");
+    /// `None` (and older files) searches the whole image every time.
+    #[serde(default)]
+    pub max_search_radii: Option<f64>,
 }
 
 fn one() -> f64 {
@@ -113,6 +125,7 @@ impl Default for TrackParams {
             scan_threshold_fraction: 0.75,
             redetect: Redetect::OnDoubt,
             local_redetect: LocalRedetectParams::default(),
+            max_search_radii: Some(2.0),
         }
     }
 }
@@ -134,6 +147,8 @@ impl TrackParams {
             Some("max_scan_radii must be at least 1")
         } else if !(self.scan_threshold_fraction > 0.0 && self.scan_threshold_fraction <= 1.0) {
             Some("scan_threshold_fraction must lie in (0, 1]")
+        } else if self.max_search_radii.is_some_and(|k| k.is_nan() || k < 1.0) {
+            Some("max_search_radii must be at least 1")
         } else {
             self.local_redetect.invalid_reason()
         }
@@ -365,7 +380,18 @@ impl ApproachTracker {
                 return (Some(c), false, probes);
             }
         }
-        for p in spiral_points(start, image.width(), image.height(), &self.params.spiral) {
+        // Rings come nearest first, so the search ends at the first probe beyond the bound.
+        let reach = match self.params.max_search_radii {
+            Some(k) if self.lost_in_a_row < self.params.relax_after_lost => k * self.radius_px,
+            _ => f64::INFINITY,
+        };
+        let within = |&(x, y): &(i64, i64)| {
+            let d = (x - start.0).abs().max((y - start.1).abs());
+            d as f64 <= reach
+        };
+        for p in spiral_points(start, image.width(), image.height(), &self.params.spiral)
+            .take_while(within)
+        {
             probes += 1;
             if !self.check(pixels, p) {
                 continue;
@@ -532,6 +558,38 @@ mod tests {
         );
     }
 
+    /// A bounded search does not jump to a fruit across the image while tracking; once the
+    /// track has been lost for `relax_after_lost` frames it searches the whole image again.
+    #[test]
+    fn a_bounded_search_keeps_off_a_far_fruit_until_the_track_is_lost() {
+        let bounded = TrackParams {
+            max_search_radii: Some(3.0),
+            ..paper()
+        };
+        let mut t = ApproachTracker::new(orange_lut(), 128, bounded, Point2::new(30.0, 30.0), 10.0)
+            .unwrap();
+        t.update(&scene(200, 120, &[(30.0, 30.0, 10.0)]));
+        // The tracked fruit is gone; another lies 14 radii away.
+        let far = scene(200, 120, &[(170.0, 90.0, 10.0)]);
+        for _ in 0..2 {
+            let est = t.update(&far);
+            assert_eq!(est.status, TrackStatus::Lost);
+            assert!((est.center_px - Point2::new(30.0, 30.0)).norm() < 1.5);
+        }
+        let est = t.update(&far);
+        assert_eq!(est.status, TrackStatus::Searched);
+        assert!((est.center_px - Point2::new(170.0, 90.0)).norm() < 1.5);
+        // The paper's search takes it at once.
+        let mut t = tracker((30.0, 30.0), 10.0);
+        t.update(&scene(200, 120, &[(30.0, 30.0, 10.0)]));
+        assert_eq!(t.update(&far).status, TrackStatus::Searched);
+        let bad = TrackParams {
+            max_search_radii: Some(0.5),
+            ..paper()
+        };
+        assert!(bad.invalid_reason().is_some());
+    }
+
     #[test]
     fn loss_repeats_the_last_estimate_and_tracking_recovers() {
         let mut t = tracker((60.0, 40.0), 14.0);
@@ -619,6 +677,7 @@ mod tests {
     fn paper() -> TrackParams {
         TrackParams {
             redetect: Redetect::Off,
+            max_search_radii: None,
             ..TrackParams::default()
         }
     }

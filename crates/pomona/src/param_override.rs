@@ -5,7 +5,8 @@
 //! is how a detection-time ablation runs without retraining; the CLI's `--set KEY=VALUE` is this.
 //! Keys are dotted paths into the object (`msac.iterations`); the key must already exist, so a
 //! typo is an error that lists the keys there are, and the value must have the same JSON type as
-//! the one it replaces (`null` may be replaced by anything).
+//! the one it replaces (`null` may be replaced by anything, and may replace anything: it switches
+//! an optional parameter off, and the typed parameters refuse it where it is required).
 
 use std::str::FromStr;
 
@@ -136,7 +137,8 @@ pub fn settable_keys(params: &Value) -> Vec<String> {
 ///
 /// # Errors
 /// [`Error::UnknownParameter`] for a key that does not exist (the message lists the keys that
-/// do), [`Error::ParameterType`] for a value of another JSON type than the one it replaces.
+/// do), [`Error::ParameterType`] for a value of another JSON type than the one it replaces
+/// (other than `null`).
 pub fn apply_overrides(
     params: &mut Value,
     overrides: &[ParamOverride],
@@ -168,8 +170,10 @@ pub fn apply_overrides(
                 known,
             });
         };
+        // `null` switches an optional parameter off; on a required one the typed parameters
+        // refuse it when they are read back.
         let same_type = std::mem::discriminant(slot) == std::mem::discriminant(&o.value);
-        if !same_type && !slot.is_null() {
+        if !same_type && !slot.is_null() && !o.value.is_null() {
             return Err(Error::ParameterType {
                 key: o.key.clone(),
                 owner: what.to_owned(),
@@ -225,6 +229,8 @@ mod tests {
         );
         let err = apply_overrides(&mut p, &[parse("pruning=7")], "m").unwrap_err();
         assert!(err.to_string().contains("a boolean"), "{err}");
+        apply_overrides(&mut p, &[parse("msac.t_m=null")], "m").unwrap();
+        assert_eq!(p["msac"]["t_m"], Value::Null);
         assert_eq!(settable_keys(&p).len(), 3);
         assert_eq!(overrides_to_json(&[parse("a.b=1")]), json!({"a.b": 1}));
     }

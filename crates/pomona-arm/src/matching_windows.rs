@@ -12,10 +12,14 @@
 //! computed over the whole working volume: every point at a hub distance in
 //! `[near_m, far_m]` seen by both views. Along one primary-view ray the stereo view sees the
 //! point move monotonically towards the epipole as it recedes (a point at infinity keeps only
-//! the rotation's shift, `u_stereo` of the rotated direction), so for each ray the extremes lie
-//! at the two ends: the bounds are the minimum over rays of the disparity at `far_m` and the
-//! maximum over rays at `near_m`, sampled on a grid of primary pixels (every
-//! [`WORKING_VOLUME_GRID_PX`] pixels and the image border). The vertical offset of an ideal
+//! the rotation's shift, `u_stereo` of the rotated direction), so the part of the ray the stereo
+//! view sees is one interval and the ray's extremes lie at its two ends: the nearest point seen
+//! by both views gives the largest disparity, the farthest the smallest. The ends are the volume's
+//! own (`near_m`, `far_m`) when the stereo view sees them; with a long lever or a wide turn the
+//! nearest points leave the stereo image, and the end is then found along the ray
+//! ([`RAY_SAMPLES`] hub distances, then bisection to a tenth of a millimetre). The bounds are
+//! the extremes over rays on a grid of primary pixels (every [`WORKING_VOLUME_GRID_PX`] pixels
+//! and the image border). The vertical offset of an ideal
 //! pinhole pair is not zero off the centre row (the two views see the point at different depths),
 //! so `ΔY_M` is the largest offset over the same samples. Each bound is then widened by a margin
 //! in pixels for what the geometry leaves out — the detector's centre error and, as the seed
@@ -28,6 +32,13 @@ use crate::{ArmError, RotatedStereo};
 
 /// Spacing of the primary-view pixel grid on which the working volume is sampled.
 pub const WORKING_VOLUME_GRID_PX: u32 = 8;
+
+/// Hub distances sampled along each ray to find the part of it both views see.
+pub const RAY_SAMPLES: usize = 32;
+
+/// Bisection steps that place an end of the seen part of a ray (the range `far − near` halves
+/// each step: 2 m becomes under 0.1 mm).
+const BISECTION_STEPS: usize = 16;
 
 /// The Eq. 10 windows, in pixels.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -102,21 +113,13 @@ impl MatchingWindows {
             for u in axis(cam.width) {
                 let primary = Point2::new(u, v);
                 let ray = cam.normalised(&primary).push(1.0);
-                for hub_distance_m in [near_m, far_m] {
-                    let Some(depth) =
-                        depth_at_hub_distance(&ray, rig.pivot_distance_m, hub_distance_m)
-                    else {
-                        continue;
-                    };
-                    let point = Point3::from(ray * depth);
-                    let Some((seen, stereo)) = rig.project_pair(&point) else {
-                        continue;
-                    };
-                    if !cam.contains(&stereo) {
-                        continue;
-                    }
-                    let dx = seen.x - stereo.x;
-                    let dy = (stereo.y - seen.y).abs();
+                let offsets = |hub_distance_m: f64| -> Option<(f64, f64)> {
+                    let depth = depth_at_hub_distance(&ray, rig.pivot_distance_m, hub_distance_m)?;
+                    let (seen, stereo) = rig.project_pair(&Point3::from(ray * depth))?;
+                    cam.contains(&stereo)
+                        .then(|| (seen.x - stereo.x, (stereo.y - seen.y).abs()))
+                };
+                for (dx, dy) in seen_ends(near_m, far_m, offsets) {
                     bounds = Some(match bounds {
                         None => (dx, dx, dy),
                         Some((lo, hi, y)) => (lo.min(dx), hi.max(dx), y.max(dy)),
@@ -135,6 +138,52 @@ impl MatchingWindows {
             max_vertical_offset_px: dy + margin_px,
         })
     }
+}
+
+/// The (disparity, vertical offset) at the two ends of the part of `[near_m, far_m]` where
+/// `offsets` (a point of one ray at a hub distance, `None` when the stereo view does not see it)
+/// is defined; empty when no sample is seen. The seen part is one interval (see the module
+/// docs), so its ends are the first and last seen samples moved by bisection towards the unseen
+/// neighbours.
+fn seen_ends(
+    near_m: f64,
+    far_m: f64,
+    offsets: impl Fn(f64) -> Option<(f64, f64)>,
+) -> Vec<(f64, f64)> {
+    let at = |i: usize| near_m + (far_m - near_m) * i as f64 / (RAY_SAMPLES - 1) as f64;
+    let Some(first) = (0..RAY_SAMPLES).find(|&i| offsets(at(i)).is_some()) else {
+        return Vec::new();
+    };
+    let last = (first..RAY_SAMPLES)
+        .rev()
+        .find(|&i| offsets(at(i)).is_some())
+        .unwrap_or(first);
+    // Moves the end `seen` towards `unseen` while staying on the seen side.
+    let bisect = |mut seen: f64, mut unseen: f64| {
+        for _ in 0..BISECTION_STEPS {
+            let mid = 0.5 * (seen + unseen);
+            if offsets(mid).is_some() {
+                seen = mid;
+            } else {
+                unseen = mid;
+            }
+        }
+        seen
+    };
+    let near_end = if first == 0 {
+        near_m
+    } else {
+        bisect(at(first), at(first - 1))
+    };
+    let far_end = if last == RAY_SAMPLES - 1 {
+        far_m
+    } else {
+        bisect(at(last), at(last + 1))
+    };
+    [near_end, far_end]
+        .into_iter()
+        .filter_map(offsets)
+        .collect()
 }
 
 /// Depth `t` (primary camera z) at which the ray `t·ray` (with `ray.z = 1`) lies
@@ -167,14 +216,45 @@ mod tests {
 
     #[test]
     fn every_point_of_the_working_volume_passes_and_the_bounds_are_tight() {
-        let rig = rig();
-        let (near, far) = (0.8, 1.8);
-        let exact = MatchingWindows::for_rig(&rig, near, far, 0.0).unwrap();
+        let (exact, lo, hi) = assert_windows_cover_the_volume(&rig(), 0.8, 1.8);
+        assert!(
+            lo - exact.min_disparity_px < 2.0 && exact.max_disparity_px - hi < 6.0,
+            "{exact:?}: seen {lo}..{hi}"
+        );
+        // Nearer fruit means larger disparities.
+        let nearer = MatchingWindows::for_rig(&rig(), 0.5, 1.8, 0.0).unwrap();
+        let exact = MatchingWindows::for_rig(&rig(), 0.8, 1.8, 0.0).unwrap();
+        assert!(nearer.max_disparity_px > exact.max_disparity_px);
+    }
+
+    #[test]
+    fn a_long_lever_whose_near_points_leave_the_stereo_view_keeps_the_seen_ones() {
+        // β = 8°, hub 0.8 m behind the lens: points 0.2 m in front of the camera are far
+        // outside the stereo image, so the largest disparity is where the rays enter it.
+        let camera = PinholeCamera::new(640, 480, 615.0, 615.0, 319.5, 239.5).unwrap();
+        let rig = RotatedStereo::new(8f64.to_radians(), 0.8, camera).unwrap();
+        let (exact, _, hi) = assert_windows_cover_the_volume(&rig, 1.0, 2.8);
+        // Sample points reach far beyond the far end's disparity (about 250 px, all the window
+        // held when only the volume's ends were tried); the bound is a corner-to-corner
+        // disparity, at most the image width.
+        assert!(hi > 500.0, "{hi}");
+        assert!(exact.max_disparity_px <= 640.0, "{exact:?}");
+    }
+
+    /// Points spread over hub distances `[near, far]` that both views see pass the windows
+    /// (with half a pixel for the grid sampling); returns the exact windows and the smallest and
+    /// largest disparity of the points.
+    fn assert_windows_cover_the_volume(
+        rig: &RotatedStereo,
+        near: f64,
+        far: f64,
+    ) -> (MatchingWindows, f64, f64) {
+        let exact = MatchingWindows::for_rig(rig, near, far, 0.0).unwrap();
         assert!(exact.min_disparity_px > 0.0, "{exact:?}");
         assert!(exact.max_disparity_px > exact.min_disparity_px);
         // Random-ish points inside the volume seen by both views pass with a small tolerance
         // for the grid sampling; the extremes are nearly attained.
-        let tolerant = MatchingWindows::for_rig(&rig, near, far, 0.5).unwrap();
+        let tolerant = MatchingWindows::for_rig(rig, near, far, 0.5).unwrap();
         let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
         let mut seen = 0;
         for i in 0..4000 {
@@ -200,11 +280,8 @@ mod tests {
             lo = lo.min(a.x - b.x);
             hi = hi.max(a.x - b.x);
         }
-        assert!(seen > 500);
-        assert!(lo - exact.min_disparity_px < 2.0 && exact.max_disparity_px - hi < 6.0);
-        // Nearer fruit means larger disparities.
-        let nearer = MatchingWindows::for_rig(&rig, 0.5, far, 0.0).unwrap();
-        assert!(nearer.max_disparity_px > exact.max_disparity_px);
+        assert!(seen > 200, "only {seen} sample points seen by both views");
+        (exact, lo, hi)
     }
 
     #[test]

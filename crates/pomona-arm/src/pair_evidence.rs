@@ -12,7 +12,15 @@
 //! * **Size**: the two circles' radii agree once the scale change between the views is
 //!   accounted for (the pair, triangulated, lies at different distances from the two lenses).
 //!
+//! * **Rows**: for a rotation about the vertical axis, the two columns locate the fruit (Eq. 18)
+//!   and the primary row then predicts the stereo row exactly
+//!   ([`RotatedStereo::row_residual_px`]). Eq. 10 bounds the raw row offset by the largest one
+//!   anywhere in the image (`ΔY_M`, 13 px at the corners for β = 4° before its margin, and
+//!   growing with the lever); the residual is zero for the right partner wherever it is, so a
+//!   neighbour above or below fails a much tighter gate.
+//!
 //! How they enter the matching ([`PairEvidence::apply`] on the [`DisparityMatrix`]):
+//! * a **row gate**: candidates whose row residual exceeds `max_row_residual_px` are removed;
 //! * a **floor**: candidates whose NCC is below `min_ncc` are removed before the relaxation;
 //! * a **cost** added to σ = (ΔX − ΔX̄)² (pixels²): `ncc_weight_px2 · (1 − NCC)` and
 //!   `radius_weight_px2 · ln(r_stereo / r_expected)²`.
@@ -34,6 +42,9 @@ use crate::{ArmError, DisparityMatrix, DisparityRefinement, RotatedStereo};
 /// Parameters of the evidence added to the relaxation. The default is off (the seed's matching).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PairEvidence {
+    /// Candidates whose |row residual| exceeds this many pixels are removed before the
+    /// relaxation; `None`: no gate (Eq. 10's vertical window only). Non-negative.
+    pub max_row_residual_px: Option<f64>,
     /// Candidates whose NCC is below this floor are removed before the relaxation; `None`: no
     /// floor. In `[-1, 1]`.
     pub min_ncc: Option<f64>,
@@ -50,6 +61,7 @@ impl Default for PairEvidence {
     /// Off: no floor, no cost; the sweep of the default refinement (patch 1.2 r, ±6 px).
     fn default() -> Self {
         Self {
+            max_row_residual_px: None,
             min_ncc: None,
             ncc_weight_px2: 0.0,
             radius_weight_px2: 0.0,
@@ -65,6 +77,9 @@ pub struct PairScore {
     pub ncc: Option<f64>,
     /// `ln(r_stereo / r_expected)`; `None` when the pair does not triangulate.
     pub radius_log_ratio: Option<f64>,
+    /// [`RotatedStereo::row_residual_px`]; `None` when the columns locate no point in front of
+    /// both views.
+    pub row_residual_px: Option<f64>,
 }
 
 /// What [`PairEvidence::apply`] did.
@@ -76,6 +91,8 @@ pub struct EvidenceOutcome {
     pub unscored: usize,
     /// Candidates removed by the NCC floor.
     pub removed: usize,
+    /// Candidates removed by the row gate.
+    pub removed_by_rows: usize,
     /// Every candidate's score: `(row, column, score)`, removed ones included.
     pub scores: Vec<(usize, usize, PairScore)>,
 }
@@ -93,7 +110,16 @@ impl EvidenceOutcome {
 impl PairEvidence {
     /// Whether no evidence is used (then [`PairEvidence::apply`] leaves the matrix alone).
     pub fn is_off(&self) -> bool {
-        self.min_ncc.is_none() && self.ncc_weight_px2 == 0.0 && self.radius_weight_px2 == 0.0
+        self.max_row_residual_px.is_none()
+            && self.min_ncc.is_none()
+            && self.ncc_weight_px2 == 0.0
+            && self.radius_weight_px2 == 0.0
+    }
+
+    /// Whether the row gate removes a candidate of `score`: its residual is known and larger.
+    fn fails_rows(&self, score: &PairScore) -> bool {
+        self.max_row_residual_px
+            .is_some_and(|gate| score.row_residual_px.is_some_and(|r| r.abs() > gate))
     }
 
     /// Whether the floor removes a candidate of `score`: its NCC is known and below `min_ncc`.
@@ -111,6 +137,15 @@ impl PairEvidence {
     /// # Errors
     /// [`ArmError::InvalidParameter`] naming the first parameter out of range.
     pub fn validate(&self) -> Result<(), ArmError> {
+        if let Some(gate) = self.max_row_residual_px {
+            if !(gate.is_finite() && gate >= 0.0) {
+                return Err(ArmError::InvalidParameter {
+                    name: "max_row_residual_px",
+                    value: gate,
+                    reason: "must be finite and non-negative",
+                });
+            }
+        }
         if let Some(floor) = self.min_ncc {
             if !(-1.0..=1.0).contains(&floor) {
                 return Err(ArmError::InvalidParameter {
@@ -163,6 +198,9 @@ impl PairEvidence {
         Ok(PairScore {
             ncc,
             radius_log_ratio: radius_log_ratio(rig, primary, stereo),
+            row_residual_px: rig
+                .row_residual_px(&primary.center_px, &stereo.center_px)
+                .ok(),
         })
     }
 
@@ -199,6 +237,11 @@ impl PairEvidence {
             outcome.scores.push((l, r, score));
             if self.needs_ncc() && score.ncc.is_none() {
                 outcome.unscored += 1;
+            }
+            if self.fails_rows(&score) {
+                matrix.remove(l, r);
+                outcome.removed_by_rows += 1;
+                continue;
             }
             if self.fails_floor(&score) {
                 matrix.remove(l, r);
@@ -369,6 +412,39 @@ mod tests {
             )
             .unwrap();
         (matrix.relax(&RelaxationParams::default()), counts)
+    }
+
+    #[test]
+    fn the_row_gate_removes_a_neighbour_off_the_predicted_row() {
+        let mut s = scene();
+        // A sits 6 px higher than B; Eq. 10's vertical window (10 px) still admits A with B's
+        // stereo circle, and by disparity alone A takes it.
+        s.primary[0].center_px.y -= 6.0;
+        s.windows.max_vertical_offset_px = 10.0;
+        assert_eq!(
+            pairs(&run(&s, &PairEvidence::default()).0),
+            [(0, 0), (2, 1)]
+        );
+        let gate = PairEvidence {
+            max_row_residual_px: Some(3.0),
+            ..PairEvidence::default()
+        };
+        let (gated, counts) = run(&s, &gate);
+        assert_eq!(pairs(&gated), [(1, 0), (2, 1)], "{gated:?}");
+        assert_eq!((counts.removed_by_rows, counts.removed), (1, 0));
+        let residual = |l: usize, r: usize| counts.score(l, r).and_then(|x| x.row_residual_px);
+        assert!(
+            (residual(0, 0).unwrap() - 6.0).abs() < 0.5,
+            "{:?}",
+            residual(0, 0)
+        );
+        assert!(residual(1, 0).unwrap().abs() < 1e-6);
+        // A negative gate is refused.
+        let bad = PairEvidence {
+            max_row_residual_px: Some(-1.0),
+            ..PairEvidence::default()
+        };
+        assert!(bad.validate().is_err());
     }
 
     #[test]

@@ -146,6 +146,56 @@ impl RotatedStereo {
             primary: [pixel_primary.x, pixel_primary.y],
             stereo: [pixel_stereo.x, pixel_stereo.y],
         };
+        let (in_plane, in_stereo) = self.horizontal_solution(pixel_primary, pixel_stereo)?;
+        let (left, right) = (
+            self.camera.normalised(pixel_primary),
+            self.camera.normalised(pixel_stereo),
+        );
+        // Y is shared by both frames (the rotation is about it): average the two rows' estimates.
+        let y = 0.5 * (left.y * in_plane.z + right.y * in_stereo.z);
+        if !y.is_finite() {
+            return Err(fail());
+        }
+        Ok(Point3::new(in_plane.x, y, in_plane.z))
+    }
+
+    /// How far, in stereo-view rows, `pixel_stereo` lies from where the primary view's row puts
+    /// the fruit that the two columns locate (Eq. 18): `v_stereo − v_predicted`. Zero for exact
+    /// projections of one point; the epipolar constraint that the seed's global vertical window
+    /// (Eq. 10's `ΔY_M`, the largest offset anywhere in the image) only bounds.
+    ///
+    /// # Errors
+    /// As [`RotatedStereo::locate_paper`].
+    pub fn row_residual_px(
+        &self,
+        pixel_primary: &Point2<f64>,
+        pixel_stereo: &Point2<f64>,
+    ) -> Result<f64, ArmError> {
+        let (in_plane, in_stereo) = self.horizontal_solution(pixel_primary, pixel_stereo)?;
+        let y = self.camera.normalised(pixel_primary).y * in_plane.z;
+        self.camera
+            .project(&Point3::new(in_stereo.x, y, in_stereo.z))
+            .map(|predicted| pixel_stereo.y - predicted.y)
+            .filter(|r| r.is_finite())
+            .ok_or(ArmError::NoStereoPoint {
+                method: "paper",
+                primary: [pixel_primary.x, pixel_primary.y],
+                stereo: [pixel_stereo.x, pixel_stereo.y],
+            })
+    }
+
+    /// Eqs. 17–18 on the two columns alone: the fruit in the horizontal plane through the lenses
+    /// (y = 0), in the primary and the stereo camera frames.
+    fn horizontal_solution(
+        &self,
+        pixel_primary: &Point2<f64>,
+        pixel_stereo: &Point2<f64>,
+    ) -> Result<(Point3<f64>, Point3<f64>), ArmError> {
+        let fail = || ArmError::NoStereoPoint {
+            method: "paper",
+            primary: [pixel_primary.x, pixel_primary.y],
+            stereo: [pixel_stereo.x, pixel_stereo.y],
+        };
         let left = self.camera.normalised(pixel_primary);
         let right = self.camera.normalised(pixel_stereo);
         // Mirrored x: the seed's image x.
@@ -164,12 +214,7 @@ impl RotatedStereo {
         {
             return Err(fail());
         }
-        // Y is shared by both frames (the rotation is about it): average the two rows' estimates.
-        let y = 0.5 * (left.y * in_plane.z + right.y * in_stereo.z);
-        if !y.is_finite() {
-            return Err(fail());
-        }
-        Ok(Point3::new(in_plane.x, y, in_plane.z))
+        Ok((in_plane, in_stereo))
     }
 
     /// Calibrated triangulation: both views' rays in the primary camera frame, and the midpoint
@@ -266,6 +311,25 @@ mod tests {
                 assert!((tri - p).norm() < 1e-6, "β {beta}: {tri} vs {p}");
             }
         }
+    }
+
+    #[test]
+    fn the_row_residual_is_zero_for_one_point_and_follows_a_row_shift() {
+        for (beta, d) in [(4.0, 0.3), (8.0, 1.0)] {
+            let rig = rig(beta, d);
+            for p in working_volume(&rig) {
+                let (a, b) = rig.project_pair(&p).unwrap();
+                assert!(rig.row_residual_px(&a, &b).unwrap().abs() < 1e-9, "{p}");
+                // Off the centre row the views see the point at different heights, so the
+                // residual is not the raw offset v_stereo − v_primary.
+                let moved = Point2::new(b.x, b.y + 5.0);
+                assert!((rig.row_residual_px(&a, &moved).unwrap() - 5.0).abs() < 1e-9);
+            }
+        }
+        // Off the centre row the raw offset is not zero for one point.
+        let rig = rig(8.0, 1.0);
+        let (a, b) = rig.project_pair(&Point3::new(0.3, 0.25, 0.6)).unwrap();
+        assert!((b.y - a.y).abs() > 1.0, "{a} {b}");
     }
 
     #[test]

@@ -89,6 +89,12 @@ pub struct StereoArgs {
     /// are kept.
     #[arg(long, value_name = "NCC", default_value_t = DisparityRefinement::default().min_ncc)]
     pub refine_min_ncc: f64,
+    /// Matching (beyond the seed): remove candidate pairs whose stereo row lies more than PX
+    /// from the row that the primary row and the two columns predict (the epipolar constraint;
+    /// Eq. 10 only bounds the row offset by its largest value anywhere in the image). Default:
+    /// no gate (the seed's matching).
+    #[arg(long, value_name = "PX")]
+    pub match_max_row_px: Option<f64>,
     /// Matching (beyond the seed): remove candidate pairs whose appearance NCC (the primary
     /// patch moved into the stereo view by the rig's motion, best of the epipolar sweep) is
     /// below this floor before the relaxation. Default: no floor (the seed's matching).
@@ -373,6 +379,7 @@ pub fn run(args: &StereoArgs) -> Result<()> {
         })
         .transpose()?;
     let evidence = PairEvidence {
+        max_row_residual_px: args.match_max_row_px,
         min_ncc: args.match_min_ncc,
         ncc_weight_px2: args.match_ncc_weight,
         radius_weight_px2: args.match_radius_weight,

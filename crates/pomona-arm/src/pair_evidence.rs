@@ -3,7 +3,7 @@
 //!
 //! Why: the Eq. 10 windows widen with β, so in clustered fruit several stereo circles fall in a
 //! primary circle's window at disparities as plausible as the right one, and duplicated or merged
-//! circles pair with a neighbour's. Two cues tell the right partner apart:
+//! circles pair with a neighbour's. Three cues tell the right partner apart:
 //! * **Appearance**: the primary circle's patch, moved into the stereo view by the rig's exact
 //!   motion and swept along the epipolar line around the pair's disparity
 //!   ([`DisparityRefinement::refine`], its best zero-mean NCC over R, G, B), agrees with the
@@ -11,12 +11,11 @@
 //!   background).
 //! * **Size**: the two circles' radii agree once the scale change between the views is
 //!   accounted for (the pair, triangulated, lies at different distances from the two lenses).
-//!
 //! * **Rows**: for a rotation about the vertical axis, the two columns locate the fruit (Eq. 18)
 //!   and the primary row then predicts the stereo row exactly
 //!   ([`RotatedStereo::row_residual_px`]). Eq. 10 bounds the raw row offset by the largest one
-//!   anywhere in the image (`ΔY_M`, 13 px at the corners for β = 4° before its margin, and
-//!   growing with the lever); the residual is zero for the right partner wherever it is, so a
+//!   anywhere in the image (`ΔY_M`, about 13 px at the corners for β = 4° before its margin);
+//!   the residual of the right partner's exact circles is zero wherever they are, so a
 //!   neighbour above or below fails a much tighter gate.
 //!
 //! How they enter the matching ([`PairEvidence::apply`] on the [`DisparityMatrix`]):
@@ -28,7 +27,8 @@
 //! Limits (measured in docs/results.md): a right candidate can score low (a leaf in front in one
 //! view), and a neighbour of the same size against contrasting foliage shares the silhouette and
 //! shading of the patch and can score high; the detector's radii are too noisy for the size cue
-//! to help.
+//! to help; its circles sit several pixels off their fruit's row where the views see different
+//! parts of it, so a row gate tight enough to help also removes right pairs.
 //!
 //! A candidate whose NCC cannot be computed (a flat patch, a sweep leaving the image, no point in
 //! front of both views) is never removed and costs as NCC 0 ("no agreement shown"); a candidate
@@ -58,7 +58,7 @@ pub struct PairEvidence {
 }
 
 impl Default for PairEvidence {
-    /// Off: no floor, no cost; the sweep of the default refinement (patch 1.2 r, ±6 px).
+    /// Off: no row gate, no floor, no cost; the sweep of the default refinement (patch 1.2 r, ±6 px).
     fn default() -> Self {
         Self {
             max_row_residual_px: None,

@@ -141,11 +141,7 @@ impl RotatedStereo {
         pixel_primary: &Point2<f64>,
         pixel_stereo: &Point2<f64>,
     ) -> Result<Point3<f64>, ArmError> {
-        let fail = || ArmError::NoStereoPoint {
-            method: "paper",
-            primary: [pixel_primary.x, pixel_primary.y],
-            stereo: [pixel_stereo.x, pixel_stereo.y],
-        };
+        let fail = || no_stereo_point("paper", pixel_primary, pixel_stereo);
         let (in_plane, in_stereo) = self.horizontal_solution(pixel_primary, pixel_stereo)?;
         let (left, right) = (
             self.camera.normalised(pixel_primary),
@@ -177,11 +173,7 @@ impl RotatedStereo {
             .project(&Point3::new(in_stereo.x, y, in_stereo.z))
             .map(|predicted| pixel_stereo.y - predicted.y)
             .filter(|r| r.is_finite())
-            .ok_or(ArmError::NoStereoPoint {
-                method: "paper",
-                primary: [pixel_primary.x, pixel_primary.y],
-                stereo: [pixel_stereo.x, pixel_stereo.y],
-            })
+            .ok_or_else(|| no_stereo_point("paper", pixel_primary, pixel_stereo))
     }
 
     /// Eqs. 17–18 on the two columns alone: the fruit in the horizontal plane through the lenses
@@ -191,11 +183,7 @@ impl RotatedStereo {
         pixel_primary: &Point2<f64>,
         pixel_stereo: &Point2<f64>,
     ) -> Result<(Point3<f64>, Point3<f64>), ArmError> {
-        let fail = || ArmError::NoStereoPoint {
-            method: "paper",
-            primary: [pixel_primary.x, pixel_primary.y],
-            stereo: [pixel_stereo.x, pixel_stereo.y],
-        };
+        let fail = || no_stereo_point("paper", pixel_primary, pixel_stereo);
         let left = self.camera.normalised(pixel_primary);
         let right = self.camera.normalised(pixel_stereo);
         // Mirrored x: the seed's image x.
@@ -228,11 +216,7 @@ impl RotatedStereo {
         pixel_primary: &Point2<f64>,
         pixel_stereo: &Point2<f64>,
     ) -> Result<Point3<f64>, ArmError> {
-        let fail = || ArmError::NoStereoPoint {
-            method: "triangulate",
-            primary: [pixel_primary.x, pixel_primary.y],
-            stereo: [pixel_stereo.x, pixel_stereo.y],
-        };
+        let fail = || no_stereo_point("triangulate", pixel_primary, pixel_stereo);
         let ray = |n: Vector2<f64>| Vector3::new(n.x, n.y, 1.0);
         let camera_from_stereo = self.stereo_from_camera().inverse();
         let (o1, d1) = (Point3::origin(), ray(self.camera.normalised(pixel_primary)));
@@ -266,6 +250,19 @@ impl RotatedStereo {
         Translation3::from(p)
             * UnitQuaternion::from_axis_angle(&Vector3::y_axis(), angle_rad)
             * Translation3::from(-p)
+    }
+}
+
+/// The error of a pixel pair that locates no point in front of both views.
+fn no_stereo_point(
+    method: &'static str,
+    pixel_primary: &Point2<f64>,
+    pixel_stereo: &Point2<f64>,
+) -> ArmError {
+    ArmError::NoStereoPoint {
+        method,
+        primary: [pixel_primary.x, pixel_primary.y],
+        stereo: [pixel_stereo.x, pixel_stereo.y],
     }
 }
 
@@ -320,13 +317,12 @@ mod tests {
             for p in working_volume(&rig) {
                 let (a, b) = rig.project_pair(&p).unwrap();
                 assert!(rig.row_residual_px(&a, &b).unwrap().abs() < 1e-9, "{p}");
-                // Off the centre row the views see the point at different heights, so the
-                // residual is not the raw offset v_stereo − v_primary.
                 let moved = Point2::new(b.x, b.y + 5.0);
                 assert!((rig.row_residual_px(&a, &moved).unwrap() - 5.0).abs() < 1e-9);
             }
         }
-        // Off the centre row the raw offset is not zero for one point.
+        // The raw offset v_stereo − v_primary of one point is not zero off the centre row (the
+        // views see it at different depths): the residual is the tighter test.
         let rig = rig(8.0, 1.0);
         let (a, b) = rig.project_pair(&Point3::new(0.3, 0.25, 0.6)).unwrap();
         assert!((b.y - a.y).abs() > 1.0, "{a} {b}");

@@ -155,6 +155,33 @@ fn stereo_locates_every_fruit_from_the_two_colour_shots() {
     }
 }
 
+/// The row gate keeps every pair of discs drawn where the rig puts them (their rows agree to a
+/// fraction of a pixel) and refuses a negative gate by name.
+#[test]
+fn the_row_gate_keeps_consistent_pairs_and_refuses_a_negative_gate() {
+    let dir = tempfile::tempdir().unwrap();
+    let (ds, det) = (dir.path().join("ds"), dir.path().join("det"));
+    stereo_dataset(&ds);
+    let gated = stereo(
+        &ds,
+        &det,
+        &["--reach-m", "0.6,2.0", "--match-max-row-px", "1.5"],
+    );
+    assert!(gated.status.success(), "{}", stderr(&gated));
+    assert!(
+        stdout(&gated).contains("5 fruit located"),
+        "{}",
+        stdout(&gated)
+    );
+    let bad = stereo(&ds, &det, &["--match-max-row-px=-1"]);
+    assert!(!bad.status.success());
+    assert!(
+        stderr(&bad).contains("max_row_residual_px"),
+        "{}",
+        stderr(&bad)
+    );
+}
+
 #[test]
 fn stereo_without_a_rig_names_the_missing_file() {
     let dir = tempfile::tempdir().unwrap();

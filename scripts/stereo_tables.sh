@@ -2,7 +2,8 @@
 # Seed 004 §4.1–4.2 through the `pomona` binary: the figures of docs/results.md, "### Stereo".
 # Orchard oranges seen by a D435-sized camera, exact depth (unused: `pomona stereo` reads only
 # the two colour views), the same scenes (seed 1) shot by rigs at β = 2, 4 and 8° (pivot 0.3 m),
-# located by Eq. 18 and by triangulation; then β = 4° through a distorted lens.
+# located by Eq. 18 and by triangulation from the circle centres (`--no-refine`, the seed's
+# method); then β = 4° through a distorted lens.
 #
 #   scripts/stereo_tables.sh [OUT]      (POMONA=path/to/pomona, FRAMES=20 by default)
 set -eu
@@ -16,7 +17,7 @@ run() { # dataset name, synth options...
     "$P" synth --out "$OUT/$name" --frames "$FRAMES" --seed 1 --domain orchard --fruit orange \
         --camera d435 --noise none --stereo --force "$@"
     for method in paper triangulate; do
-        "$P" stereo --data "$OUT/$name" --out "$OUT/det-$name-$method" --method "$method" \
+        "$P" stereo --data "$OUT/$name" --out "$OUT/det-$name-$method" --method "$method" --no-refine \
             --report "$OUT/$name-$method.json"
     done
 }

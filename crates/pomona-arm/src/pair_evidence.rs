@@ -58,14 +58,19 @@ pub struct PairEvidence {
 }
 
 impl Default for PairEvidence {
-    /// Off: no row gate, no floor, no cost; the sweep of the default refinement (patch 1.2 r, ±6 px).
+    /// Off: no row gate, no floor, no cost; the appearance sweep of the default refinement
+    /// (patch 1.2 r, ±6 px) over every pixel of the patch, as the evidence was measured (the
+    /// refinement's fruit-colour selection came later and was not measured here).
     fn default() -> Self {
         Self {
             max_row_residual_px: None,
             min_ncc: None,
             ncc_weight_px2: 0.0,
             radius_weight_px2: 0.0,
-            appearance: DisparityRefinement::default(),
+            appearance: DisparityRefinement {
+                fruit_chroma_radius: None,
+                ..DisparityRefinement::default()
+            },
         }
     }
 }

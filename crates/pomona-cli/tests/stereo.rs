@@ -193,8 +193,9 @@ fn stereo_without_a_rig_names_the_missing_file() {
     assert!(stderr(&out).contains("rig.json"), "{}", stderr(&out));
 }
 
-/// `--refine` end to end on rendered (shaded) oranges: every located pair is either refined or
-/// kept with a named reason, some are refined, and the detection files are written.
+/// The refinement (the default) end to end on rendered (shaded) oranges: every located pair is
+/// either refined or kept with a named reason, some are refined, and the detection files are
+/// written; `--no-refine` locates from the circle centres only.
 #[test]
 fn refine_accounts_for_every_pair_on_rendered_oranges() {
     let tmp = tempfile::tempdir().unwrap();
@@ -228,7 +229,6 @@ fn refine_accounts_for_every_pair_on_rendered_oranges() {
         &[
             "--method",
             "triangulate",
-            "--refine",
             "--report",
             report.to_str().unwrap(),
         ],
@@ -252,4 +252,16 @@ fn refine_accounts_for_every_pair_on_rendered_oranges() {
     assert!(refined > 0, "{report}");
     assert_eq!(refined + kept, pairs, "{report}");
     assert!(std::fs::read_dir(&det).unwrap().count() >= 3);
+    let circles = tmp.path().join("circles.json");
+    let out = stereo(
+        &ds,
+        &tmp.path().join("det-circles"),
+        &["--no-refine", "--report", circles.to_str().unwrap()],
+    );
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(!stdout(&out).contains("refined"), "{}", stdout(&out));
+    let circles: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&circles).unwrap()).unwrap();
+    assert!(circles["refinement"].is_null(), "{circles}");
+    assert_eq!(circles["matching"]["pairs"], report["matching"]["pairs"]);
 }

@@ -65,7 +65,9 @@ pub use arm_limits::ArmLimits;
 pub use arm_model_file::{ArmModelFile, ARM_MODEL_FORMAT, ARM_MODEL_VERSION};
 pub use arm_simulation::{ArmRig, ArmSample, ArmSimulation, Shot, ShotPixels};
 pub use calibration_errors::{CalibrationErrors, CalibrationMagnitudes};
-pub use disparity_refinement::{DisparityRefinement, FallbackReason, RefinementOutcome};
+pub use disparity_refinement::{
+    DisparityRefinement, FallbackReason, RefinementOutcome, MIN_CHROMA_SUM,
+};
 pub use end_position_error::EndPositionError;
 pub use error::ArmError;
 pub use exact_planner::{plan_exact, MAX_EXACT_TARGETS};

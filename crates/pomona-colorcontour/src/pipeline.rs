@@ -237,6 +237,9 @@ impl ColorContourDetector {
         if !(lo > 0.0 && lo <= hi) {
             return Err(invalid("radius_range_m", "needs 0 < min ≤ max"));
         }
+        if !(p.radius_tolerance.is_finite() && p.radius_tolerance >= 0.0) {
+            return Err(invalid("radius_tolerance", "must be 0 (off) or positive"));
+        }
         let (near, far) = p.working_distance_m;
         if !(near > 0.0 && near <= far) {
             return Err(invalid("working_distance_m", "needs 0 < near ≤ far"));

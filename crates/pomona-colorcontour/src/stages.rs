@@ -184,7 +184,7 @@ fn color_purity(fruit: &[bool], width: usize, height: usize, c: &ContourCircle) 
 /// * score = support (arc spanned over circumference) × colour purity (fraction of the circle
 ///   that is fruit-coloured): a confidence-like value in [0, 1];
 /// * size (§3.2): with depth inside the circle, the fruit radius in metres must lie in
-///   `radius_range_m`; without, the pixel radius must lie in the range those radii give over
+///   `radius_range_m` widened by `radius_tolerance`; without, the pixel radius must lie in the range those radii give over
 ///   `working_distance_m`. Checked *before* the overlap pruning (the paper does it after),
 ///   so an implausible circle cannot remove a plausible one;
 /// * overlap (§3.2): see [`crate::prune_overlapping`], circles ranked by `prune_rank`
@@ -221,7 +221,7 @@ impl<'a> Stage<(&'a RgbdFrame, &'a [bool], &'a [ContourCircle]), Vec<Detection>>
         let p = &self.params;
         let camera = frame.camera();
         let (w, h) = (camera.width as usize, camera.height as usize);
-        let (r_lo, r_hi) = p.radius_range_m;
+        let (r_lo, r_hi) = p.accepted_radius_range_m();
         let px_range = p.radius_px_range(camera.mean_focal_px());
         let measured: Vec<Measured> = circles
             .iter()

@@ -1,6 +1,6 @@
 //! Real data: the built-in colour-contour model (trained on synthetic oranges) on the Azure
-//! Kinect orchard frames (`../shared/data/ak-apples`) places the apples it finds within about a
-//! centimetre once each circle's 3D centre is refitted to the fruit pixels' points, where the
+//! Kinect orchard frames (`../shared/data/ak-apples`) places the apples it finds within about
+//! 13 mm (median) once each circle's 3D centre is refitted to the fruit pixels' points, where the
 //! centre on the circle's ray lies about 2 cm beside them. Skips with a message when the data
 //! folder is absent; fails instead when `POMONA_REQUIRE_DATA=1`.
 
@@ -49,8 +49,10 @@ fn built_in_model_places_real_apples_from_their_points() {
     eprintln!(
         "centre median: refitted {refit:.4} m ({found} apples), on the ray {ray:.4} m ({found_on_ray})"
     );
-    // Measured: 9.7 mm against 20.2 mm, 63 apples either way (docs/results.md).
-    assert!(refit <= 0.012, "refitted {refit}");
+    // Measured: 12.6 mm against 20.3 mm, 69 apples either way; 9.7 against 20.2 mm and 63
+    // apples before the radius tolerance, whose six more apples are placed 15–29 mm off
+    // (docs/results.md, "Radius tolerance").
+    assert!(refit <= 0.014, "refitted {refit}");
     assert!(ray >= 0.016, "on the ray {ray}");
     assert!(found + 2 >= found_on_ray, "{found} against {found_on_ray}");
 }

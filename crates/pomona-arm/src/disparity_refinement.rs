@@ -65,6 +65,10 @@ pub struct DisparityRefinement {
     /// than this from the patch's scores −1 (zero-mean NCC alone ignores colour). `None`: every
     /// pixel of the patch, NCC alone. Positive.
     pub fruit_chroma_radius: Option<f64>,
+    /// With `fruit_chroma_radius`: when the fruit's pixels fall back, every pixel of the patch is
+    /// tried again with this NCC floor (the whole patch keeps the silhouette, which is sharper
+    /// where the background is plain). `None`: no second try. In `[-1, 1]`.
+    pub whole_patch_min_ncc: Option<f64>,
 }
 
 impl Default for DisparityRefinement {
@@ -82,6 +86,7 @@ impl Default for DisparityRefinement {
             min_ncc: 0.3,
             min_patch_std: 2.0,
             fruit_chroma_radius: Some(0.1),
+            whole_patch_min_ncc: Some(0.5),
         }
     }
 }
@@ -193,6 +198,11 @@ impl DisparityRefinement {
         if !(-1.0..=1.0).contains(&self.min_ncc) {
             return bad("min_ncc", self.min_ncc, "must be in [-1, 1]");
         }
+        if let Some(floor) = self.whole_patch_min_ncc {
+            if !(-1.0..=1.0).contains(&floor) {
+                return bad("whole_patch_min_ncc", floor, "must be in [-1, 1]");
+            }
+        }
         if let Some(radius) = self.fruit_chroma_radius {
             if !(radius.is_finite() && radius > 0.0) {
                 return bad("fruit_chroma_radius", radius, "must be finite and positive");
@@ -218,12 +228,46 @@ impl DisparityRefinement {
     pub fn refine(
         &self,
         rig: &RotatedStereo,
-        (primary, stereo): (&ColorImage, &ColorImage),
+        images: (&ColorImage, &ColorImage),
         primary_center_px: &Point2<f64>,
         radius_px: f64,
         stereo_center_px: &Point2<f64>,
     ) -> Result<RefinementOutcome, ArmError> {
         self.validate()?;
+        let first =
+            self.refine_once(rig, images, primary_center_px, radius_px, stereo_center_px)?;
+        let second_try = match (first, self.fruit_chroma_radius, self.whole_patch_min_ncc) {
+            (RefinementOutcome::Fallback { reason, .. }, Some(_), Some(floor))
+                if reason != FallbackReason::NoStartingPoint =>
+            {
+                Some(Self {
+                    fruit_chroma_radius: None,
+                    whole_patch_min_ncc: None,
+                    min_ncc: floor,
+                    ..*self
+                })
+            }
+            _ => None,
+        };
+        if let Some(whole) = second_try {
+            let outcome =
+                whole.refine_once(rig, images, primary_center_px, radius_px, stereo_center_px)?;
+            if matches!(outcome, RefinementOutcome::Refined { .. }) {
+                return Ok(outcome);
+            }
+        }
+        Ok(first)
+    }
+
+    /// One sweep with these parameters (no second try).
+    fn refine_once(
+        &self,
+        rig: &RotatedStereo,
+        (primary, stereo): (&ColorImage, &ColorImage),
+        primary_center_px: &Point2<f64>,
+        radius_px: f64,
+        stereo_center_px: &Point2<f64>,
+    ) -> Result<RefinementOutcome, ArmError> {
         if !(radius_px.is_finite() && radius_px > 0.0) {
             return Err(ArmError::InvalidParameter {
                 name: "radius_px",
@@ -632,6 +676,7 @@ mod tests {
         min_ncc: 0.5,
         min_patch_std: 2.0,
         fruit_chroma_radius: None,
+        whole_patch_min_ncc: None,
     };
 
     #[test]
@@ -691,6 +736,49 @@ mod tests {
                 }
             ),
             "{outcome:?}"
+        );
+    }
+
+    #[test]
+    fn another_white_balance_falls_back_to_the_whole_patch() {
+        // The second shot with other channel gains: the fruit's colour no longer agrees, but
+        // zero-mean NCC per channel ignores gains, so the whole patch still matches.
+        let centre = Point3::new(0.06, -0.02, 0.9);
+        let (rig, primary, mut stereo) = views(&centre, true);
+        for v in 0..stereo.height() {
+            for u in 0..stereo.width() {
+                let [r, g, b] = stereo.get(u, v).unwrap();
+                let scale = |x: u8, k: f64| (f64::from(x) * k).round().min(255.0) as u8;
+                stereo.set(u, v, [scale(r, 0.6), scale(g, 1.3), b]);
+            }
+        }
+        let (p, s) = rig.project_pair(&centre).unwrap();
+        let r = radius_px(&rig, &centre);
+        let circle = Point2::new(s.x + 1.5, s.y);
+        let fruit_only = DisparityRefinement {
+            whole_patch_min_ncc: None,
+            ..DisparityRefinement::default()
+        };
+        let outcome = fruit_only
+            .refine(&rig, (&primary, &stereo), &p, r, &circle)
+            .unwrap();
+        assert!(
+            matches!(
+                outcome,
+                RefinementOutcome::Fallback {
+                    reason: FallbackReason::LowNcc,
+                    ..
+                }
+            ),
+            "{outcome:?}"
+        );
+        let outcome = DisparityRefinement::default()
+            .refine(&rig, (&primary, &stereo), &p, r, &circle)
+            .unwrap();
+        let error_px = (outcome.stereo_center_px(&circle) - s).norm();
+        assert!(
+            matches!(outcome, RefinementOutcome::Refined { .. }) && error_px < 0.3,
+            "{outcome:?}: {error_px} px"
         );
     }
 

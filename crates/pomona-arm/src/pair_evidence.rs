@@ -69,6 +69,7 @@ impl Default for PairEvidence {
             radius_weight_px2: 0.0,
             appearance: DisparityRefinement {
                 fruit_chroma_radius: None,
+                whole_patch_min_ncc: None,
                 ..DisparityRefinement::default()
             },
         }

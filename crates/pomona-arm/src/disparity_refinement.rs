@@ -65,8 +65,8 @@ pub struct DisparityRefinement {
     /// than this from the patch's scores −1 (zero-mean NCC alone ignores colour). `None`: every
     /// pixel of the patch, NCC alone. Positive.
     pub fruit_chroma_radius: Option<f64>,
-    /// With `fruit_chroma_radius`: when the fruit's pixels fall back, every pixel of the patch is
-    /// tried again with this NCC floor (the whole patch keeps the silhouette, which is sharper
+    /// With `fruit_chroma_radius`: when the fruit's pixels fall back (for any reason but a flat
+    /// patch or no starting point), every pixel of the patch is tried again with this NCC floor (the whole patch keeps the silhouette, which is sharper
     /// where the background is plain). `None`: no second try. In `[-1, 1]`.
     pub whole_patch_min_ncc: Option<f64>,
 }
@@ -237,8 +237,14 @@ impl DisparityRefinement {
         let first =
             self.refine_once(rig, images, primary_center_px, radius_px, stereo_center_px)?;
         let second_try = match (first, self.fruit_chroma_radius, self.whole_patch_min_ncc) {
+            // A fruit with no appearance of its own (flat patch) leaves only the silhouette,
+            // which the sphere model does not place reliably on its own: flat discs in the CLI
+            // test moved by centimetres. No second try then, nor without a starting point.
             (RefinementOutcome::Fallback { reason, .. }, Some(_), Some(floor))
-                if reason != FallbackReason::NoStartingPoint =>
+                if !matches!(
+                    reason,
+                    FallbackReason::NoStartingPoint | FallbackReason::FlatPatch
+                ) =>
             {
                 Some(Self {
                     fruit_chroma_radius: None,

@@ -66,8 +66,10 @@ pub struct DisparityRefinement {
     /// pixel of the patch, NCC alone. Positive.
     pub fruit_chroma_radius: Option<f64>,
     /// With `fruit_chroma_radius`: when the fruit's pixels fall back (for any reason but a flat
-    /// patch or no starting point), every pixel of the patch is tried again with this NCC floor (the whole patch keeps the silhouette, which is sharper
-    /// where the background is plain). `None`: no second try. In `[-1, 1]`.
+    /// patch or no starting point), every pixel of the patch is tried again with this NCC floor
+    /// (the whole patch keeps the silhouette, sharper where the background is plain, and NCC
+    /// alone ignores a white-balance change between the shots). `None`: no second try. In
+    /// `[-1, 1]`.
     pub whole_patch_min_ncc: Option<f64>,
 }
 
@@ -77,7 +79,8 @@ impl Default for DisparityRefinement {
     /// and the sweep were chosen on a tuning set (orchard oranges, seed 2, β = 4°, lever 0.3 m;
     /// a patch inside the rim, 0.8 r, matched worse than the circles), the colour selection and
     /// the floor on the same seed over eight rigs (levers 0.3–1.2 m, β = 2–8°); docs/results.md
-    /// measures them on seed 1. The earlier default was every pixel with NCC ≥ 0.5.
+    /// measures them on seed 1. When they fall back, the whole patch is tried at NCC ≥ 0.5 (the
+    /// earlier default, every pixel with that floor, chosen on the same seed-2 rigs).
     fn default() -> Self {
         Self {
             patch_scale: 1.2,

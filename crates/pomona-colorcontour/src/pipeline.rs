@@ -374,12 +374,18 @@ mod tests {
     fn model_files_without_the_pruning_settings_run_the_previous_behaviour() {
         let mut json = serde_json::to_value(built_in()).unwrap();
         let params = json["params"].as_object_mut().unwrap();
-        for key in ["prune_rank", "prune_center_reach"] {
+        for key in ["prune_rank", "prune_center_reach", "radius_tolerance"] {
             assert!(params.remove(key).is_some(), "{key}");
         }
         let old: ColorContourStageParams = serde_json::from_value(json).unwrap();
         assert_eq!(old.params.prune_rank, crate::PruneRank::Score);
         assert_eq!(old.params.prune_center_reach, 0.0);
+        // The paper's size test, exactly its range.
+        assert_eq!(old.params.radius_tolerance, 0.0);
+        assert_eq!(
+            old.params.accepted_radius_range_m(),
+            old.params.radius_range_m
+        );
     }
 
     #[test]
@@ -401,6 +407,9 @@ mod tests {
         );
         assert_eq!(stage.params.prune_rank, defaults.prune_rank);
         assert_eq!(stage.params.prune_center_reach, defaults.prune_center_reach);
+        assert_eq!(stage.params.radius_tolerance, defaults.radius_tolerance);
+        let (lo, hi) = stage.params.accepted_radius_range_m();
+        assert!((lo - 0.025 / 1.1).abs() < 1e-12 && (hi - 0.055 * 1.1).abs() < 1e-12);
         // Written before the centre refit existed: runs it with the default tolerance.
         assert_eq!(
             stage.params.depth_refit_tolerance_m,
@@ -418,6 +427,8 @@ mod tests {
                 p.edge_fit.merge_max_rms = -0.1
             }),
             ("prune_center_reach", |p| p.prune_center_reach = -0.5),
+            ("radius_tolerance", |p| p.radius_tolerance = -0.1),
+            ("radius_tolerance", |p| p.radius_tolerance = f64::NAN),
             ("prune_center_reach", |p| p.prune_center_reach = f64::NAN),
             ("depth_refit_tolerance_m", |p| {
                 p.depth_refit_tolerance_m = -0.01

@@ -10,9 +10,10 @@
 //! triangulation (`--method triangulate`) in the primary camera frame. By default each pair's
 //! stereo-view centre is first refined by appearance ([`pomona_arm::DisparityRefinement`], beyond
 //! the seed: the fruit-coloured pixels of the primary view's patch are found in the stereo image
-//! to sub-pixel; the circle centres are kept where they do not match well); it located better
-//! than the circle centres on 13 of 15 held-out rigs (docs/results.md, "Error against the lever
-//! d and β"). `--no-refine` is the seed's method. With `--match-min-ncc` (a floor) or
+//! to sub-pixel, the whole patch as a second try; the circle centres are kept where neither
+//! matches well); it located better than the circle centres on 14 of 15 held-out rigs
+//! (docs/results.md, "Error against the lever d and β" and after). `--no-refine` is the seed's
+//! method. With `--match-min-ncc` (a floor) or
 //! `--match-ncc-weight` / `--match-radius-weight` (costs added to the relaxation's σ), every
 //! candidate pair is also scored by appearance and size before the relaxation
 //! ([`pomona_arm::PairEvidence`], beyond the seed; all off by default: the seed's matching bit for

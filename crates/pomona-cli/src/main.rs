@@ -61,6 +61,7 @@ enum Command {
 }
 
 fn main() -> ExitCode {
+    pomona_cli::exit_status::exit_quietly_when_stdout_closes();
     let cli = Cli::parse();
     let result = match &cli.command {
         Command::Info(args) => commands::info::run(args),

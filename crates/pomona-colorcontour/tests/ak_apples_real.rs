@@ -38,7 +38,7 @@ fn built_in_model_places_real_apples_from_their_points() {
         .load_all()
         .unwrap();
     for lf in &mut frames {
-        lf.truth.fruits.retain(|f| f.kind == "apple");
+        lf.truth.keep_kinds(&["apple"]);
     }
     let text = ColorContourPipeline::default().default_model().unwrap();
     let model = ModelFile::from_json(text, "built-in".as_ref(), "color-contour").unwrap();

@@ -57,6 +57,29 @@ pub struct FruitTruth {
     pub extra: serde_json::Map<String, serde_json::Value>,
 }
 
+impl FrameTruth {
+    /// Keeps only the fruit whose kind is one of `kinds` (every fruit when `kinds` is empty: no
+    /// filter), for scoring one kind of a mixed annotation; returns how many were left out.
+    ///
+    /// ```
+    /// # use pomona_core::FrameTruth;
+    /// let mut truth: FrameTruth = serde_json::from_str(
+    ///     r#"{"complete": true, "fruits": [{"id": "1", "kind": "apple"}, {"id": "2", "kind": "leaf"}]}"#,
+    /// ).unwrap();
+    /// assert_eq!(truth.keep_kinds(&["apple"]), 1);
+    /// assert_eq!(truth.fruits.len(), 1);
+    /// ```
+    pub fn keep_kinds<S: AsRef<str>>(&mut self, kinds: &[S]) -> usize {
+        if kinds.is_empty() {
+            return 0;
+        }
+        let before = self.fruits.len();
+        self.fruits
+            .retain(|f| kinds.iter().any(|k| k.as_ref() == f.kind));
+        before - self.fruits.len()
+    }
+}
+
 impl FruitTruth {
     /// The fruit's circle in the image: `center_px`/`radius_px` when annotated, else the sphere
     /// `center_m` ⌀ `diameter_m` projected, else the box's inscribed circle

@@ -101,7 +101,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         // The measure is recall of annotated *apples*: the two reference balls (kind
         // `reference_ball`, white spheres of 60 and 120 mm) are not fruit and are left out.
         let mut truth = lf.truth;
-        truth.fruits.retain(|f| f.kind == "apple");
+        truth.keep_kinds(&["apple"]);
         inputs.push(FrameInput {
             frame: lf.name,
             truth,

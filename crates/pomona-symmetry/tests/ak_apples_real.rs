@@ -39,7 +39,7 @@ fn learns_range_and_radius_from_real_apples_and_finds_the_held_out_ones() {
 
     let detector = pipeline.load(&model).unwrap();
     let mut held_out = all.load(2).unwrap();
-    held_out.truth.fruits.retain(|f| f.kind == "apple");
+    held_out.truth.keep_kinds(&["apple"]);
     let report = detect_and_evaluate(detector.as_ref(), &vec![held_out], &EvalConfig::default())
         .unwrap()
         .report;

@@ -87,10 +87,8 @@ fn scored_frames(
             continue;
         };
         if !kinds.is_empty() {
-            let before = truth.fruits.len();
-            truth.fruits.retain(|f| kinds.contains(&f.kind));
+            left_out += truth.keep_kinds(kinds);
             kept += truth.fruits.len();
-            left_out += before - truth.fruits.len();
         }
         frames.push(FrameInput {
             frame: frame.clone(),

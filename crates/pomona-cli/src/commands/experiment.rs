@@ -576,9 +576,7 @@ impl Splits<'_> {
             .into_iter()
             .zip(test_idx)
             .map(|((r, mut truth), &i)| {
-                if !kinds.is_empty() {
-                    truth.fruits.retain(|f| kinds.contains(&f.kind));
-                }
+                truth.keep_kinds(kinds);
                 FrameInput {
                     frame: frame_name(&self.plan.test, i, several_test),
                     truth,

@@ -323,6 +323,8 @@ impl DisparityRefinement {
             return fallback(FallbackReason::NoStartingPoint, None);
         }
         let template: Vec<[f64; 3]> = patch.iter().map(|p| p.rgb).collect();
+        // The patch's own colour, for the colour check of every hypothesis.
+        let template_chroma = mean_chroma(&template);
         let steps = (self.search_px / self.step_px).floor() as i64;
         let w_at = |k: f64| w0 + k * self.step_px / px_per_w;
         let scores: Vec<Option<f64>> = (-steps..=steps)
@@ -335,7 +337,7 @@ impl DisparityRefinement {
                 self.score(
                     rig,
                     stereo,
-                    (&patch, &template),
+                    (&patch, &template, template_chroma),
                     &axis,
                     &centre,
                     sin_alpha / w,
@@ -443,14 +445,14 @@ impl DisparityRefinement {
         pixels
     }
 
-    /// Zero-mean NCC of the patch (its pixels and their colours, `template`, built once per
-    /// pair) against the stereo image warped by the sphere hypothesis (`centre` on `axis`,
+    /// Zero-mean NCC of the patch (its pixels, their colours `template` and its mean
+    /// chromaticity, built once per pair) against the stereo image warped by the sphere hypothesis (`centre` on `axis`,
     /// radius `radius_m`); `None` when the warp leaves the image or the warped samples are flat.
     fn score(
         &self,
         rig: &RotatedStereo,
         stereo: &ColorImage,
-        (patch, template): (&[PatchPixel], &[[f64; 3]]),
+        (patch, template, template_chroma): (&[PatchPixel], &[[f64; 3]], Option<[f64; 2]>),
         axis: &Unit<Vector3<f64>>,
         centre: &Point3<f64>,
         radius_m: f64,
@@ -474,7 +476,7 @@ impl DisparityRefinement {
         if let Some(limit) = self.fruit_chroma_radius {
             // Zero-mean NCC ignores each channel's level, so a smooth background can correlate
             // with the fruit's shading: fruit pixels must also land on the fruit's colour.
-            let agree = match (mean_chroma(template), mean_chroma(&sampled)) {
+            let agree = match (template_chroma, mean_chroma(&sampled)) {
                 (Some(a), Some(b)) => (a[0] - b[0]).hypot(a[1] - b[1]) <= limit,
                 _ => false,
             };

@@ -97,11 +97,11 @@ pub struct StereoArgs {
     /// the circle core's median (leaves and background move against the fruit between the
     /// views), and only where they land on that colour; `off` matches every pixel of the patch
     /// (the earlier default, measured with --refine-min-ncc 0.5).
-    #[arg(long, value_name = "D|off", value_parser = parse_fruit_chroma, default_value = "0.1")]
+    #[arg(long, value_name = "D|off", value_parser = parse_or_off, default_value = "0.1")]
     pub refine_fruit_chroma: OrOff,
     /// Refinement: when the fruit-coloured pixels do not match, try every pixel of the patch
     /// with this NCC floor before keeping the circle centres; `off`: no second try.
-    #[arg(long, value_name = "NCC|off", value_parser = parse_ncc_or_off, default_value = "0.5")]
+    #[arg(long, value_name = "NCC|off", value_parser = parse_or_off, default_value = "0.5")]
     pub refine_whole_patch_min_ncc: OrOff,
     /// Matching (beyond the seed): remove candidate pairs whose stereo row lies more than PX
     /// from the row that the primary row and the two columns predict (the epipolar constraint;
@@ -162,31 +162,19 @@ impl StereoMethod {
     }
 }
 
-/// A number, or `None` for `off` (`--refine-fruit-chroma`, `--refine-whole-patch-min-ncc`).
+/// A number, or `None` for `off` (`--refine-fruit-chroma`, `--refine-whole-patch-min-ncc`);
+/// its range is checked with the other refinement parameters
+/// ([`DisparityRefinement::validate`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct OrOff(pub Option<f64>);
 
-/// `s` as `off` or a number that `valid` accepts (`what` names the range in the error).
-fn parse_or_off(s: &str, valid: impl Fn(f64) -> bool, what: &str) -> Result<OrOff, String> {
+fn parse_or_off(s: &str) -> Result<OrOff, String> {
     if s == "off" {
         return Ok(OrOff(None));
     }
-    match s.parse::<f64>() {
-        Ok(x) if valid(x) => Ok(OrOff(Some(x))),
-        _ => Err(format!("need {what} or `off`, got {s}")),
-    }
-}
-
-fn parse_fruit_chroma(s: &str) -> Result<OrOff, String> {
-    parse_or_off(
-        s,
-        |d| d.is_finite() && d > 0.0,
-        "a positive chromaticity distance",
-    )
-}
-
-fn parse_ncc_or_off(s: &str) -> Result<OrOff, String> {
-    parse_or_off(s, |x| (-1.0..=1.0).contains(&x), "an NCC in [-1, 1]")
+    s.parse::<f64>()
+        .map(|x| OrOff(Some(x)))
+        .map_err(|_| format!("need a number or `off`, got {s}"))
 }
 
 fn parse_reach(s: &str) -> Result<(f64, f64), String> {

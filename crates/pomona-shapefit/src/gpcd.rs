@@ -97,8 +97,8 @@ pub fn gpcd(
     }
     let (angular, rest) = out.split_at_mut(27);
     let (color, d2) = rest.split_at_mut(9);
-    normalise(angular, &votes.angular);
-    normalise(d2, &votes.d2);
+    normalise(angular, &votes.angular_totals());
+    normalise(d2, &votes.d2_totals());
     if !colors.is_empty() {
         color.copy_from_slice(&color_moments(colors, params.hue_statistics));
     }
@@ -178,14 +178,33 @@ impl Columns {
     }
 }
 
-/// Vote counts of the D2 and angular histograms.
-#[derive(Default)]
+/// Vote counts of the D2 and angular histograms, one copy per lane (and per pair order for the
+/// angular one) summed at the end: neighbouring points vote into the same few bins, and a single
+/// table would make every increment wait for the previous one to the same bin. The counts are
+/// integers, so the totals are exactly those of one table.
 struct Votes {
-    d2: [u64; 30],
-    angular: [u64; 27],
+    d2: [[u64; 30]; LANES],
+    angular: [[u64; 27]; 2 * LANES],
+}
+
+impl Default for Votes {
+    fn default() -> Self {
+        Self {
+            d2: [[0; 30]; LANES],
+            angular: [[0; 27]; 2 * LANES],
+        }
+    }
 }
 
 impl Votes {
+    fn d2_totals(&self) -> [u64; 30] {
+        sum_tables(&self.d2)
+    }
+
+    fn angular_totals(&self) -> [u64; 27] {
+        sum_tables(&self.angular)
+    }
+
     /// The votes of every pair of subset point `k` with the points after it: four targets at a
     /// time, then the last few one by one ([`Votes::add_pair`]). Each lane computes what
     /// `add_pair` computes for one pair — the same IEEE operations in the same order
@@ -211,7 +230,7 @@ impl Votes {
             let bins = (dist / splat(d2_bin_width)).to_array();
             for (lane, q) in bins.iter().enumerate() {
                 if voting & (1 << lane) != 0 {
-                    self.d2[(*q as usize).min(29)] += 1; // both orders: two votes each
+                    self.d2[lane][(*q as usize).min(29)] += 1; // both orders: two votes each
                 }
             }
             let (tx, ty, tz) = (lanes(&s.nx), lanes(&s.ny), lanes(&s.nz));
@@ -225,11 +244,14 @@ impl Votes {
             let b = ux * tx + uy * ty + uz * tz;
             let c = dx * tx + dy * ty + dz * tz;
             let e = dx * cx + dy * cy + dz * cz;
-            for (bins, degenerate) in [lane_bins(a, b, c, e, dist), lane_bins(-c, b, -a, e, dist)] {
+            let orders = [lane_bins(a, b, c, e, dist), lane_bins(-c, b, -a, e, dist)];
+            for ((bins, degenerate), tables) in
+                orders.iter().zip(self.angular.chunks_exact_mut(LANES))
+            {
                 let voting = oriented & !degenerate;
-                for (lane, bin) in bins.iter().enumerate() {
+                for ((lane, bin), table) in bins.iter().enumerate().zip(tables) {
                     if voting & (1 << lane) != 0 {
-                        self.angular[*bin as usize] += 1;
+                        table[*bin as usize] += 1;
                     }
                 }
             }
@@ -243,7 +265,7 @@ impl Votes {
         if dist.is_nan() || dist <= 0.0 {
             return;
         }
-        self.d2[((dist / d2_bin_width) as usize).min(29)] += 1; // both orders: two votes each
+        self.d2[0][((dist / d2_bin_width) as usize).min(29)] += 1; // both orders: two votes each
         let (Some(u), Some(nt)) = (s.normal(k), s.normal(j)) else {
             return;
         };
@@ -258,9 +280,20 @@ impl Votes {
             .into_iter()
             .flatten()
         {
-            self.angular[b] += 1;
+            self.angular[0][b] += 1;
         }
     }
+}
+
+/// The bin-by-bin sum of per-lane vote tables.
+fn sum_tables<const N: usize>(tables: &[[u64; N]]) -> [u64; N] {
+    let mut total = [0u64; N];
+    for table in tables {
+        for (t, &c) in total.iter_mut().zip(table) {
+            *t += c;
+        }
+    }
+    total
 }
 
 /// [`bin`] on four lanes: each lane's bin as a float (exact small integers), and a bit mask
@@ -454,9 +487,9 @@ mod tests {
                     pairs.add_pair(&subset, k, j, 0.25 / 30.0);
                 }
             }
-            assert_eq!(lanes.d2, pairs.d2, "{n}");
-            assert_eq!(lanes.angular, pairs.angular, "{n}");
-            assert!(n < 8 || lanes.angular.iter().filter(|&&c| c > 0).count() > 5);
+            assert_eq!(lanes.d2_totals(), pairs.d2_totals(), "{n}");
+            assert_eq!(lanes.angular_totals(), pairs.angular_totals(), "{n}");
+            assert!(n < 8 || lanes.angular_totals().iter().filter(|&&c| c > 0).count() > 5);
         }
     }
 

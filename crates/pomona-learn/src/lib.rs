@@ -50,7 +50,7 @@ mod score_calibration;
 mod smo;
 mod svm;
 
-pub use batched_decision::DECISION_BLOCK;
+pub use batched_decision::{BatchedClassifier, DECISION_BLOCK};
 pub use error::{LearnError, ModelFileError};
 pub use folds::stratified_folds;
 pub use grid_search::{

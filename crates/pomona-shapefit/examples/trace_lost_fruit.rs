@@ -23,6 +23,7 @@ use std::collections::HashMap;
 use std::path::PathBuf;
 
 use pomona_consensus::Shape;
+use pomona_learn::BatchedClassifier;
 use pomona_pipeline::{run_stage, DatasetFrames, FrameSource, ModelFile, Pipeline, StageTimings};
 use pomona_shapefit::stages::{
     BackProjectionStage, ClassifierStage, ColorMaskStage, DepthProposalStage, DescriptorStage,
@@ -67,7 +68,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             ..p.gpcd
         },
         use_color: true,
-        svm: model.classifier(),
+        svm: BatchedClassifier::new(model.classifier())?,
         min_score: p.depth_proposals.screen_min_score.unwrap_or(f64::MIN),
     };
     let shapes = ShapeStage {
@@ -80,7 +81,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         use_color: true,
     };
     let classifier = ClassifierStage {
-        svm: model.classifier(),
+        svm: BatchedClassifier::new(model.classifier())?,
     };
     let frames = DatasetFrames::new(vec![pomona_io::Dataset::open(&data)?]);
     let mut lost: HashMap<&'static str, usize> = HashMap::new();

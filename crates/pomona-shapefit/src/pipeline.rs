@@ -5,7 +5,8 @@ use pomona_consensus::nalgebra::{Point2, Point3};
 use pomona_consensus::{Cylinder, Shape};
 use pomona_core::{Detection, FrameTruth, FruitTruth, PinholeCamera, PixelBox, RgbdFrame};
 use pomona_learn::{
-    GridAxis, GridSearchParams, ModelFile, Samples, SvmClassifier, SvmParams, TrainingSet,
+    BatchedClassifier, GridAxis, GridSearchParams, ModelFile, Samples, SvmClassifier, SvmParams,
+    TrainingSet,
 };
 use pomona_pipeline::{
     params_from_json, params_to_json, run_stage, Detector, FrameSource, LabelledFrame, Pipeline,
@@ -488,6 +489,7 @@ impl Pipeline for ShapeFitPipeline {
         let use_color = stage_params.color_model.is_some();
         let mut stages = self.stages(&stage_params, use_color)?;
         let p = &stage_params.params;
+        let svm = BatchedClassifier::new(model.classifier())?;
         if let (Some(min_score), Some(_)) = (p.depth_proposals.screen_min_score, &stages.proposals)
         {
             stages.screen = Some(ProposalScreenStage {
@@ -497,7 +499,7 @@ impl Pipeline for ShapeFitPipeline {
                     ..p.gpcd
                 },
                 use_color,
-                svm: model.classifier(),
+                svm: svm.clone(),
                 min_score,
             });
         }
@@ -514,9 +516,7 @@ impl Pipeline for ShapeFitPipeline {
         }
         Ok(Box::new(ShapeFitDetector {
             stages,
-            classifier: ClassifierStage {
-                svm: model.classifier(),
-            },
+            classifier: ClassifierStage { svm },
             merge_radius_m: stage_params.params.merge_radius_m,
             coaxial_merge: stage_params.params.coaxial_merge,
             calibration: stage_params.params.radius_calibration,

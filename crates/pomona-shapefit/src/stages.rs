@@ -6,7 +6,7 @@
 use pomona_consensus::nalgebra::Point3;
 use pomona_consensus::{OrientedPoint, RepeatLimits, ShapeExtractionParams, WindowNormals};
 use pomona_core::{ColorImage, PointCloud, RgbdFrame};
-use pomona_learn::SvmClassifier;
+use pomona_learn::BatchedClassifier;
 use pomona_pipeline::{FreeSpaceCheck, PipelineError, Stage};
 use rayon::prelude::*;
 
@@ -152,7 +152,7 @@ pub struct ProposalScreenStage {
     /// Whether the model uses colour.
     pub use_color: bool,
     /// The detector's classifier.
-    pub svm: SvmClassifier,
+    pub svm: BatchedClassifier,
     /// Lowest score kept.
     pub min_score: f64,
 }
@@ -367,7 +367,7 @@ impl<'a> Stage<(&'a RgbdFrame, &'a [Candidate]), Vec<Vec<f64>>> for DescriptorSt
 /// SVM decision values of the descriptors.
 pub struct ClassifierStage {
     /// The trained classifier (scaler included).
-    pub svm: SvmClassifier,
+    pub svm: BatchedClassifier,
 }
 
 impl<'a> Stage<&'a [Vec<f64>], Vec<f64>> for ClassifierStage {
@@ -386,6 +386,7 @@ mod tests {
     use super::*;
     use pomona_consensus::WindowNormalParams;
     use pomona_core::{DepthImage, PinholeCamera};
+    use pomona_learn::SvmClassifier;
 
     #[test]
     fn the_free_space_stage_drops_shapes_the_camera_sees_through() {
@@ -428,7 +429,7 @@ mod tests {
                 ..GpcdParams::default()
             },
             use_color: false,
-            svm: SvmClassifier::constant(crate::GPCD_LEN, score),
+            svm: BatchedClassifier::new(SvmClassifier::constant(crate::GPCD_LEN, score)).unwrap(),
             min_score: -1.0,
         };
         let cloud = frame.to_cloud();

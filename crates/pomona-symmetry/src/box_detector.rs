@@ -17,7 +17,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 use nalgebra::{Unit, Vector3};
 use pomona_core::{Detection, RgbdFrame};
-use pomona_learn::{ModelFile, SvmClassifier};
+use pomona_learn::{BatchedClassifier, ModelFile};
 use pomona_pipeline::{run_stage, Detector, PipelineError, StageTimings};
 
 use crate::cascade::Cascade;
@@ -34,9 +34,9 @@ use crate::{
 pub struct BoxDetector {
     name: &'static str,
     stages: Stages,
-    classifier: SvmClassifier,
+    classifier: BatchedClassifier,
     /// The cascade's fixed-frame classifier, when the cascade is on.
-    cascade: Option<SvmClassifier>,
+    cascade: Option<BatchedClassifier>,
     warned_no_color: AtomicBool,
 }
 
@@ -75,7 +75,7 @@ impl BoxDetector {
                         ),
                     });
                 }
-                Some(c)
+                Some(BatchedClassifier::new(c)?)
             }
             (Some(_), None) => {
                 return Err(PipelineError::InvalidParameter {
@@ -89,7 +89,7 @@ impl BoxDetector {
         Ok(Self {
             name,
             stages,
-            classifier,
+            classifier: BatchedClassifier::new(classifier)?,
             cascade,
             warned_no_color: AtomicBool::new(false),
         })

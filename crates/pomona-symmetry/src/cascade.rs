@@ -4,7 +4,7 @@
 //! the search (see [`crate::CascadeParams`]).
 
 use nalgebra::Point3;
-use pomona_learn::SvmClassifier;
+use pomona_learn::BatchedClassifier;
 use pomona_pipeline::{PipelineError, Stage};
 use rayon::prelude::*;
 
@@ -14,7 +14,7 @@ use crate::{BoxPatch, FeatureStage, FixedFrame, ReferenceFrame};
 /// Stage `cascade`: fixed-frame features and decision value per box; keeps the boxes scoring at
 /// least `min_score` (see [`crate::CascadeParams`]).
 pub(crate) struct Cascade<'a> {
-    pub(crate) classifier: &'a SvmClassifier,
+    pub(crate) classifier: &'a BatchedClassifier,
     pub(crate) features: &'a FeatureStage,
     pub(crate) min_score: f64,
 }

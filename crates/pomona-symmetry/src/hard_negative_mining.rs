@@ -17,7 +17,7 @@
 //! exactly the one before mining existed (same classifier, no mining keys in the model).
 
 use nalgebra::Point3;
-use pomona_learn::SvmClassifier;
+use pomona_learn::BatchedClassifier;
 use pomona_pipeline::{FrameSource, PipelineError, Stage, TrainOptions};
 use rayon::prelude::*;
 
@@ -40,12 +40,15 @@ pub(crate) fn mine_hard_negatives(
     // Centres mined so far, per frame (a box is mined at most once).
     let mut mined: Vec<Vec<Point3<f64>>> = vec![Vec::new(); total];
     for round in 1..=stages.params.training.hard_negative_rounds {
+        let main = BatchedClassifier::new(models.main.clone())?;
+        let cascade = models
+            .cascade
+            .clone()
+            .map(BatchedClassifier::new)
+            .transpose()?;
         let per_frame: Vec<Option<Vec<MinedBox>>> = (0..total)
             .into_par_iter()
-            .map(|i| {
-                let cascade = models.cascade.as_ref();
-                mine_frame(stages, &models.main, cascade, frames, i, &mined[i])
-            })
+            .map(|i| mine_frame(stages, &main, cascade.as_ref(), frames, i, &mined[i]))
             .collect::<Result<_, _>>()?;
         let skipped = per_frame.iter().filter(|f| f.is_none()).count();
         let mut added = 0;
@@ -100,8 +103,8 @@ struct ScoredSample {
 /// cascade as [`BoxDetector::detect_frame`]), with its decision value, before merging.
 fn score_boxes(
     stages: &Stages,
-    classifier: &SvmClassifier,
-    cascade: Option<&SvmClassifier>,
+    classifier: &BatchedClassifier,
+    cascade: Option<&BatchedClassifier>,
     cloud: &SceneCloud,
     mask: Option<&PruningMask>,
 ) -> Result<Vec<ScoredSample>, PipelineError> {
@@ -172,8 +175,8 @@ fn select_hard_negatives(
 /// negative) or some fruit has no 3D centre (distances to it are unknown).
 fn mine_frame(
     stages: &Stages,
-    classifier: &SvmClassifier,
-    cascade: Option<&SvmClassifier>,
+    classifier: &BatchedClassifier,
+    cascade: Option<&BatchedClassifier>,
     frames: &dyn FrameSource,
     index: usize,
     already: &[Point3<f64>],
@@ -250,8 +253,8 @@ mod tests {
     }
 
     /// A classifier that scores every box +1 (no support vectors, ρ = −1).
-    fn accept_all(n_features: usize) -> SvmClassifier {
-        SvmClassifier::constant(n_features, 1.0)
+    fn accept_all(n_features: usize) -> BatchedClassifier {
+        BatchedClassifier::new(pomona_learn::SvmClassifier::constant(n_features, 1.0)).unwrap()
     }
 
     /// With a detector that accepts every box, mining takes exactly the cap of boxes per frame,
@@ -289,10 +292,10 @@ mod tests {
                 let d = (f.center_m.unwrap() - b.center).norm();
                 assert!(d >= params.training.negative_min_distance_m, "{d}");
             }
-            assert_eq!(b.features.len(), main.n_features());
+            assert_eq!(b.features.len(), main.classifier().n_features());
             assert_eq!(
                 b.cascade_features.as_ref().map(Vec::len),
-                Some(cascade.n_features())
+                Some(cascade.classifier().n_features())
             );
         }
         // Boxes mined before are not mined again.

@@ -39,12 +39,20 @@ impl BinnedHistograms {
     /// clamped), first and second histogram bins from `first_frac` and `second_frac`.
     pub fn add(&mut self, distance_frac: f64, angle_frac: f64, first_frac: f64, second_frac: f64) {
         let p = &self.params;
-        let bin = |f: f64, n: usize| ((f * n as f64).floor().max(0.0) as usize).min(n - 1);
-        let spatial =
-            bin(distance_frac, p.distance_bins) * p.angle_bins + bin(angle_frac, p.angle_bins);
-        let base = spatial * (p.first_bins + p.second_bins);
-        self.counts[base + bin(first_frac, p.first_bins)] += 1.0;
-        self.counts[base + p.first_bins + bin(second_frac, p.second_bins)] += 1.0;
+        self.add_bins([
+            fraction_bin(distance_frac, p.distance_bins),
+            fraction_bin(angle_frac, p.angle_bins),
+            fraction_bin(first_frac, p.first_bins),
+            fraction_bin(second_frac, p.second_bins),
+        ]);
+    }
+
+    /// Adds one point by its four bins (distance, angle, first, second), each within range.
+    pub(crate) fn add_bins(&mut self, [distance, angle, first, second]: [usize; 4]) {
+        let p = &self.params;
+        let base = (distance * p.angle_bins + angle) * (p.first_bins + p.second_bins);
+        self.counts[base + first] += 1.0;
+        self.counts[base + p.first_bins + second] += 1.0;
     }
 
     /// The feature vector: every histogram normalised to sum 1 (empty ones stay zero).
@@ -63,7 +71,50 @@ impl BinnedHistograms {
     }
 }
 
-/// Eqs. 7–9 and the spatio-angular binning of seed 000 for one box.
+/// The bin of `fraction` (clamped to `[0, 1]`) among `n` equal bins.
+pub(crate) fn fraction_bin(fraction: f64, n: usize) -> usize {
+    ((fraction * n as f64).floor().max(0.0) as usize).min(n - 1)
+}
+
+/// The bin of the angle `acos(t)` among `n` equal bins of `[0, π]` — what
+/// `fraction_bin(t.acos() / π, n)` gives — found by comparing `t` with the cosines of the inner
+/// bin edges (`acos` is decreasing), without the `acos`. The two agree wherever `t` is more than
+/// [`AcosBins::EDGE_GUARD`] from an edge cosine (the rounding of `acos(t) / π · n` is about
+/// 1e-15, and `|d acos / dt| ≥ 1`); within it the formula decides, so the bins are exactly the
+/// formula's.
+pub(crate) struct AcosBins {
+    n: usize,
+    /// `cos(j π / n)` for `j = 1 … n − 1`, decreasing.
+    edge_cosines: Vec<f64>,
+}
+
+impl AcosBins {
+    /// Distance from an edge cosine within which the formula is used.
+    const EDGE_GUARD: f64 = 1e-9;
+
+    pub(crate) fn new(n: usize) -> Self {
+        Self {
+            n,
+            edge_cosines: (1..n).map(|j| (j as f64 * PI / n as f64).cos()).collect(),
+        }
+    }
+
+    /// The bin of `acos(t)`, `t` in `[−1, 1]`.
+    pub(crate) fn bin(&self, t: f64) -> usize {
+        let mut bin = 0;
+        for &c in &self.edge_cosines {
+            if (t - c).abs() <= Self::EDGE_GUARD {
+                return fraction_bin(t.acos() / PI, self.n);
+            }
+            bin += usize::from(t < c);
+        }
+        bin
+    }
+}
+
+/// Eqs. 7–9 and the spatio-angular binning of seed 000 for one box. The two angles that are
+/// only binned (θ and the angle to the reference) are binned from their cosines
+/// ([`AcosBins`]: the same bins, without an `acos` per point).
 pub fn normal_histogram(
     patch: &BoxPatch,
     frame: &LocalFrame,
@@ -71,6 +122,10 @@ pub fn normal_histogram(
     params: HistogramParams,
 ) -> Vec<f64> {
     let mut h = BinnedHistograms::new(params);
+    let (first_bins, angle_bins) = (
+        AcosBins::new(params.first_bins),
+        AcosBins::new(params.angle_bins),
+    );
     let p = frame.origin;
     let n_p = frame.normal.into_inner();
     for (x, n) in patch.points.iter().zip(&patch.normals) {
@@ -78,17 +133,22 @@ pub fn normal_histogram(
         let d = (x - p).dot(&n_p);
         let x_bar = x - n_p * d;
         let n_bar = n - n_p * n.dot(&n_p);
-        let theta = n.dot(&n_p).clamp(-1.0, 1.0).acos();
+        let theta_bin = first_bins.bin(n.dot(&n_p).clamp(-1.0, 1.0));
         let to_centre = p - x_bar;
         let phi = match (n_bar.try_normalize(1e-9), to_centre.try_normalize(1e-9)) {
             (Some(a), Some(b)) => n_p.dot(&a.cross(&b)).atan2(a.dot(&b)).rem_euclid(TAU),
             _ => 0.0,
         };
-        let angle = match (-to_centre).try_normalize(1e-9) {
-            Some(dir) => dir.dot(&frame.reference).clamp(-1.0, 1.0).acos(),
-            None => 0.0,
+        let angle_bin = match (-to_centre).try_normalize(1e-9) {
+            Some(dir) => angle_bins.bin(dir.dot(&frame.reference).clamp(-1.0, 1.0)),
+            None => 0,
         };
-        h.add(d.abs() / half_box_m, angle / PI, theta / PI, phi / TAU);
+        h.add_bins([
+            fraction_bin(d.abs() / half_box_m, params.distance_bins),
+            angle_bin,
+            theta_bin,
+            fraction_bin(phi / TAU, params.second_bins),
+        ]);
     }
     h.into_features()
 }
@@ -160,6 +220,33 @@ mod tests {
 
     use super::*;
     use crate::{plane_frame, FixedFrame, ReferenceFrame};
+
+    /// The comparison bins are the formula's everywhere: on a fine grid, at every edge cosine
+    /// and one and a few ulps either side of it, and at ±1.
+    #[test]
+    fn acos_bins_equal_the_formula() {
+        for n in [1, 2, 3, 4, 6, 8, 17] {
+            let bins = AcosBins::new(n);
+            let mut probes: Vec<f64> = (0..=20_000).map(|i| -1.0 + i as f64 / 10_000.0).collect();
+            for &c in &bins.edge_cosines {
+                let mut t = c;
+                for _ in 0..4 {
+                    probes.extend([t, -t]);
+                    t = f64::from_bits(t.to_bits() + 1);
+                }
+                let mut t = c;
+                for _ in 0..4 {
+                    t = f64::from_bits(t.to_bits() - 1);
+                    probes.push(t);
+                }
+                probes.extend([c + 2e-9, c - 2e-9]);
+            }
+            for t in probes {
+                let t = t.clamp(-1.0, 1.0);
+                assert_eq!(bins.bin(t), fraction_bin(t.acos() / PI, n), "n {n} t {t}");
+            }
+        }
+    }
 
     #[test]
     fn histograms_are_normalised_per_bin() {

@@ -5,8 +5,7 @@
 //! of the angle between the normal and `u`, one of the angle between the normal and the unit
 //! vector from `c` to the point (both over `[0, π]`), each normalised to sum 1.
 
-use std::f64::consts::PI;
-
+use crate::normal_histogram::{fraction_bin, AcosBins};
 use crate::{BinnedHistograms, BoxPatch, HistogramParams, LocalFrame};
 
 /// Features of one box in a viewer frame (`frame.reference` = `u`, `frame.normal` = `u × w`).
@@ -20,8 +19,9 @@ pub fn viewer_features(
     let c = frame.origin;
     let u = frame.reference.into_inner();
     let m = frame.normal.into_inner();
-    let angle =
-        |a: &nalgebra::Vector3<f64>, b: &nalgebra::Vector3<f64>| a.dot(b).clamp(-1.0, 1.0).acos();
+    // Each angle is only binned: from its cosine (the same bins as binning `acos`).
+    let bins = [params.angle_bins, params.first_bins, params.second_bins].map(AcosBins::new);
+    let cosine = |a: &nalgebra::Vector3<f64>, b: &nalgebra::Vector3<f64>| a.dot(b).clamp(-1.0, 1.0);
     for (x, n) in patch.points.iter().zip(&patch.normals) {
         let n = n.into_inner();
         let d = x - c;
@@ -29,12 +29,12 @@ pub fn viewer_features(
         let Some(ray) = d.try_normalize(1e-9) else {
             continue;
         };
-        h.add(
-            dist / half_box_m,
-            angle(&ray, &u) / PI,
-            angle(&n, &u) / PI,
-            angle(&n, &ray) / PI,
-        );
+        h.add_bins([
+            fraction_bin(dist / half_box_m, params.distance_bins),
+            bins[0].bin(cosine(&ray, &u)),
+            bins[1].bin(cosine(&n, &u)),
+            bins[2].bin(cosine(&n, &ray)),
+        ]);
     }
     h.into_features()
 }

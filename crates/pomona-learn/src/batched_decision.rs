@@ -7,26 +7,29 @@
 //! every sample of the block with every support vector are one `nalgebra` GEMM (the
 //! `matrixmultiply` kernels, which pick the CPU's SIMD width at run time). Blocks run in
 //! parallel, each padded to the full block so that every product has the same shape: a sample's
-//! value depends neither on the thread count nor on the other samples scored with it. The kernel
-//! values of four support vectors at a time are taken with `wide`'s vector `exp` (a degree-13
-//! polynomial after range reduction, within an ulp or two of the C library's; 0 below e^−708,
-//! where the library returns subnormals) and summed in four partial sums.
+//! value depends neither on the thread count nor on the other samples scored with it.
 //!
-//! The GEMM runs in single precision (twice the lanes of a double-precision one, half the
-//! memory), on samples and support vectors both centred on the support vectors' mean — distances
-//! do not change, and the dot products, hence their rounding, shrink; norms, the combination
-//! and the kernel stay in double precision. A value differs from
-//! [`SvmClassifier::decision_value`] by a few 1e-9 of the coefficients' total weight
-//! `Σ|yᵢαᵢ|` (unit test: 3e-9 seen, asserted below 1e-7); on the built-in models' 24 held-out wide
-//! sets (`scripts/wide_builtin_eval.sh`, three pipelines) scores moved by at most 2.4e-5,
-//! centres by 1.1 µm, and every AP, precision and recall figure stayed the same to the printed
-//! three decimals. It may differ in the last bits between CPUs with and without FMA.
+//! The arithmetic is single precision where rounding cannot matter, which doubles the SIMD lanes
+//! and halves the memory: the GEMM runs in `f32` on samples and support vectors both centred on
+//! the support vectors' mean (distances do not change, and the dot products, hence their
+//! rounding, shrink), and the kernel terms `yᵢαᵢ exp(−γ d²)` are taken eight support vectors at
+//! a time with `wide::f32x8` (its `exp`: a degree-7 polynomial after range reduction, 0 below
+//! e^−87), then summed in double precision. Norms and the centring stay in double precision.
+//! A value differs from the sequential double-precision [`SvmClassifier::decision_value`] by up
+//! to about 2e-8 of the coefficients' total weight `Σ|yᵢαᵢ|` (unit test: 1.9e-8 seen, asserted
+//! below 1e-7); on the
+//! built-in models' 24 held-out wide sets (`scripts/wide_builtin_eval.sh`, three pipelines)
+//! scores moved by at most 1.7e-4 (shape-fit; 4e-5 symmetry, 1.4e-5 viewer-pose), and every AP,
+//! precision and recall figure stayed the same to the printed three decimals but one: in one
+//! viewer-pose frame a box crossed the merging threshold (88 → 87 detections, one centre 14 mm
+//! away), and that set's all-point AP went 0.568 → 0.569. It may differ in the last bits between CPUs with and without FMA.
 //!
-//! Measured on 10 wide Kinect v2 frames (one thread, 3 December): the vector `exp` took the
-//! `symmetry` cascade stage from 58.4 to 48.6 ms per frame and viewer-pose's `classifier` from
-//! 15.4 to 11.9 ms; the single-precision GEMM then to 37.3 and 9.6 ms.
+//! Measured on 10 wide Kinect v2 frames (one thread, 3 December), per frame: the `symmetry`
+//! cascade stage 58.4 ms (double precision, scalar `exp`) → 48.6 (vector `exp` in double) →
+//! 37.3 (single-precision GEMM) → 24.6 ms (single-precision kernel terms); viewer-pose's
+//! `classifier` 15.4 → 11.9 → 9.6 → 5.9 ms.
 //!
-//! Measured in the `symmetry` detector: its classifier stage went from 37.4 ms to 16.9 ms per
+//! Earlier, in the `symmetry` detector: its classifier stage went from 37.4 ms to 16.9 ms per
 //! Kinect v2 frame (6 frames, 1201 boxes/frame, one thread) when it adopted blocks of 8 samples
 //! with four partial sums per distance, and its cascade stage from 57.4 to 21.2 ms per frame (10
 //! wide pepper frames, 2013 support vectors) with the matrix product; the criterion bench
@@ -37,15 +40,15 @@
 
 use nalgebra::DMatrix;
 use rayon::prelude::*;
-use wide::f64x4;
+use wide::f32x8;
 
 use crate::{LearnError, SvmClassifier};
 
 /// Samples scored together by one matrix product against every support vector.
 pub const DECISION_BLOCK: usize = 64;
 
-/// Support vectors whose kernel values are computed together (`wide::f64x4`).
-const LANES: usize = 4;
+/// Support vectors whose kernel values are computed together (`wide::f32x8`).
+const LANES: usize = 8;
 
 impl SvmClassifier {
     /// Decision values of many raw (unscaled) samples, in order, computed in parallel blocks of
@@ -116,26 +119,30 @@ impl SvmClassifier {
         }
         // dots[(j, i)] = s_j · x_i.
         let dots = &support.vectors * scaled.clone().cast::<f32>();
-        let neg_gamma = f64x4::splat(-self.svm.gamma);
+        let neg_gamma = f32x8::splat(-self.svm.gamma as f32);
+        let two = f32x8::splat(2.0);
         Ok(scaled
             .column_iter()
             .zip(dots.column_iter())
             .take(rows.len())
             .map(|(x, dots)| {
-                let x_norm = f64x4::splat(x.norm_squared());
-                let mut sum = f64x4::ZERO;
+                let x_norm = f32x8::splat(x.norm_squared() as f32);
+                // Kernel terms in single precision, summed in double.
+                let mut sum = [0.0f64; LANES];
                 for ((coef, s_norm), dot) in support
                     .coef
                     .iter()
                     .zip(&support.norms)
                     .zip(dots.as_slice().chunks_exact(LANES))
                 {
-                    let dot =
-                        f64x4::from([dot[0].into(), dot[1].into(), dot[2].into(), dot[3].into()]);
-                    let d2 = (x_norm + *s_norm - f64x4::splat(2.0) * dot).max(f64x4::ZERO);
-                    sum += *coef * (neg_gamma * d2).exp();
+                    let dot = f32x8::from(dot);
+                    let d2 = (x_norm + *s_norm - two * dot).max(f32x8::ZERO);
+                    let terms = *coef * (neg_gamma * d2).exp();
+                    for (s, t) in sum.iter_mut().zip(terms.to_array()) {
+                        *s += f64::from(t);
+                    }
                 }
-                sum.reduce_add() - self.svm.rho
+                sum.iter().sum::<f64>() - self.svm.rho
             })
             .collect())
     }
@@ -189,10 +196,10 @@ struct SupportMatrix {
     vectors: DMatrix<f32>,
     /// Mean support vector.
     mean: nalgebra::DVector<f64>,
-    /// `‖s_j‖²`, four at a time.
-    norms: Vec<f64x4>,
-    /// `yⱼ αⱼ`, four at a time.
-    coef: Vec<f64x4>,
+    /// `‖s_j‖²`, [`LANES`] at a time.
+    norms: Vec<f32x8>,
+    /// `yⱼ αⱼ`, [`LANES`] at a time.
+    coef: Vec<f32x8>,
 }
 
 impl SupportMatrix {
@@ -222,9 +229,9 @@ impl SupportMatrix {
         let norms: Vec<f64> = vectors.row_iter().map(|s| s.norm_squared()).collect();
         let mut coef = svm.coef.clone();
         coef.resize(padded, 0.0);
-        let lanes = |v: &[f64]| -> Vec<f64x4> {
+        let lanes = |v: &[f64]| -> Vec<f32x8> {
             v.chunks_exact(LANES)
-                .map(|c| f64x4::from([c[0], c[1], c[2], c[3]]))
+                .map(|c| f32x8::from(std::array::from_fn::<f32, LANES, _>(|k| c[k] as f32)))
                 .collect()
         };
         Ok(Self {
@@ -278,7 +285,7 @@ mod tests {
             let values = c.decision_values(&refs).unwrap();
             assert_eq!(values.len(), rows.len());
             // Single-precision dot products (see the module docs): within 1e-7 of the
-            // coefficients' total weight (3e-9 seen).
+            // coefficients' total weight (1.9e-8 seen).
             let weight: f64 = c.svm.coef.iter().map(|a| a.abs()).sum();
             for (row, v) in rows.iter().zip(&values) {
                 let expected = c.decision_value(row).unwrap();

@@ -118,7 +118,7 @@ impl SvmClassifier {
             column -= &support.mean;
         }
         // dots[(j, i)] = s_j · x_i.
-        let dots = &support.vectors * scaled.clone().cast::<f32>();
+        let dots = &support.vectors * scaled.map(|v| v as f32);
         let neg_gamma = f32x8::splat(-self.svm.gamma as f32);
         let two = f32x8::splat(2.0);
         Ok(scaled
@@ -185,11 +185,12 @@ impl BatchedClassifier {
     }
 }
 
-/// The support vectors as the rows of one matrix, with their squared norms and coefficients in
-/// lanes of [`LANES`]: built once per [`SvmClassifier::decision_values`] call or
-/// [`BatchedClassifier`], shared by the blocks. (As rows, so that the product with a block is a plain `*`, which `nalgebra` hands to
-/// its GEMM; `tr_mul` would not.) The rows are padded with zero vectors of coefficient 0 to a
-/// whole number of lanes, which add exactly 0 to every sum.
+/// The support vectors, centred on their mean, as the rows of one single-precision matrix, with
+/// their squared norms and coefficients in lanes of [`LANES`]: built once per
+/// [`SvmClassifier::decision_values`] call or [`BatchedClassifier`], shared by the blocks. (As
+/// rows, so that the product with a block is a plain `*`, which `nalgebra` hands to its GEMM;
+/// `tr_mul` would not.) The rows are padded with zero vectors of coefficient 0 to a whole number
+/// of lanes, which add exactly 0 to every sum.
 #[derive(Debug, Clone)]
 struct SupportMatrix {
     /// `n_padded × n_features`, support vector `j` in row `j`, then zero rows.

@@ -186,6 +186,9 @@ fn connected_components(
                 if parent[j] == NONE || (depth_m[j] - d).abs() > step {
                     return;
                 }
+                if parent[j] == root {
+                    return; // already in i's tree, next to its root (what `find` would say)
+                }
                 let other = find(parent, j as u32);
                 if other < root {
                     parent[root as usize] = other;

@@ -112,9 +112,69 @@ impl AcosBins {
     }
 }
 
-/// Eqs. 7–9 and the spatio-angular binning of seed 000 for one box. The two angles that are
-/// only binned (θ and the angle to the reference) are binned from their cosines
-/// ([`AcosBins`]: the same bins, without an `acos` per point).
+/// The bin of the angle `atan2(y, x)` taken in `[0, 2π)` among `n` equal bins — what
+/// `fraction_bin(y.atan2(x).rem_euclid(2π) / 2π, n)` gives — found by sign tests against the
+/// bin edges' directions instead of the `atan2`: a point of the upper half-plane is past an edge
+/// of the upper half when it lies counter-clockwise of it (cross product ≥ 0) and past every edge
+/// of the lower half never, and conversely. Within [`SectorBins::EDGE_GUARD`] (relative to
+/// `|x| + |y|`) of an edge or of the x axis, and for non-finite input, the formula decides, so
+/// the bins are exactly the formula's (whose rounding is about 1e-15 of a turn).
+pub(crate) struct SectorBins {
+    n: usize,
+    /// `(cos θ_j, sin θ_j)` of the inner edges `θ_j = 2π j / n`, `j = 1 … n − 1`.
+    edges: Vec<(f64, f64)>,
+}
+
+impl SectorBins {
+    /// Relative distance from an edge or the x axis within which the formula is used.
+    const EDGE_GUARD: f64 = 1e-9;
+
+    pub(crate) fn new(n: usize) -> Self {
+        Self {
+            n,
+            edges: (1..n)
+                .map(|j| {
+                    let t = j as f64 * TAU / n as f64;
+                    (t.cos(), t.sin())
+                })
+                .collect(),
+        }
+    }
+
+    /// The formula the bins reproduce.
+    fn by_formula(&self, y: f64, x: f64) -> usize {
+        fraction_bin(y.atan2(x).rem_euclid(TAU) / TAU, self.n)
+    }
+
+    /// The bin of the direction `(x, y)`.
+    pub(crate) fn bin(&self, y: f64, x: f64) -> usize {
+        let guard = Self::EDGE_GUARD * (x.abs() + y.abs());
+        // Also false for NaN: the formula decides.
+        if !(y.abs() > guard) {
+            return self.by_formula(y, x);
+        }
+        let upper = y > 0.0;
+        let mut bin = 0;
+        for &(c, s) in &self.edges {
+            let cross = c * y - s * x;
+            let edge_upper = s > 0.0 || (s == 0.0 && c > 0.0);
+            if edge_upper != upper {
+                // An edge of the other half: passed by every lower point, by no upper one.
+                bin += usize::from(!upper);
+                continue;
+            }
+            if !(cross.abs() > guard) {
+                return self.by_formula(y, x);
+            }
+            bin += usize::from(cross > 0.0);
+        }
+        bin
+    }
+}
+
+/// Eqs. 7–9 and the spatio-angular binning of seed 000 for one box. The angles are only ever
+/// binned: θ and the angle to the reference from their cosines ([`AcosBins`]), φ from its sine
+/// and cosine ([`SectorBins`]) — the same bins, without an `acos` or `atan2` per point.
 pub fn normal_histogram(
     patch: &BoxPatch,
     frame: &LocalFrame,
@@ -126,6 +186,7 @@ pub fn normal_histogram(
         AcosBins::new(params.first_bins),
         AcosBins::new(params.angle_bins),
     );
+    let phi_bins = SectorBins::new(params.second_bins);
     let p = frame.origin;
     let n_p = frame.normal.into_inner();
     for (x, n) in patch.points.iter().zip(&patch.normals) {
@@ -135,9 +196,9 @@ pub fn normal_histogram(
         let n_bar = n - n_p * n.dot(&n_p);
         let theta_bin = first_bins.bin(n.dot(&n_p).clamp(-1.0, 1.0));
         let to_centre = p - x_bar;
-        let phi = match (n_bar.try_normalize(1e-9), to_centre.try_normalize(1e-9)) {
-            (Some(a), Some(b)) => n_p.dot(&a.cross(&b)).atan2(a.dot(&b)).rem_euclid(TAU),
-            _ => 0.0,
+        let phi_bin = match (n_bar.try_normalize(1e-9), to_centre.try_normalize(1e-9)) {
+            (Some(a), Some(b)) => phi_bins.bin(n_p.dot(&a.cross(&b)), a.dot(&b)),
+            _ => 0,
         };
         let angle_bin = match (-to_centre).try_normalize(1e-9) {
             Some(dir) => angle_bins.bin(dir.dot(&frame.reference).clamp(-1.0, 1.0)),
@@ -147,7 +208,7 @@ pub fn normal_histogram(
             fraction_bin(d.abs() / half_box_m, params.distance_bins),
             angle_bin,
             theta_bin,
-            fraction_bin(phi / TAU, params.second_bins),
+            phi_bin,
         ]);
     }
     h.into_features()
@@ -223,6 +284,39 @@ mod tests {
 
     /// The comparison bins are the formula's everywhere: on a fine grid, at every edge cosine
     /// and one and a few ulps either side of it, and at ±1.
+    /// The sector bins are the formula's everywhere: on a fine circle of directions at two
+    /// lengths, on and a few ulps around every edge direction and both axes, and for zero and
+    /// non-finite input.
+    #[test]
+    fn sector_bins_equal_the_formula() {
+        for n in [1, 2, 3, 4, 6, 8, 17] {
+            let bins = SectorBins::new(n);
+            let mut probes: Vec<(f64, f64)> = Vec::new();
+            for i in 0..20_000 {
+                let t = i as f64 * TAU / 20_000.0;
+                probes.extend([(t.sin(), t.cos()), (3.0 * t.sin(), 3.0 * t.cos())]);
+            }
+            let mut directions: Vec<(f64, f64)> = bins.edges.iter().map(|&(c, s)| (s, c)).collect();
+            directions.extend([
+                (0.0, 1.0),
+                (0.0, -1.0),
+                (-0.0, -1.0),
+                (1.0, 0.0),
+                (-1.0, 0.0),
+            ]);
+            for (y, x) in directions {
+                let step = |v: f64, k: i64| f64::from_bits(v.to_bits().wrapping_add(k as u64));
+                for k in -3..=3 {
+                    probes.extend([(step(y, k), x), (y, step(x, k)), (y + k as f64 * 1e-10, x)]);
+                }
+            }
+            probes.extend([(0.0, 0.0), (-0.0, 0.0), (f64::NAN, 1.0), (1.0, f64::NAN)]);
+            for (y, x) in probes {
+                assert_eq!(bins.bin(y, x), bins.by_formula(y, x), "n {n} y {y} x {x}");
+            }
+        }
+    }
+
     #[test]
     fn acos_bins_equal_the_formula() {
         for n in [1, 2, 3, 4, 6, 8, 17] {

@@ -149,8 +149,7 @@ impl SectorBins {
     /// The bin of the direction `(x, y)`.
     pub(crate) fn bin(&self, y: f64, x: f64) -> usize {
         let guard = Self::EDGE_GUARD * (x.abs() + y.abs());
-        // Also false for NaN: the formula decides.
-        if !(y.abs() > guard) {
+        if !(x.is_finite() && y.is_finite()) || y.abs() <= guard {
             return self.by_formula(y, x);
         }
         let upper = y > 0.0;
@@ -163,7 +162,7 @@ impl SectorBins {
                 bin += usize::from(!upper);
                 continue;
             }
-            if !(cross.abs() > guard) {
+            if cross.abs() <= guard {
                 return self.by_formula(y, x);
             }
             bin += usize::from(cross > 0.0);

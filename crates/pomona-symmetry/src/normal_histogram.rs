@@ -82,6 +82,7 @@ pub(crate) fn fraction_bin(fraction: f64, n: usize) -> usize {
 /// [`AcosBins::EDGE_GUARD`] from an edge cosine (the rounding of `acos(t) / π · n` is about
 /// 1e-15, and `|d acos / dt| ≥ 1`); within it the formula decides, so the bins are exactly the
 /// formula's.
+#[derive(Debug, Clone, PartialEq)]
 pub(crate) struct AcosBins {
     n: usize,
     /// `cos(j π / n)` for `j = 1 … n − 1`, decreasing.
@@ -119,6 +120,7 @@ impl AcosBins {
 /// of the lower half never, and conversely. Within [`SectorBins::EDGE_GUARD`] (relative to
 /// `|x| + |y|`) of an edge or of the x axis, and for non-finite input, the formula decides, so
 /// the bins are exactly the formula's (whose rounding is about 1e-15 of a turn).
+#[derive(Debug, Clone, PartialEq)]
 pub(crate) struct SectorBins {
     n: usize,
     /// `(cos θ_j, sin θ_j)` of the inner edges `θ_j = 2π j / n`, `j = 1 … n − 1`.
@@ -171,6 +173,31 @@ impl SectorBins {
     }
 }
 
+/// The bin tables of one [`HistogramParams`]' angles, built once per feature stage rather than
+/// per box.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct AngleBins {
+    /// The spatial angle (`angle_bins` over `[0, π]`).
+    pub(crate) angle: AcosBins,
+    /// The first histogram (`first_bins` over `[0, π]`).
+    pub(crate) first: AcosBins,
+    /// The second histogram over `[0, π]` (viewer features).
+    pub(crate) second: AcosBins,
+    /// The second histogram over `[0, 2π)` (φ of the symmetry and fixed frames).
+    pub(crate) phi: SectorBins,
+}
+
+impl AngleBins {
+    pub(crate) fn new(params: &HistogramParams) -> Self {
+        Self {
+            angle: AcosBins::new(params.angle_bins),
+            first: AcosBins::new(params.first_bins),
+            second: AcosBins::new(params.second_bins),
+            phi: SectorBins::new(params.second_bins),
+        }
+    }
+}
+
 /// Eqs. 7–9 and the spatio-angular binning of seed 000 for one box. The angles are only ever
 /// binned: θ and the angle to the reference from their cosines ([`AcosBins`]), φ from its sine
 /// and cosine ([`SectorBins`]) — the same bins, without an `acos` or `atan2` per point.
@@ -180,12 +207,18 @@ pub fn normal_histogram(
     half_box_m: f64,
     params: HistogramParams,
 ) -> Vec<f64> {
+    normal_histogram_with(&AngleBins::new(&params), patch, frame, half_box_m, params)
+}
+
+/// [`normal_histogram`] with the bin tables of `params` already built.
+pub(crate) fn normal_histogram_with(
+    bins: &AngleBins,
+    patch: &BoxPatch,
+    frame: &LocalFrame,
+    half_box_m: f64,
+    params: HistogramParams,
+) -> Vec<f64> {
     let mut h = BinnedHistograms::new(params);
-    let (first_bins, angle_bins) = (
-        AcosBins::new(params.first_bins),
-        AcosBins::new(params.angle_bins),
-    );
-    let phi_bins = SectorBins::new(params.second_bins);
     let p = frame.origin;
     let n_p = frame.normal.into_inner();
     for (x, n) in patch.points.iter().zip(&patch.normals) {
@@ -193,14 +226,14 @@ pub fn normal_histogram(
         let d = (x - p).dot(&n_p);
         let x_bar = x - n_p * d;
         let n_bar = n - n_p * n.dot(&n_p);
-        let theta_bin = first_bins.bin(n.dot(&n_p).clamp(-1.0, 1.0));
+        let theta_bin = bins.first.bin(n.dot(&n_p).clamp(-1.0, 1.0));
         let to_centre = p - x_bar;
         let phi_bin = match (n_bar.try_normalize(1e-9), to_centre.try_normalize(1e-9)) {
-            (Some(a), Some(b)) => phi_bins.bin(n_p.dot(&a.cross(&b)), a.dot(&b)),
+            (Some(a), Some(b)) => bins.phi.bin(n_p.dot(&a.cross(&b)), a.dot(&b)),
             _ => 0,
         };
         let angle_bin = match (-to_centre).try_normalize(1e-9) {
-            Some(dir) => angle_bins.bin(dir.dot(&frame.reference).clamp(-1.0, 1.0)),
+            Some(dir) => bins.angle.bin(dir.dot(&frame.reference).clamp(-1.0, 1.0)),
             None => 0,
         };
         h.add_bins([
@@ -214,11 +247,12 @@ pub fn normal_histogram(
 }
 
 /// Stage `features`: one feature vector per box that has a frame.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct FeatureStage {
     kind: FrameKind,
     half_box_m: f64,
     params: HistogramParams,
+    bins: AngleBins,
 }
 
 impl FeatureStage {
@@ -229,6 +263,7 @@ impl FeatureStage {
             kind,
             half_box_m,
             params,
+            bins: AngleBins::new(&params),
         }
     }
 
@@ -240,9 +275,15 @@ impl FeatureStage {
     /// Features of one box.
     pub fn describe(&self, patch: &BoxPatch, frame: &LocalFrame) -> Vec<f64> {
         match self.kind {
-            FrameKind::Viewer => crate::viewer_features(patch, frame, self.half_box_m, self.params),
+            FrameKind::Viewer => crate::viewer_features::viewer_features_with(
+                &self.bins,
+                patch,
+                frame,
+                self.half_box_m,
+                self.params,
+            ),
             FrameKind::Symmetry | FrameKind::Fixed => {
-                normal_histogram(patch, frame, self.half_box_m, self.params)
+                normal_histogram_with(&self.bins, patch, frame, self.half_box_m, self.params)
             }
         }
     }

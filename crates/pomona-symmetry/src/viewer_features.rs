@@ -5,11 +5,22 @@
 //! of the angle between the normal and `u`, one of the angle between the normal and the unit
 //! vector from `c` to the point (both over `[0, π]`), each normalised to sum 1.
 
-use crate::normal_histogram::{fraction_bin, AcosBins};
+use crate::normal_histogram::{fraction_bin, AngleBins};
 use crate::{BinnedHistograms, BoxPatch, HistogramParams, LocalFrame};
 
 /// Features of one box in a viewer frame (`frame.reference` = `u`, `frame.normal` = `u × w`).
 pub fn viewer_features(
+    patch: &BoxPatch,
+    frame: &LocalFrame,
+    half_box_m: f64,
+    params: HistogramParams,
+) -> Vec<f64> {
+    viewer_features_with(&AngleBins::new(&params), patch, frame, half_box_m, params)
+}
+
+/// [`viewer_features`] with the bin tables of `params` already built.
+pub(crate) fn viewer_features_with(
+    bins: &AngleBins,
     patch: &BoxPatch,
     frame: &LocalFrame,
     half_box_m: f64,
@@ -20,7 +31,6 @@ pub fn viewer_features(
     let u = frame.reference.into_inner();
     let m = frame.normal.into_inner();
     // Each angle is only binned: from its cosine (the same bins as binning `acos`).
-    let bins = [params.angle_bins, params.first_bins, params.second_bins].map(AcosBins::new);
     let cosine = |a: &nalgebra::Vector3<f64>, b: &nalgebra::Vector3<f64>| a.dot(b).clamp(-1.0, 1.0);
     for (x, n) in patch.points.iter().zip(&patch.normals) {
         let n = n.into_inner();
@@ -31,9 +41,9 @@ pub fn viewer_features(
         };
         h.add_bins([
             fraction_bin(dist / half_box_m, params.distance_bins),
-            bins[0].bin(cosine(&ray, &u)),
-            bins[1].bin(cosine(&n, &u)),
-            bins[2].bin(cosine(&n, &ray)),
+            bins.angle.bin(cosine(&ray, &u)),
+            bins.first.bin(cosine(&n, &u)),
+            bins.second.bin(cosine(&n, &ray)),
         ]);
     }
     h.into_features()

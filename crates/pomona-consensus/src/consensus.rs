@@ -107,7 +107,7 @@ fn total_score<D, E: Estimator<D>>(
     let mut sum = 0.0;
     let mut inliers = 0;
     // Check the bound every few points: cheap, and still exits early on bad hypotheses.
-    for chunk in valid.chunks(64) {
+    for chunk in valid.chunks(16) {
         for &i in chunk {
             let e = estimator.residual(model, &data[i]);
             inliers += usize::from(e < inlier_threshold_m);

@@ -23,6 +23,16 @@ pub struct ColorContourParams {
     /// table was thresholded).
     #[serde(default = "yes")]
     pub learn_color_threshold: bool,
+    /// Training on truth that does not list every fruit (`"complete": false` and no instance
+    /// mask, like real frames where only tagged fruit are boxed): the fruit left untagged would
+    /// be taught as background. With a positive value the model is trained twice: the first
+    /// model detects fruit on its training frames, and the pixels within this many radii of
+    /// every circle it finds away from the tagged fruit are left out of the second training and
+    /// of the learnt threshold (see `training_pixels.rs`). 0 = off (every untagged pixel is
+    /// background, the behaviour before this setting). Frames with complete truth are not
+    /// affected. Not in seed 004.
+    #[serde(default = "untagged_fruit_disc_scale")]
+    pub untagged_fruit_disc_scale: f64,
     /// Hysteresis on the colour table (not in the paper, see [`crate::hysteresis_mask`]): pixels
     /// whose network output is at least this fraction of `color_threshold` are fruit where they
     /// join fruit. 1 = off (the paper's single threshold, and what model files from before this
@@ -114,6 +124,7 @@ impl Default for ColorContourParams {
             pixels_per_class_per_frame: 2000,
             color_threshold: 0.5,
             learn_color_threshold: true,
+            untagged_fruit_disc_scale: untagged_fruit_disc_scale(),
             color_grow_fraction: 0.75,
             color_grow_seed_px: 10,
             min_component_px: 40,
@@ -131,6 +142,10 @@ impl Default for ColorContourParams {
             depth_refit_tolerance_m: ten_mm(),
         }
     }
+}
+
+fn untagged_fruit_disc_scale() -> f64 {
+    1.2
 }
 
 fn ten_mm() -> f64 {

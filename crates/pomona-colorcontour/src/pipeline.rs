@@ -12,8 +12,9 @@ use serde::{Deserialize, Serialize};
 
 use crate::stages::{ColorClassStage, ContourStage, EdgeFitStage, FruitStage};
 use crate::{
-    best_f1_threshold, quantise_probability, training_pixels, value_histograms, ColorContourParams,
-    ContourCircle, HSigmaLut, Mlp, SampledRegion,
+    best_f1_threshold, may_have_untagged_fruit, quantise_probability, taught_labels,
+    training_pixels, untagged_discs, value_histograms, ColorContourParams, ContourCircle,
+    HSigmaLut, Mlp, PixelDisc, SampledRegion,
 };
 
 /// Name of the pipeline on the command line and in model files.
@@ -71,6 +72,83 @@ pub struct ColorContourPipeline {
     pub params: ColorContourParams,
 }
 
+impl ColorContourPipeline {
+    /// One training: the colour perceptron on pixels of every frame ([`training_pixels`]) and,
+    /// with `learn_color_threshold`, its threshold, both from the labels [`taught_labels`]
+    /// gives with frame `i`'s background pixels inside `left_out[i]` left out.
+    fn train_once(
+        &self,
+        frames: &dyn FrameSource,
+        options: &TrainOptions,
+        left_out: &[Vec<PixelDisc>],
+        progress: &(dyn Fn(usize, usize) + Sync),
+    ) -> Result<ModelFile, PipelineError> {
+        let n = frames.len();
+        let done = std::sync::atomic::AtomicUsize::new(0);
+        let per_class = self.params.pixels_per_class_per_frame;
+        let discs = |i: usize| left_out.get(i).map_or(&[][..], Vec::as_slice);
+        let per_frame: Result<Vec<Vec<_>>, PipelineError> = (0..n)
+            .into_par_iter()
+            .map(|i| {
+                let lf = frames.load(i)?;
+                if lf.frame.color().is_none() {
+                    return Err(PipelineError::MissingColor {
+                        pipeline: PIPELINE_NAME,
+                    });
+                }
+                let seed = options.seed ^ (i as u64 + 1).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+                let labels = taught_labels(&lf, discs(i)).unwrap_or_default();
+                let samples = training_pixels(&lf, &labels, per_class, seed);
+                let k = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+                progress(k, n);
+                Ok(samples)
+            })
+            .collect();
+        let samples: Vec<_> = per_frame?.into_iter().flatten().collect();
+        let mlp = Mlp::train(&samples, &self.params.mlp, options.seed).ok_or_else(|| {
+            PipelineError::NotEnoughTrainingData {
+                pipeline: PIPELINE_NAME,
+                reason: format!(
+                    "the colour perceptron needs fruit and background pixels ({} frames gave {} \
+                     samples, {} of fruit)",
+                    n,
+                    samples.len(),
+                    samples.iter().filter(|s| s.1).count()
+                ),
+            }
+        })?;
+        let mut params = self.params.clone();
+        if params.learn_color_threshold {
+            let lut = HSigmaLut::compile(&mlp);
+            let per_frame: Result<Vec<[[u64; 256]; 2]>, PipelineError> = (0..n)
+                .into_par_iter()
+                .map(|i| {
+                    let lf = frames.load(i)?;
+                    let labels = taught_labels(&lf, discs(i)).unwrap_or_default();
+                    Ok(value_histograms(&lf, &labels, &lut))
+                })
+                .collect();
+            let mut total = [[0u64; 256]; 2];
+            for h in per_frame? {
+                for (t, f) in total.iter_mut().zip(h) {
+                    for (a, b) in t.iter_mut().zip(f) {
+                        *a += b;
+                    }
+                }
+            }
+            if let Some(t) = best_f1_threshold(&total) {
+                params.color_threshold = f64::from(t) / 255.0;
+            }
+        }
+        let stage = ColorContourStageParams { params, mlp };
+        Ok(ModelFile::new(
+            PIPELINE_NAME,
+            params_to_json(&stage),
+            &no_svm(),
+        ))
+    }
+}
+
 /// The model file's classifier slot: this method has no SVM (its score is support × colour
 /// purity), so the file carries an empty one that is never evaluated.
 fn no_svm() -> SvmClassifier {
@@ -115,63 +193,37 @@ impl Pipeline for ColorContourPipeline {
         options: &TrainOptions,
         progress: &(dyn Fn(usize, usize) + Sync),
     ) -> Result<ModelFile, PipelineError> {
-        let n = frames.len();
-        let done = std::sync::atomic::AtomicUsize::new(0);
-        let per_class = self.params.pixels_per_class_per_frame;
-        let per_frame: Result<Vec<Vec<_>>, PipelineError> = (0..n)
+        let scale = self.params.untagged_fruit_disc_scale;
+        if !(scale.is_finite() && scale >= 0.0) {
+            return Err(PipelineError::InvalidParameter {
+                name: "untagged_fruit_disc_scale".into(),
+                reason: "must be 0 (off) or positive".into(),
+            });
+        }
+        let no_discs = vec![Vec::new(); frames.len()];
+        let first = self.train_once(frames, options, &no_discs, progress)?;
+        let untagged = (0..frames.len())
+            .into_par_iter()
+            .map(|i| Ok(may_have_untagged_fruit(&frames.load(i)?)))
+            .collect::<Result<Vec<bool>, PipelineError>>()?;
+        if scale == 0.0 || !untagged.contains(&true) {
+            return Ok(first);
+        }
+        // Some frames may leave fruit untagged: what the first model finds away from the tagged
+        // fruit is left out of the second training (training_pixels.rs).
+        let detector = ColorContourDetector::new(&ColorContourStageParams::from_model(&first)?)?;
+        let left_out = (0..frames.len())
             .into_par_iter()
             .map(|i| {
+                if !untagged[i] {
+                    return Ok(Vec::new());
+                }
                 let lf = frames.load(i)?;
-                if lf.frame.color().is_none() {
-                    return Err(PipelineError::MissingColor {
-                        pipeline: PIPELINE_NAME,
-                    });
-                }
-                let seed = options.seed ^ (i as u64 + 1).wrapping_mul(0x9E37_79B9_7F4A_7C15);
-                let samples = training_pixels(&lf, per_class, seed);
-                let k = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
-                progress(k, n);
-                Ok(samples)
+                let found = detector.detect(&lf.frame, &mut StageTimings::default())?;
+                Ok(untagged_discs(&lf, &found, scale))
             })
-            .collect();
-        let samples: Vec<_> = per_frame?.into_iter().flatten().collect();
-        let mlp = Mlp::train(&samples, &self.params.mlp, options.seed).ok_or_else(|| {
-            PipelineError::NotEnoughTrainingData {
-                pipeline: PIPELINE_NAME,
-                reason: format!(
-                    "the colour perceptron needs fruit and background pixels ({} frames gave {} \
-                     samples, {} of fruit)",
-                    n,
-                    samples.len(),
-                    samples.iter().filter(|s| s.1).count()
-                ),
-            }
-        })?;
-        let mut params = self.params.clone();
-        if params.learn_color_threshold {
-            let lut = HSigmaLut::compile(&mlp);
-            let per_frame: Result<Vec<[[u64; 256]; 2]>, PipelineError> = (0..n)
-                .into_par_iter()
-                .map(|i| Ok(value_histograms(&frames.load(i)?, &lut)))
-                .collect();
-            let mut total = [[0u64; 256]; 2];
-            for h in per_frame? {
-                for (t, f) in total.iter_mut().zip(h) {
-                    for (a, b) in t.iter_mut().zip(f) {
-                        *a += b;
-                    }
-                }
-            }
-            if let Some(t) = best_f1_threshold(&total) {
-                params.color_threshold = f64::from(t) / 255.0;
-            }
-        }
-        let stage = ColorContourStageParams { params, mlp };
-        Ok(ModelFile::new(
-            PIPELINE_NAME,
-            params_to_json(&stage),
-            &no_svm(),
-        ))
+            .collect::<Result<Vec<_>, PipelineError>>()?;
+        self.train_once(frames, options, &left_out, &|_, _| {})
     }
 
     fn complete_stage_params(

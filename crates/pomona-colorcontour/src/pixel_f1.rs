@@ -36,13 +36,20 @@ impl PixelCounts {
     }
 }
 
-/// Per table value 0–255: how many fruit and background pixels of `lf` have it (empty without
-/// colour).
-pub fn value_histograms(lf: &LabelledFrame, lut: &HSigmaLut) -> [[u64; 256]; 2] {
+/// Per table value 0–255: how many fruit and background pixels of `lf` have it, by the labels
+/// training teaches ([`crate::taught_labels`]: pixels left out are not counted); empty without
+/// colour.
+pub fn value_histograms(
+    lf: &LabelledFrame,
+    labels: &[Option<bool>],
+    lut: &HSigmaLut,
+) -> [[u64; 256]; 2] {
     let mut h = [[0u64; 256]; 2];
-    if let (Some(color), Some(labels)) = (lf.frame.color(), fruit_labels(lf)) {
-        for (rgb, &fruit) in color.pixels().zip(&labels) {
-            h[usize::from(fruit)][usize::from(lut.value(rgb))] += 1;
+    if let Some(color) = lf.frame.color() {
+        for (rgb, label) in color.pixels().zip(labels) {
+            if let Some(fruit) = *label {
+                h[usize::from(fruit)][usize::from(lut.value(rgb))] += 1;
+            }
         }
     }
     h

@@ -82,7 +82,4 @@ pub use pipeline::{
 pub use pixel_f1::{best_f1_threshold, pixel_counts, value_histograms, PixelCounts};
 pub use spiral_search::{spiral_points, SpiralParams};
 pub use tracking::{ApproachTracker, TrackEstimate, TrackParams, TrackStatus};
-pub use training_pixels::{
-    fruit_labels, may_have_untagged_fruit, taught_labels, training_pixels, untagged_discs,
-    PixelDisc,
-};
+pub use training_pixels::{fruit_labels, taught_labels, training_pixels};

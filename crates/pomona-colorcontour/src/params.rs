@@ -27,10 +27,10 @@ pub struct ColorContourParams {
     /// mask, like real frames where only tagged fruit are boxed): the fruit left untagged would
     /// be taught as background. With a positive value the model is trained twice: the first
     /// model detects fruit on its training frames, and the pixels within this many radii of
-    /// every circle it finds away from the tagged fruit are left out of the second training and
-    /// of the learnt threshold (see `training_pixels.rs`). 0 = off (every untagged pixel is
-    /// background, the behaviour before this setting). Frames with complete truth are not
-    /// affected. Not in seed 004.
+    /// every circle it finds centred outside the tagged fruit's boxes are left out of the second
+    /// training and of the learnt threshold (`pomona_pipeline::untagged_fruit_circles`). 0 = off
+    /// (every untagged pixel is background, the behaviour before this setting). Frames with
+    /// complete truth are not affected. Not in seed 004.
     #[serde(default = "untagged_fruit_disc_scale")]
     pub untagged_fruit_disc_scale: f64,
     /// Hysteresis on the colour table (not in the paper, see [`crate::hysteresis_mask`]): pixels

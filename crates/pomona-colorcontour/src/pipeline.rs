@@ -1,20 +1,19 @@
 //! The `color-contour` pipeline: training (the colour perceptron on fruit and background pixels)
 //! and the detector that chains the stages.
 
-use pomona_core::{ColorImage, Detection, RgbdFrame};
+use pomona_core::{ColorImage, Detection, ImageCircle, RgbdFrame};
 use pomona_learn::{ModelFile, SvmClassifier};
 use pomona_pipeline::{
-    params_from_json, params_to_json, run_stage, Detector, FrameSource, Pipeline, PipelineError,
-    StageTimings, TrainOptions,
+    may_have_untagged_fruit, params_from_json, params_to_json, run_stage, untagged_fruit_circles,
+    Detector, FrameSource, Pipeline, PipelineError, StageTimings, TrainOptions,
 };
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::stages::{ColorClassStage, ContourStage, EdgeFitStage, FruitStage};
 use crate::{
-    best_f1_threshold, may_have_untagged_fruit, quantise_probability, taught_labels,
-    training_pixels, untagged_discs, value_histograms, ColorContourParams, ContourCircle,
-    HSigmaLut, Mlp, PixelDisc, SampledRegion,
+    best_f1_threshold, quantise_probability, taught_labels, training_pixels, value_histograms,
+    ColorContourParams, ContourCircle, HSigmaLut, Mlp, SampledRegion,
 };
 
 /// Name of the pipeline on the command line and in model files.
@@ -80,7 +79,7 @@ impl ColorContourPipeline {
         &self,
         frames: &dyn FrameSource,
         options: &TrainOptions,
-        left_out: &[Vec<PixelDisc>],
+        left_out: &[Vec<ImageCircle>],
         progress: &(dyn Fn(usize, usize) + Sync),
     ) -> Result<ModelFile, PipelineError> {
         let n = frames.len();
@@ -220,7 +219,7 @@ impl Pipeline for ColorContourPipeline {
                 }
                 let lf = frames.load(i)?;
                 let found = detector.detect(&lf.frame, &mut StageTimings::default())?;
-                Ok(untagged_discs(&lf, &found, scale))
+                Ok(untagged_fruit_circles(&lf, &found, scale))
             })
             .collect::<Result<Vec<_>, PipelineError>>()?;
         self.train_once(frames, options, &left_out, &|_, _| {})

@@ -12,16 +12,14 @@
 //! Real frames are often annotated only in part (the shared orchard frames box the tagged
 //! apples; many more hang beside them). Taught as background, those apples pull the network and
 //! its learnt threshold away from the fruit's own colours, most of all from their shaded and
-//! highlighted parts. Seed 004 trained on hand-cut samples and does not meet this. Training
-//! therefore runs twice on such frames: the first model, trained as usual, detects fruit on its
-//! own training frames, and the discs of the circles it finds away from every tagged fruit are
-//! left out of the second training (neither fruit nor background). Leaving out pixels by colour
-//! alone (untagged pixels the first network scores like fruit) was measured and rejected: the
-//! leaves inside the tagged discs drag any such cut down into the leaves' colours
-//! (docs/results.md, "Untagged fruit in training").
+//! highlighted parts (seed 004 trained on hand-cut samples and does not meet this). Training
+//! therefore runs twice on such frames ([`pomona_pipeline::may_have_untagged_fruit`]): the
+//! circles the first model finds away from every tagged fruit
+//! ([`pomona_pipeline::untagged_fruit_circles`]) are left out of the second training and of the
+//! learnt threshold ([`taught_labels`]).
 
 use pomona_core::nalgebra::Point2;
-use pomona_core::Detection;
+use pomona_core::ImageCircle;
 use pomona_pipeline::LabelledFrame;
 use rand::seq::SliceRandom;
 use rand::SeedableRng;
@@ -58,65 +56,36 @@ pub fn fruit_labels(lf: &LabelledFrame) -> Option<Vec<bool>> {
     )
 }
 
-/// Whether fruit of `lf` may be missing from its labels: truth marked incomplete and no
-/// instance mask (a mask labels every fruit pixel whatever the truth lists).
-pub fn may_have_untagged_fruit(lf: &LabelledFrame) -> bool {
-    !lf.truth.complete && lf.mask.is_none()
-}
-
-/// A disc of pixels: centre and radius, pixels.
-pub type PixelDisc = (Point2<f64>, f64);
-
 /// What training teaches about each pixel of `lf`: `Some(true)` fruit, `Some(false)`
 /// background, `None` left out; `None` without colour. The labels of [`fruit_labels`], with
-/// the background pixels inside any of `left_out` left out.
-pub fn taught_labels(lf: &LabelledFrame, left_out: &[PixelDisc]) -> Option<Vec<Option<bool>>> {
+/// the background pixels inside any of `left_out` (the untagged fruit of
+/// [`pomona_pipeline::untagged_fruit_circles`]) left out.
+pub fn taught_labels(lf: &LabelledFrame, left_out: &[ImageCircle]) -> Option<Vec<Option<bool>>> {
     let labels = fruit_labels(lf)?;
     let w = lf.frame.color()?.width() as usize;
     let mut taught: Vec<Option<bool>> = labels.into_iter().map(Some).collect();
     let h = taught.len() / w.max(1);
-    for &(c, r) in left_out {
-        if !(c.x.is_finite() && c.y.is_finite() && r.is_finite() && r > 0.0) {
+    for c in left_out {
+        let (centre, r) = (c.center_px, c.radius_px);
+        if !(centre.x.is_finite() && centre.y.is_finite() && r.is_finite() && r > 0.0) {
             continue;
         }
-        let rows = (c.y - r).floor().max(0.0) as usize
-            ..=((c.y + r).ceil().max(0.0) as usize).min(h.saturating_sub(1));
-        let cols = (c.x - r).floor().max(0.0) as usize
-            ..=((c.x + r).ceil().max(0.0) as usize).min(w.saturating_sub(1));
-        for y in rows {
-            for x in cols.clone() {
-                let (dx, dy) = (x as f64 - c.x, y as f64 - c.y);
+        // The circle's bounding rows and columns, clipped to the image.
+        let span = |mid: f64, len: usize| {
+            let lo = (mid - r).floor().max(0.0) as usize;
+            let hi = ((mid + r).ceil().max(0.0) as usize).min(len.saturating_sub(1));
+            lo..=hi
+        };
+        for y in span(centre.y, h) {
+            for x in span(centre.x, w) {
                 let label = &mut taught[y * w + x];
-                if dx * dx + dy * dy <= r * r && *label == Some(false) {
+                if *label == Some(false) && c.contains(&Point2::new(x as f64, y as f64)) {
                     *label = None;
                 }
             }
         }
     }
     Some(taught)
-}
-
-/// The discs, `scale` times their radius, of `detections` on `lf` whose centre lies in no
-/// tagged fruit's disc ([`fruit_labels`]' inscribed discs, or the mask): fruit the truth may
-/// not list. Detections without a 2D circle are skipped.
-pub fn untagged_discs(lf: &LabelledFrame, detections: &[Detection], scale: f64) -> Vec<PixelDisc> {
-    let Some(labels) = fruit_labels(lf) else {
-        return Vec::new();
-    };
-    let Some(w) = lf.frame.color().map(|c| c.width() as usize) else {
-        return Vec::new();
-    };
-    detections
-        .iter()
-        .filter_map(|d| Some((d.center_px?, d.radius_px?)))
-        .filter(|(c, _)| {
-            let (x, y) = (c.x.round(), c.y.round());
-            let inside = x >= 0.0 && y >= 0.0 && (x as usize) < w;
-            let index = y as usize * w + x as usize;
-            !(inside && labels.get(index).copied().unwrap_or(false))
-        })
-        .map(|(c, r)| (c, r * scale))
-        .collect()
 }
 
 /// Up to `per_class` fruit and `per_class` background samples of `lf` in the HΣ plane, drawn with
@@ -151,7 +120,6 @@ pub fn training_pixels(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use pomona_core::nalgebra::Point3;
     use pomona_core::{ColorImage, DepthImage, FrameTruth, PinholeCamera, RgbdFrame};
 
     /// A 20×10 frame: one tagged fruit boxed at x 2–8 (disc of radius 3 around (5, 5)) and,
@@ -173,22 +141,18 @@ mod tests {
         }
     }
 
-    fn circle(x: f64, y: f64, r: f64) -> Detection {
-        let mut d = Detection::new(Point3::new(0.0, 0.0, 1.0), 1.0);
-        d.center_px = Some(Point2::new(x, y));
-        d.radius_px = Some(r);
-        d
+    fn circle(x: f64, y: f64, r: f64) -> ImageCircle {
+        ImageCircle {
+            center_px: Point2::new(x, y),
+            radius_px: r,
+        }
     }
 
     #[test]
     fn only_background_inside_a_left_out_disc_is_left_out() {
         let lf = frame(false);
         let plain = fruit_labels(&lf).unwrap();
-        let taught = taught_labels(
-            &lf,
-            &[(Point2::new(14.0, 5.0), 2.0), (Point2::new(5.0, 5.0), 4.0)],
-        )
-        .unwrap();
+        let taught = taught_labels(&lf, &[circle(14.0, 5.0, 2.0), circle(5.0, 5.0, 4.0)]).unwrap();
         for (i, (&fruit, &label)) in plain.iter().zip(&taught).enumerate() {
             let (x, y) = ((i % 20) as f64, (i / 20) as f64);
             let near = |cx: f64, r: f64| (x - cx).powi(2) + (y - 5.0).powi(2) <= r * r;
@@ -206,28 +170,14 @@ mod tests {
             13 + (49 - 29)
         );
         // Without discs the labels are fruit_labels' own; discs off the image are harmless.
-        let none = taught_labels(&lf, &[(Point2::new(-50.0, 80.0), 3.0)]).unwrap();
+        let none = taught_labels(&lf, &[circle(-50.0, 80.0, 3.0)]).unwrap();
         assert_eq!(none, plain.into_iter().map(Some).collect::<Vec<_>>());
-    }
-
-    #[test]
-    fn circles_on_tagged_fruit_are_not_untagged_fruit() {
-        let lf = frame(false);
-        let found = [
-            circle(5.2, 4.8, 3.0),
-            circle(14.0, 5.0, 2.5),
-            Detection::new(Point3::origin(), 1.0),
-        ];
-        let discs = untagged_discs(&lf, &found, 1.2);
-        assert_eq!(discs, vec![(Point2::new(14.0, 5.0), 3.0)]);
-        assert!(may_have_untagged_fruit(&lf));
-        assert!(!may_have_untagged_fruit(&frame(true)));
     }
 
     #[test]
     fn left_out_pixels_are_never_drawn() {
         let lf = frame(false);
-        let taught = taught_labels(&lf, &[(Point2::new(14.0, 5.0), 100.0)]).unwrap();
+        let taught = taught_labels(&lf, &[circle(14.0, 5.0, 100.0)]).unwrap();
         // Every background pixel is left out: the draw has fruit samples only.
         let samples = training_pixels(&lf, &taught, 1000, 3);
         assert_eq!(samples.len(), 29);

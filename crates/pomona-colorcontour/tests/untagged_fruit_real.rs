@@ -3,8 +3,8 @@
 //! untagged pixel were background, the colour network learns those apples' colours as
 //! background; with the untagged fruit left out of the second training (the default,
 //! `untagged_fruit_disc_scale`), the model finds more of the tagged apples. Measured through the
-//! CLI (docs/results.md, "Untagged fruit in training"): 44 → 52 of 72 on the training frames,
-//! 41 → 53 leave-one-out. Skips with a message when the data folder is absent; fails instead when
+//! CLI (docs/results.md, "Untagged fruit in training"): 44 → 56 of 72 on the training frames,
+//! 41 → 48 leave-one-out. Skips with a message when the data folder is absent; fails instead when
 //! `POMONA_REQUIRE_DATA=1`.
 
 #![allow(clippy::unwrap_used, clippy::expect_used)] // test helpers outside test functions

@@ -105,6 +105,11 @@ impl ImageCircle {
     pub fn center_distance_px(&self, other: &ImageCircle) -> f64 {
         (self.center_px - other.center_px).norm()
     }
+
+    /// Whether pixel position `p` lies on or inside the circle.
+    pub fn contains(&self, p: &Point2<f64>) -> bool {
+        (p - self.center_px).norm_squared() <= self.radius_px * self.radius_px
+    }
 }
 
 #[cfg(test)]

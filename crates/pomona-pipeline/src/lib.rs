@@ -29,6 +29,7 @@ mod stage;
 mod synthetic_frames;
 mod timings;
 mod train_params;
+mod untagged_fruit;
 
 pub use calibration::{
     load_detector, train_calibrated, CalibratedDetector, CalibratedTraining, CalibrationParams,
@@ -44,3 +45,4 @@ pub use stage::{run_stage, Stage};
 pub use synthetic_frames::SyntheticFrames;
 pub use timings::StageTimings;
 pub use train_params::{params_from_json, params_to_json};
+pub use untagged_fruit::{may_have_untagged_fruit, untagged_fruit_circles};

@@ -74,7 +74,8 @@ pub struct ColorContourPipeline {
 impl ColorContourPipeline {
     /// One training: the colour perceptron on pixels of every frame ([`training_pixels`]) and,
     /// with `learn_color_threshold`, its threshold, both from the labels [`taught_labels`]
-    /// gives with frame `i`'s background pixels inside `left_out[i]` left out.
+    /// gives with frame `i`'s background pixels inside `left_out[i]` left out (none for frames
+    /// past the end of `left_out`).
     fn train_once(
         &self,
         frames: &dyn FrameSource,
@@ -199,29 +200,40 @@ impl Pipeline for ColorContourPipeline {
                 reason: "must be 0 (off) or positive".into(),
             });
         }
-        let no_discs = vec![Vec::new(); frames.len()];
-        let first = self.train_once(frames, options, &no_discs, progress)?;
-        let untagged = (0..frames.len())
+        let first = self.train_once(frames, options, &[], progress)?;
+        // Frames whose truth may leave fruit untagged (read from the truth files first, so
+        // complete datasets cost no extra pass over the images).
+        let incomplete = (0..frames.len())
             .into_par_iter()
-            .map(|i| Ok(may_have_untagged_fruit(&frames.load(i)?)))
+            .map(|i| frames.truth(i).map(|t| !t.complete))
             .collect::<Result<Vec<bool>, PipelineError>>()?;
-        if scale == 0.0 || !untagged.contains(&true) {
+        if scale == 0.0 || !incomplete.contains(&true) {
             return Ok(first);
         }
-        // Some frames may leave fruit untagged: what the first model finds away from the tagged
-        // fruit is left out of the second training (training_pixels.rs).
+        // What the first model finds away from the tagged fruit is left out of the second
+        // training (training_pixels.rs).
         let detector = ColorContourDetector::new(&ColorContourStageParams::from_model(&first)?)?;
         let left_out = (0..frames.len())
             .into_par_iter()
             .map(|i| {
-                if !untagged[i] {
-                    return Ok(Vec::new());
+                if !incomplete[i] {
+                    return Ok(None);
                 }
                 let lf = frames.load(i)?;
+                if !may_have_untagged_fruit(&lf) {
+                    return Ok(None); // an instance mask labels every fruit
+                }
                 let found = detector.detect(&lf.frame, &mut StageTimings::default())?;
-                Ok(untagged_fruit_circles(&lf, &found, scale))
+                Ok(Some(untagged_fruit_circles(&lf, &found, scale)))
             })
-            .collect::<Result<Vec<_>, PipelineError>>()?;
+            .collect::<Result<Vec<Option<Vec<ImageCircle>>>, PipelineError>>()?;
+        if left_out.iter().all(Option::is_none) {
+            return Ok(first);
+        }
+        let left_out: Vec<Vec<ImageCircle>> = left_out
+            .into_iter()
+            .map(Option::unwrap_or_default)
+            .collect();
         self.train_once(frames, options, &left_out, &|_, _| {})
     }
 

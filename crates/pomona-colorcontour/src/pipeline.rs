@@ -200,14 +200,18 @@ impl Pipeline for ColorContourPipeline {
                 reason: "must be 0 (off) or positive".into(),
             });
         }
-        let first = self.train_once(frames, options, &[], progress)?;
-        // Frames whose truth may leave fruit untagged (read from the truth files first, so
-        // complete datasets cost no extra pass over the images).
+        // Frames whose truth may leave fruit untagged (read from the truth files, so complete
+        // datasets cost no extra pass over the images).
         let incomplete = (0..frames.len())
             .into_par_iter()
             .map(|i| frames.truth(i).map(|t| !t.complete))
             .collect::<Result<Vec<bool>, PipelineError>>()?;
-        if scale == 0.0 || !incomplete.contains(&true) {
+        let two_passes = scale > 0.0 && incomplete.contains(&true);
+        // Progress over both passes when there will be two.
+        let n = frames.len();
+        let total = if two_passes { 2 * n } else { n };
+        let first = self.train_once(frames, options, &[], &|k, _| progress(k, total))?;
+        if !two_passes {
             return Ok(first);
         }
         // What the first model finds away from the tagged fruit is left out of the second
@@ -234,7 +238,7 @@ impl Pipeline for ColorContourPipeline {
             .into_iter()
             .map(Option::unwrap_or_default)
             .collect();
-        self.train_once(frames, options, &left_out, &|_, _| {})
+        self.train_once(frames, options, &left_out, &|k, _| progress(n + k, total))
     }
 
     fn complete_stage_params(

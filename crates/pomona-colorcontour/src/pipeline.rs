@@ -231,8 +231,8 @@ impl Pipeline for ColorContourPipeline {
                 Ok(Some(untagged_fruit_circles(&lf, &found, scale)))
             })
             .collect::<Result<Vec<Option<Vec<ImageCircle>>>, PipelineError>>()?;
-        if left_out.iter().all(Option::is_none) {
-            return Ok(first);
+        if left_out.iter().flatten().all(Vec::is_empty) {
+            return Ok(first); // nothing to leave out: the second training would repeat the first
         }
         let left_out: Vec<Vec<ImageCircle>> = left_out
             .into_iter()

@@ -75,19 +75,20 @@ impl ColorContourPipeline {
     /// One training: the colour perceptron on pixels of every frame ([`training_pixels`]) and,
     /// with `learn_color_threshold`, its threshold, both from the labels [`taught_labels`]
     /// gives with frame `i`'s background pixels inside `left_out[i]` left out (none for frames
-    /// past the end of `left_out`).
+    /// past the end of `left_out`). Also says, per frame, whether its labels may leave fruit
+    /// untagged ([`may_have_untagged_fruit`]).
     fn train_once(
         &self,
         frames: &dyn FrameSource,
         options: &TrainOptions,
         left_out: &[Vec<ImageCircle>],
         progress: &(dyn Fn(usize, usize) + Sync),
-    ) -> Result<ModelFile, PipelineError> {
+    ) -> Result<(ModelFile, Vec<bool>), PipelineError> {
         let n = frames.len();
         let done = std::sync::atomic::AtomicUsize::new(0);
         let per_class = self.params.pixels_per_class_per_frame;
         let discs = |i: usize| left_out.get(i).map_or(&[][..], Vec::as_slice);
-        let per_frame: Result<Vec<Vec<_>>, PipelineError> = (0..n)
+        let per_frame: Result<Vec<(Vec<_>, bool)>, PipelineError> = (0..n)
             .into_par_iter()
             .map(|i| {
                 let lf = frames.load(i)?;
@@ -101,10 +102,11 @@ impl ColorContourPipeline {
                 let samples = training_pixels(&lf, &labels, per_class, seed);
                 let k = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
                 progress(k, n);
-                Ok(samples)
+                Ok((samples, may_have_untagged_fruit(&lf)))
             })
             .collect();
-        let samples: Vec<_> = per_frame?.into_iter().flatten().collect();
+        let (per_frame, untagged): (Vec<_>, Vec<bool>) = per_frame?.into_iter().unzip();
+        let samples: Vec<_> = per_frame.into_iter().flatten().collect();
         let mlp = Mlp::train(&samples, &self.params.mlp, options.seed).ok_or_else(|| {
             PipelineError::NotEnoughTrainingData {
                 pipeline: PIPELINE_NAME,
@@ -141,11 +143,8 @@ impl ColorContourPipeline {
             }
         }
         let stage = ColorContourStageParams { params, mlp };
-        Ok(ModelFile::new(
-            PIPELINE_NAME,
-            params_to_json(&stage),
-            &no_svm(),
-        ))
+        let model = ModelFile::new(PIPELINE_NAME, params_to_json(&stage), &no_svm());
+        Ok((model, untagged))
     }
 }
 
@@ -200,45 +199,32 @@ impl Pipeline for ColorContourPipeline {
                 reason: "must be 0 (off) or positive".into(),
             });
         }
-        // Frames whose truth may leave fruit untagged (read from the truth files, so complete
-        // datasets cost no extra pass over the images).
-        let incomplete = (0..frames.len())
-            .into_par_iter()
-            .map(|i| frames.truth(i).map(|t| !t.complete))
-            .collect::<Result<Vec<bool>, PipelineError>>()?;
-        let two_passes = scale > 0.0 && incomplete.contains(&true);
-        // Progress over both passes when there will be two.
         let n = frames.len();
-        let total = if two_passes { 2 * n } else { n };
-        let first = self.train_once(frames, options, &[], &|k, _| progress(k, total))?;
-        if !two_passes {
+        let (first, untagged) = self.train_once(frames, options, &[], progress)?;
+        if scale == 0.0 || !untagged.contains(&true) {
             return Ok(first);
         }
         // What the first model finds away from the tagged fruit is left out of the second
         // training (training_pixels.rs).
         let detector = ColorContourDetector::new(&ColorContourStageParams::from_model(&first)?)?;
-        let left_out = (0..frames.len())
+        let left_out = (0..n)
             .into_par_iter()
             .map(|i| {
-                if !incomplete[i] {
-                    return Ok(None);
+                if !untagged[i] {
+                    return Ok(Vec::new());
                 }
                 let lf = frames.load(i)?;
-                if !may_have_untagged_fruit(&lf) {
-                    return Ok(None); // an instance mask labels every fruit
-                }
                 let found = detector.detect(&lf.frame, &mut StageTimings::default())?;
-                Ok(Some(untagged_fruit_circles(&lf, &found, scale)))
+                Ok(untagged_fruit_circles(&lf, &found, scale))
             })
-            .collect::<Result<Vec<Option<Vec<ImageCircle>>>, PipelineError>>()?;
-        if left_out.iter().flatten().all(Vec::is_empty) {
+            .collect::<Result<Vec<Vec<ImageCircle>>, PipelineError>>()?;
+        if left_out.iter().all(Vec::is_empty) {
             return Ok(first); // nothing to leave out: the second training would repeat the first
         }
-        let left_out: Vec<Vec<ImageCircle>> = left_out
-            .into_iter()
-            .map(Option::unwrap_or_default)
-            .collect();
-        self.train_once(frames, options, &left_out, &|k, _| progress(n + k, total))
+        // The second pass continues the progress: frames n + 1 to 2n.
+        let (second, _) =
+            self.train_once(frames, options, &left_out, &|k, _| progress(n + k, 2 * n))?;
+        Ok(second)
     }
 
     fn complete_stage_params(

@@ -3,8 +3,8 @@
 //! Fruit pixels come from the instance mask (id > 0) when the frame has one; otherwise from the
 //! truth boxes, taking the disc inscribed in each box (a round fruit fills its box's inscribed
 //! circle, while the box corners are background). Every other pixel is background — unless the
-//! truth says it does not list every fruit (`"complete": false`, no mask): then a first network's
-//! view decides which of them training may call background ([`taught_labels`]). Up to
+//! truth says it does not list every fruit (`"complete": false`, no mask): then what a first
+//! model detects there is left out ([`taught_labels`], below). Up to
 //! `per_class` of each class are drawn by a seeded shuffle, so classes are balanced and the draw
 //! is reproducible.
 //!
@@ -122,14 +122,14 @@ mod tests {
     use super::*;
     use pomona_core::{ColorImage, DepthImage, FrameTruth, PinholeCamera, RgbdFrame};
 
-    /// A 20×10 frame: one tagged fruit boxed at x 2–8 (disc of radius 3 around (5, 5)) and,
-    /// with `complete` false, an untagged one around (14, 5).
-    fn frame(complete: bool) -> LabelledFrame {
+    /// A 20×10 frame whose incomplete truth boxes one fruit at x 2–8 (disc of radius 3 around
+    /// (5, 5)).
+    fn frame() -> LabelledFrame {
         let cam = PinholeCamera::new(20, 10, 100.0, 100.0, 9.5, 4.5).unwrap();
         let depth = DepthImage::from_u16(20, 10, &[1000; 200], 0.001).unwrap();
         let color = ColorImage::from_rgb(20, 10, vec![40; 600]).unwrap();
         let truth: FrameTruth = serde_json::from_value(serde_json::json!({
-            "complete": complete,
+            "complete": false,
             "fruits": [{"id": "a", "kind": "orange", "bbox_px": [2.0, 2.0, 8.0, 8.0]}],
         }))
         .unwrap();
@@ -150,7 +150,7 @@ mod tests {
 
     #[test]
     fn only_background_inside_a_left_out_disc_is_left_out() {
-        let lf = frame(false);
+        let lf = frame();
         let plain = fruit_labels(&lf).unwrap();
         let taught = taught_labels(&lf, &[circle(14.0, 5.0, 2.0), circle(5.0, 5.0, 4.0)]).unwrap();
         for (i, (&fruit, &label)) in plain.iter().zip(&taught).enumerate() {
@@ -176,7 +176,7 @@ mod tests {
 
     #[test]
     fn left_out_pixels_are_never_drawn() {
-        let lf = frame(false);
+        let lf = frame();
         let taught = taught_labels(&lf, &[circle(14.0, 5.0, 100.0)]).unwrap();
         // Every background pixel is left out: the draw has fruit samples only.
         let samples = training_pixels(&lf, &taught, 1000, 3);

@@ -116,15 +116,19 @@ impl AcosBins {
 /// The bin of the angle `atan2(y, x)` taken in `[0, 2π)` among `n` equal bins — what
 /// `fraction_bin(y.atan2(x).rem_euclid(2π) / 2π, n)` gives — found by sign tests against the
 /// bin edges' directions instead of the `atan2`: a point of the upper half-plane is past an edge
-/// of the upper half when it lies counter-clockwise of it (cross product ≥ 0) and past every edge
-/// of the lower half never, and conversely. Within [`SectorBins::EDGE_GUARD`] (relative to
+/// of the upper half when it lies counter-clockwise of it (cross product > 0) and past no edge of
+/// the lower half; a point of the lower half is past every edge of the upper half, and past an
+/// edge of its own half when counter-clockwise of it. Within [`SectorBins::EDGE_GUARD`] (relative to
 /// `|x| + |y|`) of an edge or of the x axis, and for non-finite input, the formula decides, so
 /// the bins are exactly the formula's (whose rounding is about 1e-15 of a turn).
 #[derive(Debug, Clone, PartialEq)]
 pub(crate) struct SectorBins {
     n: usize,
-    /// `(cos θ_j, sin θ_j)` of the inner edges `θ_j = 2π j / n`, `j = 1 … n − 1`.
-    edges: Vec<(f64, f64)>,
+    /// `(cos θ_j, sin θ_j)` of the inner edges `θ_j = 2π j / n`, `j = 1 … n − 1`, in the upper
+    /// half-plane (`θ_j ∈ (0, π]` as rounded: `sin θ_j > 0`, or `= 0` with `cos θ_j > 0`).
+    upper_edges: Vec<(f64, f64)>,
+    /// The other inner edges, in the lower half-plane.
+    lower_edges: Vec<(f64, f64)>,
 }
 
 impl SectorBins {
@@ -132,14 +136,16 @@ impl SectorBins {
     const EDGE_GUARD: f64 = 1e-9;
 
     pub(crate) fn new(n: usize) -> Self {
+        let (upper_edges, lower_edges) = (1..n)
+            .map(|j| {
+                let t = j as f64 * TAU / n as f64;
+                (t.cos(), t.sin())
+            })
+            .partition(|&(c, s)| s > 0.0 || (s == 0.0 && c > 0.0));
         Self {
             n,
-            edges: (1..n)
-                .map(|j| {
-                    let t = j as f64 * TAU / n as f64;
-                    (t.cos(), t.sin())
-                })
-                .collect(),
+            upper_edges,
+            lower_edges,
         }
     }
 
@@ -154,16 +160,15 @@ impl SectorBins {
         if !(x.is_finite() && y.is_finite()) || y.abs() <= guard {
             return self.by_formula(y, x);
         }
-        let upper = y > 0.0;
-        let mut bin = 0;
-        for &(c, s) in &self.edges {
+        // The other half's edges: every one passed by a lower point, none by an upper one.
+        let (own_half, passed) = if y > 0.0 {
+            (&self.upper_edges, 0)
+        } else {
+            (&self.lower_edges, self.upper_edges.len())
+        };
+        let mut bin = passed;
+        for &(c, s) in own_half {
             let cross = c * y - s * x;
-            let edge_upper = s > 0.0 || (s == 0.0 && c > 0.0);
-            if edge_upper != upper {
-                // An edge of the other half: passed by every lower point, by no upper one.
-                bin += usize::from(!upper);
-                continue;
-            }
             if cross.abs() <= guard {
                 return self.by_formula(y, x);
             }
@@ -322,8 +327,6 @@ mod tests {
     use super::*;
     use crate::{plane_frame, FixedFrame, ReferenceFrame};
 
-    /// The comparison bins are the formula's everywhere: on a fine grid, at every edge cosine
-    /// and one and a few ulps either side of it, and at ±1.
     /// The sector bins are the formula's everywhere: on a fine circle of directions at two
     /// lengths, on and a few ulps around every edge direction and both axes, and for zero and
     /// non-finite input.
@@ -336,7 +339,8 @@ mod tests {
                 let t = i as f64 * TAU / 20_000.0;
                 probes.extend([(t.sin(), t.cos()), (3.0 * t.sin(), 3.0 * t.cos())]);
             }
-            let mut directions: Vec<(f64, f64)> = bins.edges.iter().map(|&(c, s)| (s, c)).collect();
+            let edges = bins.upper_edges.iter().chain(&bins.lower_edges);
+            let mut directions: Vec<(f64, f64)> = edges.map(|&(c, s)| (s, c)).collect();
             directions.extend([
                 (0.0, 1.0),
                 (0.0, -1.0),
@@ -357,6 +361,8 @@ mod tests {
         }
     }
 
+    /// The comparison bins are the formula's everywhere: on a fine grid, at every edge cosine
+    /// and one and a few ulps either side of it, and at ±1.
     #[test]
     fn acos_bins_equal_the_formula() {
         for n in [1, 2, 3, 4, 6, 8, 17] {

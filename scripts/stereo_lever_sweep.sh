@@ -5,7 +5,8 @@
 # depth) are shot by every rig; `pomona stereo` locates the fruit from the two colour views with
 # Eq. 18 (paper) and triangulation, three ways each: the seed's circle centres (`--no-refine`),
 # the earlier whole-patch refinement (`--refine-fruit-chroma off --refine-min-ncc 0.5`) and the
-# default refinement (fruit-coloured pixels); then one table.
+# default refinement (fruit-coloured pixels); then one table. Matching is the seed's relaxation
+# (`--match-better-elsewhere off`) throughout, as when the table was measured.
 #
 #   scripts/stereo_lever_sweep.sh [OUT]   (POMONA=path/to/pomona, FRAMES=60, SEED=1,
 #                                          LEVERS="0.3 0.5 0.8 1.0 1.2", BETAS="2 4 8",
@@ -31,7 +32,8 @@ for d in $LEVERS; do
                 run=$1
                 shift
                 "$P" stereo --data "$OUT/$name" --out "$OUT/det-$name-$method-$run" \
-                    --method "$method" --report "$OUT/$name-$method-$run.json" "$@" >/dev/null
+                    --method "$method" --report "$OUT/$name-$method-$run.json" \
+                    --match-better-elsewhere off "$@" >/dev/null
             }
             stereo circles --no-refine
             stereo whole-patch --refine-fruit-chroma off --refine-min-ncc 0.5

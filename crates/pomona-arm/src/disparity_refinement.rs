@@ -167,6 +167,7 @@ impl RefinementOutcome {
 pub const MIN_CHROMA_SUM: f64 = 30.0;
 
 /// A primary pixel of the patch: its unit ray and colour.
+#[derive(Clone, Copy)]
 struct PatchPixel {
     ray: Unit<Vector3<f64>>,
     rgb: [f64; 3],
@@ -277,23 +278,8 @@ impl DisparityRefinement {
         radius_px: f64,
         stereo_center_px: &Point2<f64>,
     ) -> Result<RefinementOutcome, ArmError> {
-        if !(radius_px.is_finite() && radius_px > 0.0) {
-            return Err(ArmError::InvalidParameter {
-                name: "radius_px",
-                value: radius_px,
-                reason: "must be finite and positive",
-            });
-        }
+        check_radius_and_sizes(rig, (primary, stereo), radius_px)?;
         let camera = &rig.camera;
-        for (view, image) in [("primary", primary), ("stereo", stereo)] {
-            if (image.width(), image.height()) != (camera.width, camera.height) {
-                return Err(ArmError::ImageSize {
-                    view,
-                    found: [image.width(), image.height()],
-                    expected: [camera.width, camera.height],
-                });
-            }
-        }
         let fallback = |reason, ncc| Ok(RefinementOutcome::Fallback { reason, ncc });
         let Ok(start) = rig.triangulate(primary_center_px, stereo_center_px) else {
             return fallback(FallbackReason::NoStartingPoint, None);
@@ -377,6 +363,113 @@ impl DisparityRefinement {
             shift_px: k * self.step_px,
             ncc: best_ncc,
         })
+    }
+
+    /// The best appearance match of the primary circle's patch anywhere along its ray, for
+    /// sphere distances `distance_range_m` = (nearest, farthest) from the primary lens: the
+    /// sweep of [`DisparityRefinement::refine`] (same patch, warp and score, `step_px` apart in
+    /// the stereo view) run over the whole range instead of `±search_px` around a candidate.
+    /// Returns the best NCC and the stereo-view centre where it was found; `None` when the patch
+    /// is flat, the range projects into neither view, or no hypothesis stays inside the stereo
+    /// image.
+    ///
+    /// # Errors
+    /// [`ArmError::InvalidParameter`] for parameters out of range, a non-positive radius or a
+    /// range that is not `0 < nearest < farthest`; [`ArmError::ImageSize`] when an image's size
+    /// is not the rig camera's.
+    pub fn best_along_ray(
+        &self,
+        rig: &RotatedStereo,
+        (primary, stereo): (&ColorImage, &ColorImage),
+        primary_center_px: &Point2<f64>,
+        radius_px: f64,
+        distance_range_m: (f64, f64),
+    ) -> Result<Option<(f64, Point2<f64>)>, ArmError> {
+        self.validate()?;
+        let (near, far) = distance_range_m;
+        if !(near.is_finite() && far.is_finite() && 0.0 < near && near < far) {
+            return Err(ArmError::InvalidParameter {
+                name: "distance_range_m",
+                value: near,
+                reason: "needs finite 0 < nearest < farthest",
+            });
+        }
+        check_radius_and_sizes(rig, (primary, stereo), radius_px)?;
+        let camera = &rig.camera;
+        let n = camera.normalised(primary_center_px);
+        let axis = Unit::new_normalize(Vector3::new(n.x, n.y, 1.0));
+        let sin_alpha = (radius_px / camera.mean_focal_px()).atan().sin();
+        let patch = self.patch(rig, primary, primary_center_px, radius_px);
+        if patch.len() < 9 || patch_std(&patch) < self.min_patch_std {
+            return Ok(None);
+        }
+        let stereo_from_camera = rig.stereo_from_camera();
+        let centre_px =
+            |w: f64| camera.project(&(stereo_from_camera * Point3::from(axis.into_inner() / w)));
+        // The stereo-view centre moves nearly linearly in inverse distance w: step w so that it
+        // moves `step_px` at the fastest end of the range.
+        let (w_lo, w_hi) = (1.0 / far, 1.0 / near);
+        let px_per_w = [w_lo, w_hi]
+            .iter()
+            .filter_map(|&w| {
+                let dw = 1e-3 * w;
+                Some((centre_px(w + dw)? - centre_px(w)?).norm() / dw)
+            })
+            .fold(0.0, f64::max);
+        if !(px_per_w.is_finite() && px_per_w > 0.0) {
+            return Ok(None);
+        }
+        let template: Vec<[f64; 3]> = patch.iter().map(|p| p.rgb).collect();
+        let template_chroma = mean_chroma(&template);
+        // The coarse pass scores every BEST_ALONG_RAY_COARSE_SUBSAMPLE-th pixel of the patch.
+        let sparse: Vec<PatchPixel> = patch
+            .iter()
+            .step_by(BEST_ALONG_RAY_COARSE_SUBSAMPLE)
+            .cloned()
+            .collect();
+        let sparse_template: Vec<[f64; 3]> = sparse.iter().map(|p| p.rgb).collect();
+        let score_with = |pixels: &[PatchPixel], colours: &[[f64; 3]], w: f64| {
+            let centre = Point3::from(axis.into_inner() / w);
+            self.score(
+                rig,
+                stereo,
+                (pixels, colours, template_chroma),
+                &axis,
+                &centre,
+                sin_alpha / w,
+            )
+        };
+        let score_at = |w: f64| score_with(&patch, &template, w);
+        // Coarse to fine: a fruit's NCC peak is about a radius wide, so steps of
+        // BEST_ALONG_RAY_COARSE_PX on a subsampled patch find it; then `step_px` steps on the
+        // whole patch around the coarse best.
+        let coarse_px = BEST_ALONG_RAY_COARSE_PX.max(self.step_px);
+        let steps = ((w_hi - w_lo) * px_per_w / coarse_px).ceil().max(1.0) as usize;
+        let dw = (w_hi - w_lo) / steps as f64;
+        let Some(w_best) = (0..=steps)
+            .map(|k| w_lo + dw * k as f64)
+            .filter_map(|w| Some((w, score_with(&sparse, &sparse_template, w)?)))
+            .max_by(|a, b| a.1.total_cmp(&b.1))
+            .map(|(w, _)| w)
+        else {
+            return Ok(None);
+        };
+        let (mut best, mut w_fine) = (f64::NEG_INFINITY, w_best);
+        let fine = (coarse_px / self.step_px).ceil() as i64;
+        for k in -fine..=fine {
+            let w = w_best + dw * k as f64 / fine as f64;
+            if w > 0.0 {
+                if let Some(score) = score_at(w) {
+                    if score > best {
+                        (best, w_fine) = (score, w);
+                    }
+                }
+            }
+        }
+        if best == f64::NEG_INFINITY {
+            return Ok(None);
+        }
+        Ok(centre_px(w_fine).map(|px| (best, px)))
     }
 
     /// The primary pixels within `patch_scale · radius_px` of the circle centre (of the fruit's
@@ -486,6 +579,38 @@ impl DisparityRefinement {
         }
         ncc(template, &sampled)
     }
+}
+
+/// Spacing of the first, coarse pass of [`DisparityRefinement::best_along_ray`], stereo pixels.
+const BEST_ALONG_RAY_COARSE_PX: f64 = 2.0;
+/// The coarse pass of [`DisparityRefinement::best_along_ray`] scores every this-many-th pixel of
+/// the patch.
+const BEST_ALONG_RAY_COARSE_SUBSAMPLE: usize = 4;
+
+/// A positive finite radius and two images of the rig camera's size.
+fn check_radius_and_sizes(
+    rig: &RotatedStereo,
+    (primary, stereo): (&ColorImage, &ColorImage),
+    radius_px: f64,
+) -> Result<(), ArmError> {
+    if !(radius_px.is_finite() && radius_px > 0.0) {
+        return Err(ArmError::InvalidParameter {
+            name: "radius_px",
+            value: radius_px,
+            reason: "must be finite and positive",
+        });
+    }
+    let camera = &rig.camera;
+    for (view, image) in [("primary", primary), ("stereo", stereo)] {
+        if (image.width(), image.height()) != (camera.width, camera.height) {
+            return Err(ArmError::ImageSize {
+                view,
+                found: [image.width(), image.height()],
+                expected: [camera.width, camera.height],
+            });
+        }
+    }
+    Ok(())
 }
 
 /// Chromaticity `(r, g) / (r + g + b)` of the mean colour; `None` when it is too dark to tell.
@@ -657,6 +782,43 @@ mod tests {
                     "{centre} shift {shift}: {after} m vs {before} m"
                 );
             }
+        }
+    }
+
+    #[test]
+    fn the_whole_ray_finds_the_fruit_far_from_any_circle() {
+        for centre in [Point3::new(0.06, -0.02, 0.9), Point3::new(-0.1, 0.03, 1.4)] {
+            let (rig, primary, stereo) = views(&centre, true);
+            let (p, s) = rig.project_pair(&centre).unwrap();
+            let r = radius_px(&rig, &centre);
+            for refinement in [WHOLE_PATCH, DisparityRefinement::default()] {
+                let (ncc, found) = refinement
+                    .best_along_ray(&rig, (&primary, &stereo), &p, r, (0.3, 2.5))
+                    .unwrap()
+                    .unwrap();
+                assert!(ncc > 0.9, "{centre}: {ncc}");
+                assert!((found - s).norm() < 0.5, "{centre}: {found} vs {s}");
+            }
+        }
+        // A patch flatter than `min_patch_std` has nothing to match; a bad range or radius is
+        // an error.
+        let centre = Point3::new(0.06, -0.02, 0.9);
+        let (rig, primary, stereo) = views(&centre, false);
+        let (p, _) = rig.project_pair(&centre).unwrap();
+        let images = (&primary, &stereo);
+        let flat = DisparityRefinement {
+            min_patch_std: 200.0,
+            ..WHOLE_PATCH
+        };
+        assert_eq!(
+            flat.best_along_ray(&rig, images, &p, 20.0, (0.3, 2.5))
+                .unwrap(),
+            None
+        );
+        for (radius, range) in [(20.0, (1.0, 0.5)), (20.0, (0.0, 1.0)), (0.0, (0.3, 2.5))] {
+            assert!(WHOLE_PATCH
+                .best_along_ray(&rig, images, &p, radius, range)
+                .is_err());
         }
     }
 

@@ -77,7 +77,7 @@ pub use matching_windows::{MatchingWindows, WORKING_VOLUME_GRID_PX};
 pub use motion_model::MotionModel;
 pub use network_training::{train_joint_network, NetworkTraining, TrainingReport};
 pub use nominal_mapping::NominalMapping;
-pub use pair_evidence::{EvidenceOutcome, PairEvidence, PairScore};
+pub use pair_evidence::{BetterElsewhere, EvidenceOutcome, PairEvidence, PairScore};
 pub use plan_problem::{Arm, PickPlan, PlanFile, PlanProblem, Target, TargetList};
 pub use random_targets::random_targets;
 pub use rotated_stereo::RotatedStereo;

@@ -17,10 +17,18 @@
 //!   anywhere in the image (`ΔY_M`, about 13 px at the corners for β = 4° before its margin);
 //!   the residual of the right partner's exact circles is zero wherever they are, so a
 //!   neighbour above or below fails a much tighter gate.
+//! * **Appearance elsewhere**: when the primary fruit's own circle is missing in the stereo
+//!   view, the relaxation pairs it with a neighbour's circle that nobody else claims (the
+//!   commonest wrong pair), and no cost can refuse an uncontested candidate. But the fruit is
+//!   usually still visible there: swept over the whole working range along the primary ray
+//!   ([`DisparityRefinement::best_along_ray`]), the patch matches the undetected fruit better
+//!   than the neighbour.
 //!
 //! How they enter the matching ([`PairEvidence::apply`] on the [`DisparityMatrix`]):
 //! * a **row gate**: candidates whose row residual exceeds `max_row_residual_px` are removed;
 //! * a **floor**: candidates whose NCC is below `min_ncc` are removed before the relaxation;
+//! * a **better match elsewhere** ([`BetterElsewhere`]): candidates whose NCC falls more than a
+//!   margin below the best one of their primary circle's whole ray are removed;
 //! * a **cost** added to σ = (ΔX − ΔX̄)² (pixels²): `ncc_weight_px2 · (1 − NCC)` and
 //!   `radius_weight_px2 · ln(r_stereo / r_expected)²`.
 //!
@@ -35,6 +43,7 @@
 //! that does not triangulate has no size cost. With everything off ([`PairEvidence::is_off`],
 //! the default) nothing is computed and the relaxation is the seed's, bit for bit.
 
+use nalgebra::Point2;
 use pomona_core::{ColorImage, ImageCircle};
 
 use crate::{ArmError, DisparityMatrix, DisparityRefinement, RotatedStereo};
@@ -48,6 +57,9 @@ pub struct PairEvidence {
     /// Candidates whose NCC is below this floor are removed before the relaxation; `None`: no
     /// floor. In `[-1, 1]`.
     pub min_ncc: Option<f64>,
+    /// Candidates whose primary patch matches better by more than a margin elsewhere along its
+    /// ray are removed before the relaxation; `None`: no such check.
+    pub better_elsewhere: Option<BetterElsewhere>,
     /// Weight of the appearance cost `1 − NCC` (in `[0, 2]`), pixels². Non-negative; 0 = off.
     pub ncc_weight_px2: f64,
     /// Weight of the size cost `ln(r_stereo / r_expected)²`, pixels². Non-negative; 0 = off.
@@ -64,6 +76,7 @@ impl Default for PairEvidence {
     fn default() -> Self {
         Self {
             max_row_residual_px: None,
+            better_elsewhere: None,
             min_ncc: None,
             ncc_weight_px2: 0.0,
             radius_weight_px2: 0.0,
@@ -76,6 +89,25 @@ impl Default for PairEvidence {
     }
 }
 
+/// The check that removes a candidate when its primary circle's patch matches the stereo image
+/// clearly better somewhere else along the primary ray.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BetterElsewhere {
+    /// A candidate is removed when the best NCC along the ray exceeds its own by more than this.
+    /// In `[0, 2]`.
+    pub margin: f64,
+    /// ... and the best match lies further than this many stereo-circle radii from the
+    /// candidate's stereo circle centre (a right pair whose circles are a few pixels off in
+    /// disparity finds its own fruit just outside the candidate's sweep). Non-negative.
+    pub min_distance_radii: f64,
+    /// Sphere distances from the primary lens swept along the ray, metres (the working range):
+    /// `0 < nearest < farthest`.
+    pub distance_range_m: (f64, f64),
+}
+
+/// [`DisparityRefinement::best_along_ray`]'s answer: best NCC and where it puts the stereo centre.
+type BestAlongRay = Option<(f64, Point2<f64>)>;
+
 /// What the evidence found for one candidate pair.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PairScore {
@@ -86,6 +118,12 @@ pub struct PairScore {
     /// [`RotatedStereo::row_residual_px`]; `None` when the columns locate no point in front of
     /// both views.
     pub row_residual_px: Option<f64>,
+    /// With [`PairEvidence::better_elsewhere`]: the best NCC of the primary patch anywhere along
+    /// its ray (`None` when it could not be computed, or without the check).
+    pub best_along_ray_ncc: Option<f64>,
+    /// Where that best match puts the fruit's centre in the stereo view, in radii of the
+    /// candidate's stereo circle from its centre.
+    pub best_along_ray_distance_radii: Option<f64>,
 }
 
 /// What [`PairEvidence::apply`] did.
@@ -99,6 +137,8 @@ pub struct EvidenceOutcome {
     pub removed: usize,
     /// Candidates removed by the row gate.
     pub removed_by_rows: usize,
+    /// Candidates removed because their patch matches better elsewhere along the ray.
+    pub removed_elsewhere: usize,
     /// Every candidate's score: `(row, column, score)`, removed ones included.
     pub scores: Vec<(usize, usize, PairScore)>,
 }
@@ -117,6 +157,7 @@ impl PairEvidence {
     /// Whether no evidence is used (then [`PairEvidence::apply`] leaves the matrix alone).
     pub fn is_off(&self) -> bool {
         self.max_row_residual_px.is_none()
+            && self.better_elsewhere.is_none()
             && self.min_ncc.is_none()
             && self.ncc_weight_px2 == 0.0
             && self.radius_weight_px2 == 0.0
@@ -128,6 +169,16 @@ impl PairEvidence {
             .is_some_and(|gate| score.row_residual_px.is_some_and(|r| r.abs() > gate))
     }
 
+    /// Whether a candidate of `score` is beaten by more than the margin elsewhere along its ray
+    /// (both scores known).
+    fn fails_elsewhere(&self, score: &PairScore) -> bool {
+        self.better_elsewhere.is_some_and(|check| {
+            matches!((score.ncc, score.best_along_ray_ncc, score.best_along_ray_distance_radii),
+                (Some(own), Some(best), Some(away))
+                    if best > own + check.margin && away > check.min_distance_radii)
+        })
+    }
+
     /// Whether the floor removes a candidate of `score`: its NCC is known and below `min_ncc`.
     fn fails_floor(&self, score: &PairScore) -> bool {
         self.min_ncc
@@ -135,7 +186,7 @@ impl PairEvidence {
     }
 
     fn needs_ncc(&self) -> bool {
-        self.min_ncc.is_some() || self.ncc_weight_px2 > 0.0
+        self.min_ncc.is_some() || self.ncc_weight_px2 > 0.0 || self.better_elsewhere.is_some()
     }
 
     /// Checks the parameters' ranges.
@@ -149,6 +200,30 @@ impl PairEvidence {
                     name: "max_row_residual_px",
                     value: gate,
                     reason: "must be finite and non-negative",
+                });
+            }
+        }
+        if let Some(check) = self.better_elsewhere {
+            let (near, far) = check.distance_range_m;
+            if !(check.min_distance_radii.is_finite() && check.min_distance_radii >= 0.0) {
+                return Err(ArmError::InvalidParameter {
+                    name: "better_elsewhere.min_distance_radii",
+                    value: check.min_distance_radii,
+                    reason: "must be finite and non-negative",
+                });
+            }
+            if !(0.0..=2.0).contains(&check.margin) {
+                return Err(ArmError::InvalidParameter {
+                    name: "better_elsewhere.margin",
+                    value: check.margin,
+                    reason: "must be in [0, 2]",
+                });
+            }
+            if !(near.is_finite() && far.is_finite() && 0.0 < near && near < far) {
+                return Err(ArmError::InvalidParameter {
+                    name: "better_elsewhere.distance_range_m",
+                    value: near,
+                    reason: "needs finite 0 < nearest < farthest",
                 });
             }
         }
@@ -207,6 +282,8 @@ impl PairEvidence {
             row_residual_px: rig
                 .row_residual_px(&primary.center_px, &stereo.center_px)
                 .ok(),
+            best_along_ray_ncc: None,
+            best_along_ray_distance_radii: None,
         })
     }
 
@@ -237,9 +314,30 @@ impl PairEvidence {
             });
         }
         let candidates: Vec<(usize, usize)> = matrix.candidates().map(|(l, r, _)| (l, r)).collect();
+        // The best match along each primary circle's ray, swept once per circle.
+        let mut along_ray: Vec<Option<BestAlongRay>> = vec![None; primary.len()];
         for (l, r) in candidates {
             outcome.candidates += 1;
-            let score = self.score(rig, images, &primary[l], &stereo[r])?;
+            let mut score = self.score(rig, images, &primary[l], &stereo[r])?;
+            if let Some(check) = self.better_elsewhere {
+                let best = match along_ray[l] {
+                    Some(best) => best,
+                    None => {
+                        let best = self.appearance.best_along_ray(
+                            rig,
+                            images,
+                            &primary[l].center_px,
+                            primary[l].radius_px,
+                            check.distance_range_m,
+                        )?;
+                        along_ray[l] = Some(best);
+                        best
+                    }
+                };
+                score.best_along_ray_ncc = best.map(|b| b.0);
+                score.best_along_ray_distance_radii =
+                    best.map(|b| (b.1 - stereo[r].center_px).norm() / stereo[r].radius_px);
+            }
             outcome.scores.push((l, r, score));
             if self.needs_ncc() && score.ncc.is_none() {
                 outcome.unscored += 1;
@@ -247,6 +345,11 @@ impl PairEvidence {
             if self.fails_rows(&score) {
                 matrix.remove(l, r);
                 outcome.removed_by_rows += 1;
+                continue;
+            }
+            if self.fails_elsewhere(&score) {
+                matrix.remove(l, r);
+                outcome.removed_elsewhere += 1;
                 continue;
             }
             if self.fails_floor(&score) {
@@ -494,6 +597,80 @@ mod tests {
             ..PairEvidence::default()
         };
         assert_eq!(pairs(&run(&s, &weak).0), pairs(&paper));
+    }
+
+    #[test]
+    fn a_fruit_seen_elsewhere_on_its_ray_refuses_a_neighbours_circle() {
+        let s = scene();
+        let check = PairEvidence {
+            better_elsewhere: Some(BetterElsewhere {
+                margin: 0.3,
+                min_distance_radii: 1.0,
+                distance_range_m: (0.3, 2.5),
+            }),
+            ..PairEvidence::default()
+        };
+        let (matched, counts) = run(&s, &check);
+        // A's patch matches best where A is, 30 px from B's circle: A's candidate with B's
+        // circle goes, and B pairs with its own.
+        assert_eq!(pairs(&matched), [(1, 0), (2, 1)], "{matched:?}");
+        assert_eq!((counts.removed_elsewhere, counts.removed), (1, 0));
+        let wrong = counts.score(0, 0).unwrap();
+        let (own, best) = (wrong.ncc.unwrap(), wrong.best_along_ray_ncc.unwrap());
+        assert!(best > 0.9 && best > own + 0.3, "{own} vs {best}");
+        let away = wrong.best_along_ray_distance_radii.unwrap();
+        let b_radius = s.stereo[0].radius_px;
+        assert!(
+            (away * b_radius - 30.0).abs() < 2.0,
+            "{away} radii of {b_radius} px"
+        );
+        // B's own candidate: the best along its ray is its own circle.
+        let right = counts.score(1, 0).unwrap();
+        assert!(
+            right.best_along_ray_distance_radii.unwrap() < 0.2,
+            "{right:?}"
+        );
+        // Beaten by less than a huge margin: kept, and the seed's wrong pair comes back.
+        let lenient = PairEvidence {
+            better_elsewhere: check
+                .better_elsewhere
+                .map(|c| BetterElsewhere { margin: 1.9, ..c }),
+            ..check
+        };
+        assert_eq!(pairs(&run(&s, &lenient).0), [(0, 0), (2, 1)]);
+        // Nor when the better match must lie further away than it does.
+        let near_only = PairEvidence {
+            better_elsewhere: check.better_elsewhere.map(|c| BetterElsewhere {
+                min_distance_radii: away + 0.5,
+                ..c
+            }),
+            ..check
+        };
+        assert_eq!(pairs(&run(&s, &near_only).0), [(0, 0), (2, 1)]);
+        for bad in [
+            BetterElsewhere {
+                margin: -0.1,
+                ..check.better_elsewhere.unwrap()
+            },
+            BetterElsewhere {
+                min_distance_radii: f64::NAN,
+                ..check.better_elsewhere.unwrap()
+            },
+            BetterElsewhere {
+                distance_range_m: (1.0, 0.5),
+                ..check.better_elsewhere.unwrap()
+            },
+            BetterElsewhere {
+                distance_range_m: (0.0, 0.5),
+                ..check.better_elsewhere.unwrap()
+            },
+        ] {
+            let e = PairEvidence {
+                better_elsewhere: Some(bad),
+                ..check
+            };
+            assert!(e.validate().is_err(), "{bad:?}");
+        }
     }
 
     #[test]

@@ -156,9 +156,10 @@ fn stereo_locates_every_fruit_from_the_two_colour_shots() {
 }
 
 /// The row gate keeps every pair of discs drawn where the rig puts them (their rows agree to a
-/// fraction of a pixel) and refuses a negative gate by name.
+/// fraction of a pixel), so does the seed's relaxation alone, and out-of-range matching
+/// parameters are refused by name.
 #[test]
-fn the_row_gate_keeps_consistent_pairs_and_refuses_a_negative_gate() {
+fn the_row_gate_keeps_consistent_pairs_and_bad_matching_parameters_are_refused() {
     let dir = tempfile::tempdir().unwrap();
     let (ds, det) = (dir.path().join("ds"), dir.path().join("det"));
     stereo_dataset(&ds);
@@ -173,6 +174,30 @@ fn the_row_gate_keeps_consistent_pairs_and_refuses_a_negative_gate() {
         "{}",
         stdout(&gated)
     );
+    // The seed's relaxation alone (no check for a better match elsewhere) pairs them too: the
+    // discs are flat, so the default check has nothing to compare and removes nothing.
+    let seed = stereo(
+        &ds,
+        &det,
+        &["--reach-m", "0.6,2.0", "--match-better-elsewhere", "off"],
+    );
+    assert!(seed.status.success(), "{}", stderr(&seed));
+    assert!(
+        stdout(&seed).contains("5 fruit located"),
+        "{}",
+        stdout(&seed)
+    );
+    for (flag, name) in [
+        ("--match-better-elsewhere=3", "better_elsewhere.margin"),
+        (
+            "--match-elsewhere-radii=-1",
+            "better_elsewhere.min_distance_radii",
+        ),
+    ] {
+        let bad = stereo(&ds, &det, &[flag]);
+        assert!(!bad.status.success(), "{flag}");
+        assert!(stderr(&bad).contains(name), "{flag}: {}", stderr(&bad));
+    }
     let bad = stereo(&ds, &det, &["--match-max-row-px=-1"]);
     assert!(!bad.status.success());
     assert!(

@@ -81,6 +81,10 @@ pub struct EvidenceReport {
     pub unscored: usize,
     /// Pairs removed by the NCC floor.
     pub removed: usize,
+    /// Pairs removed by the row gate.
+    pub removed_by_rows: usize,
+    /// Pairs removed because the primary patch matches better elsewhere along its ray.
+    pub removed_elsewhere: usize,
     /// NCC of candidates whose two circles are the same fruit.
     pub ncc_same_fruit: Spread,
     /// NCC of candidates of two different fruit.
@@ -149,6 +153,9 @@ pub struct WrongPair {
     pub ncc: Option<f64>,
     /// The matching evidence's ln(r_stereo / r_expected), if computed.
     pub radius_log_ratio: Option<f64>,
+    /// With `--match-better-elsewhere`: the best NCC along the primary ray, and how many
+    /// stereo-circle radii from the pair's stereo circle it lies.
+    pub best_along_ray: Option<[f64; 2]>,
 }
 
 /// Matching scores.
@@ -421,6 +428,8 @@ fn evidence_report(
         e.candidates += o.evidence.candidates;
         e.unscored += o.evidence.unscored;
         e.removed += o.evidence.removed;
+        e.removed_by_rows += o.evidence.removed_by_rows;
+        e.removed_elsewhere += o.evidence.removed_elsewhere;
         let load = |d: &Dataset| {
             d.load_truth(&o.stem)
                 .with_context(|| format!("truth of frame {} in {}", o.stem, d.root().display()))
@@ -542,6 +551,9 @@ impl Tally {
                     cause,
                     ncc: pair.evidence.and_then(|e| e.ncc),
                     radius_log_ratio: pair.evidence.and_then(|e| e.radius_log_ratio),
+                    best_along_ray: pair.evidence.and_then(|e| {
+                        Some([e.best_along_ray_ncc?, e.best_along_ray_distance_radii?])
+                    }),
                 });
                 continue;
             }

@@ -163,30 +163,24 @@ fn the_row_gate_keeps_consistent_pairs_and_bad_matching_parameters_are_refused()
     let dir = tempfile::tempdir().unwrap();
     let (ds, det) = (dir.path().join("ds"), dir.path().join("det"));
     stereo_dataset(&ds);
-    let gated = stereo(
-        &ds,
-        &det,
-        &["--reach-m", "0.6,2.0", "--match-max-row-px", "1.5"],
-    );
-    assert!(gated.status.success(), "{}", stderr(&gated));
-    assert!(
-        stdout(&gated).contains("5 fruit located"),
-        "{}",
-        stdout(&gated)
-    );
-    // The seed's relaxation alone (no check for a better match elsewhere) pairs them too: the
-    // discs are flat, so the default check has nothing to compare and removes nothing.
-    let seed = stereo(
-        &ds,
-        &det,
-        &["--reach-m", "0.6,2.0", "--match-better-elsewhere", "off"],
-    );
-    assert!(seed.status.success(), "{}", stderr(&seed));
-    assert!(
-        stdout(&seed).contains("5 fruit located"),
-        "{}",
-        stdout(&seed)
-    );
+    // The row gate; and the seed's relaxation alone (no check for a better match elsewhere):
+    // the discs are flat, so the default check has nothing to compare and removes nothing.
+    for option in [
+        ["--match-max-row-px", "1.5"],
+        ["--match-better-elsewhere", "off"],
+    ] {
+        let out = stereo(
+            &ds,
+            &det,
+            &[&["--reach-m", "0.6,2.0"][..], &option].concat(),
+        );
+        assert!(out.status.success(), "{option:?}: {}", stderr(&out));
+        assert!(
+            stdout(&out).contains("5 fruit located"),
+            "{option:?}: {}",
+            stdout(&out)
+        );
+    }
     for (flag, name) in [
         ("--match-better-elsewhere=3", "better_elsewhere.margin"),
         (

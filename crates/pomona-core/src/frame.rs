@@ -68,24 +68,53 @@ impl RgbdFrame {
     /// Back-projects every pixel to an organised cloud in the camera frame (`NaN` where there is
     /// no depth), coloured when the frame has colour.
     pub fn to_cloud(&self) -> PointCloud {
+        let colors = self.color.as_ref().map(|c| c.pixels().collect());
+        PointCloud::from_checked_parts(self.camera.width, self.camera.height, self.points(), colors)
+    }
+
+    /// [`RgbdFrame::to_cloud`] without the colour: the detectors read colour from the frame, and
+    /// at 1920×1080 the copy is 6 MB of fresh memory per frame.
+    pub fn to_cloud_without_color(&self) -> PointCloud {
+        PointCloud::from_checked_parts(self.camera.width, self.camera.height, self.points(), None)
+    }
+
+    /// The back-projected points in row-major pixel order. Without lens distortion a row at a
+    /// time, with `u − cx` per column computed once: the same arithmetic as
+    /// [`PinholeCamera::back_project`] (so the same bits), without a division by the width per
+    /// pixel.
+    fn points(&self) -> Vec<Point3<f32>> {
         let cam = &self.camera;
         let w = cam.width as usize;
-        let points = self
-            .depth
-            .as_slice()
-            .iter()
-            .enumerate()
-            .map(|(i, &z)| {
+        let depth = self.depth.as_slice();
+        let missing = Point3::new(f32::NAN, f32::NAN, f32::NAN);
+        if w == 0 || cam.distortion.is_some() {
+            return depth
+                .iter()
+                .enumerate()
+                .map(|(i, &z)| {
+                    if z.is_finite() {
+                        let p = cam.back_project((i % w) as f64, (i / w) as f64, z as f64);
+                        Point3::new(p.x as f32, p.y as f32, z)
+                    } else {
+                        missing
+                    }
+                })
+                .collect();
+        }
+        let du: Vec<f64> = (0..w).map(|u| u as f64 - cam.cx).collect();
+        let mut points = Vec::with_capacity(depth.len());
+        for (v, row) in depth.chunks_exact(w).enumerate() {
+            let dv = v as f64 - cam.cy;
+            points.extend(row.iter().zip(&du).map(|(&z, &du)| {
                 if z.is_finite() {
-                    let p = cam.back_project((i % w) as f64, (i / w) as f64, z as f64);
-                    Point3::new(p.x as f32, p.y as f32, z)
+                    let z64 = z as f64;
+                    Point3::new((du * z64 / cam.fx) as f32, (dv * z64 / cam.fy) as f32, z)
                 } else {
-                    Point3::new(f32::NAN, f32::NAN, f32::NAN)
+                    missing
                 }
-            })
-            .collect();
-        let colors = self.color.as_ref().map(|c| c.pixels().collect());
-        PointCloud::from_checked_parts(cam.width, cam.height, points, colors)
+            }));
+        }
+        points
     }
 }
 
@@ -109,6 +138,39 @@ mod tests {
         assert!((cloud.at(2, 0).unwrap().x - 0.02).abs() < 1e-7);
         assert!(!cloud.is_valid(1));
         assert_eq!(cloud.colors().unwrap()[4], [10, 20, 30]);
+    }
+
+    #[test]
+    fn row_wise_points_are_the_back_projection_bit_for_bit() {
+        let cam = PinholeCamera::new(7, 5, 917.123, 916.965, 3.2178, 2.7894).unwrap();
+        let raw: Vec<u16> = (0..35u16)
+            .map(|i| if i % 6 == 0 { 0 } else { 400 + 37 * i })
+            .collect();
+        let depth = DepthImage::from_u16(7, 5, &raw, 0.001).unwrap();
+        let color = ColorImage::filled(7, 5, [1, 2, 3]);
+        let frame = RgbdFrame::new(cam, depth, Some(color)).unwrap();
+        let (coloured, plain) = (frame.to_cloud(), frame.to_cloud_without_color());
+        assert!(plain.colors().is_none() && coloured.colors().is_some());
+        for (i, (&z, (p, q))) in frame
+            .depth()
+            .as_slice()
+            .iter()
+            .zip(coloured.points().iter().zip(plain.points()))
+            .enumerate()
+        {
+            if z.is_finite() {
+                let e = cam.back_project((i % 7) as f64, (i / 7) as f64, z as f64);
+                let expected = [e.x as f32, e.y as f32, z];
+                assert_eq!(
+                    [p.x, p.y, p.z].map(f32::to_bits),
+                    expected.map(f32::to_bits),
+                    "pixel {i}"
+                );
+            } else {
+                assert!(p.iter().all(|c| c.is_nan()), "pixel {i}");
+            }
+            assert_eq!(p.map(f32::to_bits), q.map(f32::to_bits), "pixel {i}");
+        }
     }
 
     #[test]

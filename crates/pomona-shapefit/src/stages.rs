@@ -206,7 +206,7 @@ impl<'a> Stage<&'a RgbdFrame, PointCloud> for BackProjectionStage {
     }
 
     fn run(&self, frame: &'a RgbdFrame) -> Result<PointCloud, PipelineError> {
-        Ok(frame.to_cloud())
+        Ok(frame.to_cloud_without_color())
     }
 }
 

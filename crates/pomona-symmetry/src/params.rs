@@ -116,6 +116,16 @@ pub struct SlidingBoxParams {
     /// per kept point on a Kinect v2), which cuts normal estimation by its square.
     #[serde(default = "one")]
     pub pixel_lattice: usize,
+    /// On cameras of at least this focal length, px, a box's samples start on multiples of its
+    /// thinning step (on the image, not at the box's own corner), so overlapping boxes of the
+    /// same step read the same pixels and share their normals: a quarter of the normals on a
+    /// 1920×1080 Azure Kinect frame (917 px). Each box still reads every step-th pixel of its
+    /// rectangle, from at most one step further on. Cameras below it (730 px by default: twice
+    /// the Kinect v2's 365, so Kinect v2, D435 and SR4000 frames) keep the corner start and
+    /// their detections. `None` (model files written before it) never aligns. See
+    /// docs/results.md, "Symmetry boxes on a shared lattice".
+    #[serde(default)]
+    pub align_samples_min_focal_px: Option<f64>,
 }
 
 fn one() -> usize {
@@ -135,6 +145,7 @@ impl Default for SlidingBoxParams {
             max_normal_coherence: 1.0,
             max_points: 400,
             pixel_lattice: 1,
+            align_samples_min_focal_px: Some(730.0),
         }
     }
 }
@@ -551,6 +562,9 @@ fn validate_boxes(b: &SlidingBoxParams) -> Result<(), SymmetryError> {
     check_positive("boxes.max_normal_coherence", b.max_normal_coherence)?;
     check_at_least("boxes.min_points", b.min_points, 3)?;
     check_at_least("boxes.pixel_lattice", b.pixel_lattice, 1)?;
+    if let Some(focal) = b.align_samples_min_focal_px {
+        check_positive("boxes.align_samples_min_focal_px", focal)?;
+    }
     if !(b.min_behind_m.is_finite() && b.min_behind_m < 0.5 * b.box_size_m) {
         return Err(SymmetryError::InvalidParameter {
             name: "boxes.min_behind_m",

@@ -313,12 +313,21 @@ mod tests {
             noise: NoiseModel::Tof,
             ..SceneSpec::default()
         };
-        for (frame_index, lattice) in [(0, 1), (1, 1), (2, 2)] {
+        // The last two with samples aligned to the boxes' steps (on every focal length).
+        let aligned = Some(1.0);
+        for (frame_index, lattice, align) in [
+            (0, 1, None),
+            (1, 1, None),
+            (2, 2, None),
+            (3, 1, aligned),
+            (4, 2, aligned),
+        ] {
             let scene = spec.sample_frame(7, frame_index).unwrap();
             let frame = render(&scene, &spec.camera).unwrap().frame;
             let stage = NormalStage::new(WindowNormalParams::default(), lattice).unwrap();
             let sb = SlidingBox::new(SlidingBoxParams {
                 pixel_lattice: lattice,
+                align_samples_min_focal_px: align,
                 ..SlidingBoxParams::default()
             });
             let full = stage.cloud(&frame).unwrap();

@@ -164,7 +164,11 @@ impl SlidingBox {
         let g = p.pixel_lattice.max(1);
         let step = ((area / p.max_points as f64).sqrt().ceil() as usize).max(1);
         let step = step.div_ceil(g) * g;
-        let (u0, v0) = (u0.div_ceil(g) * g, v0.div_ceil(g) * g);
+        // Samples on multiples of the step are shared by every box of that step; otherwise on
+        // the normals' lattice from the box's corner (the step is a multiple of the lattice).
+        let align = p.align_samples_min_focal_px.is_some_and(|f| cam.fx >= f);
+        let start = if align { step } else { g };
+        let (u0, v0) = (u0.div_ceil(start) * start, v0.div_ceil(start) * start);
         if u0 > u1 || v0 > v1 {
             return None;
         }
@@ -511,6 +515,40 @@ mod tests {
             ..Default::default()
         });
         assert!(far.centres(&cloud, None).is_empty());
+    }
+
+    #[test]
+    fn aligned_boxes_of_one_step_read_one_lattice() {
+        let cloud = wall(0.8);
+        // The wall's camera has a focal length of 60 px.
+        let boxes = |align_samples_min_focal_px| {
+            let sb = SlidingBox::new(SlidingBoxParams {
+                min_points: 20,
+                max_points: 30,
+                align_samples_min_focal_px,
+                ..Default::default()
+            });
+            sb.candidates(&cloud, None)
+        };
+        let (aligned, corner) = (boxes(Some(60.0)), boxes(None));
+        assert_eq!(boxes(Some(60.1)), corner);
+        assert_eq!(aligned.len(), corner.len());
+        let lattice = |c: &BoxCandidate| {
+            let (u, v) = (c.pixels[0] as usize % 64, c.pixels[0] as usize / 64);
+            (u % c.step, v % c.step)
+        };
+        assert!(aligned.iter().all(|c| c.step > 1 && lattice(c) == (0, 0)));
+        assert!(corner.iter().any(|c| lattice(c) != (0, 0)));
+        for (a, c) in aligned.iter().zip(&corner) {
+            // The same box and step; the same rectangle from a start less than a step further
+            // on, so at most one sample row and column fewer or more.
+            assert_eq!((a.center, a.step), (c.center, c.step));
+            let (na, nc) = (a.pixels.len() as f64, c.pixels.len() as f64);
+            assert!(
+                (na - nc).abs() <= 2.0 * na.max(nc).sqrt() + 1.0,
+                "{na} vs {nc}"
+            );
+        }
     }
 
     #[test]

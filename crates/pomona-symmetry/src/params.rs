@@ -118,8 +118,9 @@ pub struct SlidingBoxParams {
     pub pixel_lattice: usize,
     /// On cameras of at least this focal length, px, a box's samples start on multiples of its
     /// thinning step (on the image, not at the box's own corner), so overlapping boxes of the
-    /// same step read the same pixels and share their normals: a quarter of the normals on a
-    /// 1920×1080 Azure Kinect frame (917 px). Each box still reads every step-th pixel of its
+    /// same step read the same pixels and share their normals (the normal stage of a 1920×1080
+    /// Azure Kinect frame, 917 px, takes a quarter of the time). Each box still reads every
+    /// step-th pixel of its
     /// rectangle, from at most one step further on. Cameras below it (730 px by default: twice
     /// the Kinect v2's 365, so Kinect v2, D435 and SR4000 frames) keep the corner start and
     /// their detections. `None` (model files written before it) never aligns. See

@@ -37,19 +37,60 @@ pub fn pca_normal(neighbours: &[Point3<f64>]) -> Option<Unit<Vector3<f64>>> {
         .iter()
         .fold(Vector3::zeros(), |a, p| a + p.coords)
         / n;
-    // The six distinct sums of the outer products `d dᵀ`: each entry the same products added in
-    // the same order as summing full 3×3 outer products (which are symmetric), at half the work.
-    let [mut xx, mut xy, mut xz, mut yy, mut yz, mut zz] = [0.0f64; 6];
+    let mut sums = OuterSums::default();
     for p in neighbours {
-        let d = p.coords - mean;
-        xx += d.x * d.x;
-        xy += d.x * d.y;
-        xz += d.x * d.z;
-        yy += d.y * d.y;
-        yz += d.y * d.z;
-        zz += d.z * d.z;
+        sums.add(&(p.coords - mean));
     }
-    smallest_eigenvector(&Matrix3::new(xx, xy, xz, xy, yy, yz, xz, yz, zz))
+    smallest_eigenvector(&sums.matrix())
+}
+
+/// The six distinct sums of the outer products `d dᵀ` of a set of vectors: each entry the same
+/// products added in the same order as summing full 3×3 outer products (which are symmetric), at
+/// half the work.
+#[derive(Debug, Clone, Copy, Default)]
+struct OuterSums {
+    xx: f64,
+    xy: f64,
+    xz: f64,
+    yy: f64,
+    yz: f64,
+    zz: f64,
+}
+
+impl OuterSums {
+    fn add(&mut self, d: &Vector3<f64>) {
+        self.xx += d.x * d.x;
+        self.xy += d.x * d.y;
+        self.xz += d.x * d.z;
+        self.yy += d.y * d.y;
+        self.yz += d.y * d.z;
+        self.zz += d.z * d.z;
+    }
+
+    /// The sums less `sum mᵀ`, for vectors adding up to `sum` with mean `m`: the scatter about
+    /// the mean (`Σ d dᵀ − (Σ d)(Σ d)ᵀ / n`), entry by entry.
+    fn less_mean(self, sum: &Vector3<f64>, m: &Vector3<f64>) -> Self {
+        Self {
+            xx: self.xx - sum.x * m.x,
+            xy: self.xy - sum.x * m.y,
+            xz: self.xz - sum.x * m.z,
+            yy: self.yy - sum.y * m.y,
+            yz: self.yz - sum.y * m.z,
+            zz: self.zz - sum.z * m.z,
+        }
+    }
+
+    fn matrix(&self) -> Matrix3<f64> {
+        let Self {
+            xx,
+            xy,
+            xz,
+            yy,
+            yz,
+            zz,
+        } = *self;
+        Matrix3::new(xx, xy, xz, xy, yy, yz, xz, yz, zz)
+    }
 }
 
 /// Unit eigenvector of the smallest eigenvalue of a symmetric positive semi-definite 3×3 matrix,
@@ -412,13 +453,14 @@ impl WindowNormals {
             what: "window normals",
         })?;
         let (w, h) = (w as usize, h as usize);
-        let pts = cloud_points_f64(cloud);
+        // The `f32` points are widened as they are read, as in `estimate_at`.
+        let pts = cloud.points();
         let mut out = vec![None; pts.len()];
         out.par_chunks_mut(w.max(1))
             .enumerate()
             .for_each(|(v, row)| {
                 for (u, slot) in row.iter_mut().enumerate() {
-                    *slot = self.normal_at(&pts, |q| q, w, h, u, v);
+                    *slot = self.normal_at(pts, |q| q.cast::<f64>(), w, h, u, v);
                 }
             });
         Ok(out)
@@ -483,7 +525,7 @@ impl WindowNormals {
         }
         let mut count = 0usize;
         let mut sum = Vector3::zeros();
-        let [mut xx, mut xy, mut xz, mut yy, mut yz, mut zz] = [0.0f64; 6];
+        let mut sums = OuterSums::default();
         for vv in (v0..=v1).step_by(step) {
             for &q in pts[vv * w + u0..=vv * w + u1].iter().step_by(step) {
                 let d = point(q) - centre;
@@ -491,30 +533,14 @@ impl WindowNormals {
                 if d.norm_squared() <= max_d2 {
                     count += 1;
                     sum += d;
-                    xx += d.x * d.x;
-                    xy += d.x * d.y;
-                    xz += d.x * d.z;
-                    yy += d.y * d.y;
-                    yz += d.y * d.z;
-                    zz += d.z * d.z;
+                    sums.add(&d);
                 }
             }
         }
         if count < p.min_neighbors.max(MIN_NEIGHBOURS) {
             return None;
         }
-        let m = sum / count as f64;
-        let scatter = Matrix3::new(
-            xx - sum.x * m.x,
-            xy - sum.x * m.y,
-            xz - sum.x * m.z,
-            xy - sum.x * m.y,
-            yy - sum.y * m.y,
-            yz - sum.y * m.z,
-            xz - sum.x * m.z,
-            yz - sum.y * m.z,
-            zz - sum.z * m.z,
-        );
+        let scatter = sums.less_mean(&sum, &(sum / count as f64)).matrix();
         smallest_eigenvector(&scatter).map(|n| orient_towards(n, &centre, &p.viewpoint))
     }
 }

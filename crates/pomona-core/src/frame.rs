@@ -78,40 +78,31 @@ impl RgbdFrame {
         PointCloud::from_checked_parts(self.camera.width, self.camera.height, self.points(), None)
     }
 
-    /// The back-projected points in row-major pixel order. Without lens distortion a row at a
-    /// time, with `u − cx` per column computed once: the same arithmetic as
+    /// The back-projected points in row-major pixel order, a row at a time. Without lens
+    /// distortion `u − cx` is computed once per column: the same arithmetic as
     /// [`PinholeCamera::back_project`] (so the same bits), without a division by the width per
     /// pixel.
     fn points(&self) -> Vec<Point3<f32>> {
         let cam = &self.camera;
         let w = cam.width as usize;
         let depth = self.depth.as_slice();
-        let missing = Point3::new(f32::NAN, f32::NAN, f32::NAN);
-        if w == 0 || cam.distortion.is_some() {
-            return depth
-                .iter()
-                .enumerate()
-                .map(|(i, &z)| {
-                    if z.is_finite() {
-                        let p = cam.back_project((i % w) as f64, (i / w) as f64, z as f64);
-                        Point3::new(p.x as f32, p.y as f32, z)
-                    } else {
-                        missing
-                    }
-                })
-                .collect();
-        }
         let du: Vec<f64> = (0..w).map(|u| u as f64 - cam.cx).collect();
         let mut points = Vec::with_capacity(depth.len());
-        for (v, row) in depth.chunks_exact(w).enumerate() {
+        for (v, row) in depth.chunks_exact(w.max(1)).enumerate() {
             let dv = v as f64 - cam.cy;
-            points.extend(row.iter().zip(&du).map(|(&z, &du)| {
-                if z.is_finite() {
-                    let z64 = z as f64;
-                    Point3::new((du * z64 / cam.fx) as f32, (dv * z64 / cam.fy) as f32, z)
-                } else {
-                    missing
+            points.extend(row.iter().zip(&du).enumerate().map(|(u, (&z, &du))| {
+                if !z.is_finite() {
+                    return Point3::new(f32::NAN, f32::NAN, f32::NAN);
                 }
+                let z64 = z as f64;
+                let (x, y) = match cam.distortion {
+                    None => (du * z64 / cam.fx, dv * z64 / cam.fy),
+                    Some(_) => {
+                        let p = cam.back_project(u as f64, v as f64, z64);
+                        (p.x, p.y)
+                    }
+                };
+                Point3::new(x as f32, y as f32, z)
             }));
         }
         points

@@ -122,8 +122,8 @@ pub struct SlidingBoxParams {
     /// Azure Kinect frame, 917 px, takes a quarter of the time). Each box still reads every
     /// step-th pixel of its rectangle, from at most one step further on. Cameras below it
     /// (730 px by default: twice the Kinect v2's 365, so Kinect v2, D435 and SR4000 frames) keep
-    /// the corner start and their detections. `None` (model files written before it) never aligns. See
-    /// docs/results.md, "Symmetry boxes on a shared lattice".
+    /// the corner start and their detections. `None` (model files written before it) never
+    /// aligns. See docs/results.md, "Symmetry boxes on a shared lattice".
     #[serde(default)]
     pub align_samples_min_focal_px: Option<f64>,
 }

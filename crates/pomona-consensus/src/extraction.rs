@@ -207,6 +207,21 @@ pub struct ShapeExtractionParams {
 }
 
 impl ShapeExtractionParams {
+    /// Whether extraction reads the points' normals: cylinders do (their minimal sample is two
+    /// oriented points), and spheres only with a normal-angle test. Without it the shapes found
+    /// are the same whether or not normals are given, so a caller may skip estimating them.
+    ///
+    /// ```
+    /// use pomona_consensus::{ShapeChoice, ShapeExtractionParams};
+    /// let spheres = ShapeExtractionParams::default();
+    /// assert!(!spheres.uses_normals());
+    /// let both = ShapeExtractionParams { shapes: ShapeChoice::Both, ..spheres };
+    /// assert!(both.uses_normals());
+    /// ```
+    pub fn uses_normals(&self) -> bool {
+        self.shapes != ShapeChoice::Sphere || self.sphere.max_normal_deviation_rad.is_some()
+    }
+
     /// Validates every part into a [`ShapeExtractor`].
     ///
     /// # Errors

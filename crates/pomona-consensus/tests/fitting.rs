@@ -319,6 +319,23 @@ fn repeated_extraction_finds_two_separated_spheres() {
 
     // Same seed, same shapes; another seed finds them too.
     assert_eq!(params.check().unwrap().extract(&pts).unwrap(), shapes);
+    // Spheres without a normal-angle test do not read normals (`uses_normals`): the same shapes
+    // with every normal removed. With the test, the normals decide.
+    assert!(!params.uses_normals());
+    let bare: Vec<OrientedPoint> = pts
+        .iter()
+        .map(|p| OrientedPoint::without_normal(p.position))
+        .collect();
+    assert_eq!(params.check().unwrap().extract(&bare).unwrap(), shapes);
+    let mut tested = params;
+    tested.sphere.max_normal_deviation_rad = Some(0.3);
+    assert!(tested.uses_normals());
+    let mut flipped = pts.clone();
+    for p in flipped.iter_mut().take(800) {
+        p.normal = p.normal.map(|n| Unit::new_normalize(n.cross(&Vector3::x())));
+    }
+    let found = tested.check().unwrap().extract(&flipped).unwrap();
+    assert!(found.len() < shapes.len(), "{found:?}");
     let other = ShapeExtractionParams { seed: 99, ..params }
         .check()
         .unwrap()

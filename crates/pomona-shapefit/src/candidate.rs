@@ -12,6 +12,8 @@ pub struct Candidate {
     pub pixels: Vec<usize>,
     /// Inlier positions, camera frame.
     pub points: Vec<Point3<f64>>,
-    /// Inlier normals (towards the camera), where defined.
-    pub normals: Vec<Option<Unit<Vector3<f64>>>>,
+    /// Inlier normals (towards the camera), where defined, when the shape stage estimated them
+    /// (its estimators read normals: cylinders, or a sphere normal-angle test); `None`
+    /// otherwise, and the descriptor estimates only the normals it samples.
+    pub normals: Option<Vec<Option<Unit<Vector3<f64>>>>>,
 }

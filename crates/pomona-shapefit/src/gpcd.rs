@@ -63,6 +63,16 @@ impl GpcdParams {
     pub fn stride_for(&self, n: usize) -> usize {
         n.div_ceil(self.max_points.max(2)).max(1)
     }
+
+    /// The subset of `items` the descriptor pairs: every [`GpcdParams::stride_for`]-th from the
+    /// first. [`gpcd`] of the subset (with the whole set's colours) is [`gpcd`] of the whole set.
+    pub fn sample<T: Copy>(&self, items: &[T]) -> Vec<T> {
+        items
+            .iter()
+            .copied()
+            .step_by(self.stride_for(items.len()))
+            .collect()
+    }
 }
 
 impl Default for GpcdParams {
@@ -530,6 +540,19 @@ mod tests {
         let sub = gpcd(&p, &n, &[], &GpcdParams::default());
         let l1: f64 = full.iter().zip(&sub).map(|(a, b)| (a - b).abs()).sum();
         assert!(l1 < 0.1, "L1 distance {l1}");
+    }
+
+    #[test]
+    fn the_sample_alone_gives_the_whole_descriptor() {
+        let colors: Vec<[u8; 3]> = (0..2003).map(|i| [i as u8, 40, (i / 9) as u8]).collect();
+        for n in [2003, 401, 200, 7] {
+            let (p, normals) = sphere_cap(n, 0.04);
+            let params = GpcdParams::default();
+            let whole = gpcd(&p, &normals, &colors[..n], &params);
+            let (ps, ns) = (params.sample(&p), params.sample(&normals));
+            assert!(ps.len() <= params.max_points && ps.len() >= 2);
+            assert_eq!(gpcd(&ps, &ns, &colors[..n], &params), whole, "{n} points");
+        }
     }
 
     #[test]

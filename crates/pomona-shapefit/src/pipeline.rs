@@ -335,6 +335,7 @@ impl ShapeFitPipeline {
             descriptor: DescriptorStage {
                 params: p.gpcd,
                 use_color,
+                normals,
             },
         })
     }
@@ -387,7 +388,11 @@ impl Stages {
             let shapes = run_stage(&self.shapes, (frame, &cloud, clusters.as_slice()), t)?;
             candidates.extend(self.admitted(frame, shapes, t)?);
         }
-        let features = run_stage(&self.descriptor, (frame, candidates.as_slice()), t)?;
+        let features = run_stage(
+            &self.descriptor,
+            (frame, &cloud, candidates.as_slice()),
+            t,
+        )?;
         Ok(CandidateSet {
             candidates,
             features,
@@ -892,7 +897,7 @@ mod tests {
             shape: Shape::Sphere(sphere),
             pixels: vec![],
             points: vec![],
-            normals: vec![],
+            normals: None,
         }
     }
 
@@ -930,7 +935,7 @@ mod tests {
             shape: Shape::Cylinder(cyl),
             pixels: vec![],
             points: vec![],
-            normals: vec![],
+            normals: None,
         }
     }
 

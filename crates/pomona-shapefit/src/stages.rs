@@ -173,15 +173,9 @@ impl<'a> Stage<(&'a RgbdFrame, &'a PointCloud, &'a [Vec<usize>]), Vec<Vec<usize>
         let features: Result<Vec<Vec<f64>>, PipelineError> = clusters
             .par_iter()
             .map(|cluster| {
-                let stride = self.gpcd.stride_for(cluster.len());
-                let pixels: Vec<usize> = cluster.iter().copied().step_by(stride).collect();
-                let normals = normals.estimate_at(cloud, &pixels).map_err(err)?;
-                let points: Vec<Point3<f64>> = pixels
-                    .iter()
-                    .map(|&i| cloud.points()[i].cast::<f64>())
-                    .collect();
+                let pixels = self.gpcd.sample(cluster);
                 let colors = pixel_colors(color, &pixels);
-                Ok(gpcd(&points, &normals, &colors, &self.gpcd).to_vec())
+                sampled_gpcd(cloud, &normals, &pixels, &colors, &self.gpcd)
             })
             .collect();
         let features = features?;
@@ -239,12 +233,19 @@ impl ShapeStage {
         cluster: &[usize],
         step: usize,
     ) -> Result<Vec<Candidate>, PipelineError> {
-        let normals = normals.estimate_at(cloud, cluster).map_err(err)?;
-        let positions: Vec<Point3<f64>> = cluster
-            .iter()
-            .map(|&i| cloud.points()[i].cast::<f64>())
-            .collect();
-        let oriented = OrientedPoint::zip(&positions, &normals);
+        let positions = positions(cloud, cluster);
+        let normals = if self.shapes.uses_normals() {
+            Some(normals.estimate_at(cloud, cluster).map_err(err)?)
+        } else {
+            None
+        };
+        let oriented: Vec<OrientedPoint> = match &normals {
+            Some(normals) => OrientedPoint::zip(&positions, normals),
+            None => positions
+                .iter()
+                .map(|&p| OrientedPoint::without_normal(p))
+                .collect(),
+        };
         // Point counts on a thinned cluster stand for `step²` pixels each.
         let limits = self.shapes.limits;
         let area = step * step;
@@ -268,7 +269,9 @@ impl ShapeStage {
                 shape: e.model,
                 pixels: e.inliers.iter().map(|&i| cluster[i]).collect(),
                 points: e.inliers.iter().map(|&i| positions[i]).collect(),
-                normals: e.inliers.iter().map(|&i| normals[i]).collect(),
+                normals: normals
+                    .as_ref()
+                    .map(|n| e.inliers.iter().map(|&i| n[i]).collect()),
             })
             .collect())
     }
@@ -336,31 +339,65 @@ impl<'a> Stage<(&'a RgbdFrame, Vec<Candidate>), Vec<Candidate>> for FreeSpaceSta
     }
 }
 
-/// The GPCD of every candidate (colour terms zero when `use_color` is off).
+/// The positions of row-major `pixels` of the organised `cloud`, widened to `f64`.
+fn positions(cloud: &PointCloud, pixels: &[usize]) -> Vec<Point3<f64>> {
+    pixels
+        .iter()
+        .map(|&i| cloud.points()[i].cast::<f64>())
+        .collect()
+}
+
+/// The GPCD of the already sampled `pixels` ([`GpcdParams::sample`]) of `cloud`, with window
+/// normals estimated at those pixels only, and the colour moments of `colors`. Equal to
+/// [`gpcd`] of all the pixels with all their normals: the descriptor pairs only the sample.
+fn sampled_gpcd(
+    cloud: &PointCloud,
+    normals: &WindowNormals,
+    pixels: &[usize],
+    colors: &[[u8; 3]],
+    params: &GpcdParams,
+) -> Result<Vec<f64>, PipelineError> {
+    let normals = normals.estimate_at(cloud, pixels).map_err(err)?;
+    Ok(gpcd(&positions(cloud, pixels), &normals, colors, params).to_vec())
+}
+
+/// The GPCD of every candidate (colour terms zero when `use_color` is off). A candidate that
+/// comes without normals gets window normals at the points the descriptor samples.
 pub struct DescriptorStage {
     /// Descriptor parameters.
     pub params: GpcdParams,
     /// Whether the model uses colour.
     pub use_color: bool,
+    /// Normal estimation, as in the shape stage (scaled to each frame's focal length).
+    pub normals: WindowNormals,
 }
 
-impl<'a> Stage<(&'a RgbdFrame, &'a [Candidate]), Vec<Vec<f64>>> for DescriptorStage {
+impl<'a> Stage<(&'a RgbdFrame, &'a PointCloud, &'a [Candidate]), Vec<Vec<f64>>>
+    for DescriptorStage
+{
     fn name(&self) -> &'static str {
         "gpcd"
     }
 
     fn run(
         &self,
-        (frame, candidates): (&'a RgbdFrame, &'a [Candidate]),
+        (frame, cloud, candidates): (&'a RgbdFrame, &'a PointCloud, &'a [Candidate]),
     ) -> Result<Vec<Vec<f64>>, PipelineError> {
         let color = if self.use_color { frame.color() } else { None };
-        Ok(candidates
+        let normals = self.normals.for_focal(frame.camera().fx);
+        candidates
             .par_iter()
             .map(|c| {
                 let colors = pixel_colors(color, &c.pixels);
-                gpcd(&c.points, &c.normals, &colors, &self.params).to_vec()
+                match &c.normals {
+                    Some(n) => Ok(gpcd(&c.points, n, &colors, &self.params).to_vec()),
+                    None => {
+                        let pixels = self.params.sample(&c.pixels);
+                        sampled_gpcd(cloud, &normals, &pixels, &colors, &self.params)
+                    }
+                }
             })
-            .collect())
+            .collect()
     }
 }
 
@@ -401,7 +438,7 @@ mod tests {
             }),
             pixels: Vec::new(),
             points: Vec::new(),
-            normals: Vec::new(),
+            normals: None,
         };
         let stage = |check| FreeSpaceStage { check };
         let kept = stage(FreeSpaceCheck::default())

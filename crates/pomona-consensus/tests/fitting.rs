@@ -332,7 +332,9 @@ fn repeated_extraction_finds_two_separated_spheres() {
     assert!(tested.uses_normals());
     let mut flipped = pts.clone();
     for p in flipped.iter_mut().take(800) {
-        p.normal = p.normal.map(|n| Unit::new_normalize(n.cross(&Vector3::x())));
+        p.normal = p
+            .normal
+            .map(|n| Unit::new_normalize(n.cross(&Vector3::x())));
     }
     let found = tested.check().unwrap().extract(&flipped).unwrap();
     assert!(found.len() < shapes.len(), "{found:?}");

@@ -79,6 +79,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let descriptor = DescriptorStage {
         params: p.gpcd,
         use_color: true,
+        normals,
     };
     let classifier = ClassifierStage {
         svm: BatchedClassifier::new(model.classifier())?,
@@ -125,7 +126,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 proposal_of[i] = k;
             }
         }
-        let features = run_stage(&descriptor, (frame, cands.as_slice()), &mut t)?;
+        let features = run_stage(&descriptor, (frame, &cloud, cands.as_slice()), &mut t)?;
         let mut scores = run_stage(&classifier, features.as_slice(), &mut t)?;
         if let Some(cal) = &p.radius_calibration {
             for c in &mut cands {
@@ -172,7 +173,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 (frame, &cloud, all_depth.as_slice()),
                 &mut t,
             )?);
-            let f = run_stage(&descriptor, (frame, train.as_slice()), &mut t)?;
+            let f = run_stage(&descriptor, (frame, &cloud, train.as_slice()), &mut t)?;
             let s = run_stage(&classifier, f.as_slice(), &mut t)?;
             for (c, score) in train.iter().zip(s) {
                 let centre = c.shape.center();

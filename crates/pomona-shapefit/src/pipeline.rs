@@ -388,11 +388,7 @@ impl Stages {
             let shapes = run_stage(&self.shapes, (frame, &cloud, clusters.as_slice()), t)?;
             candidates.extend(self.admitted(frame, shapes, t)?);
         }
-        let features = run_stage(
-            &self.descriptor,
-            (frame, &cloud, candidates.as_slice()),
-            t,
-        )?;
+        let features = run_stage(&self.descriptor, (frame, &cloud, candidates.as_slice()), t)?;
         Ok(CandidateSet {
             candidates,
             features,

@@ -200,6 +200,13 @@ pub struct ShapeExtractionParams {
     pub cylinder: CylinderEstimatorParams,
     /// Which models to fit.
     pub shapes: ShapeChoice,
+    /// With [`ShapeChoice::Both`], how much a round prefers its sphere: the cylinder is taken
+    /// only when its cost is below `(1 − sphere_preference)` times the sphere's (default 0: the
+    /// lower cost wins; at most 0.99). A cylinder has more freedom than a sphere and fits a round
+    /// fruit with a leaf edge or a stem beside it at a slightly lower cost; a real elongated
+    /// fruit is cheaper by far (not in seed 002, which fits one shape per crop).
+    #[serde(default)]
+    pub sphere_preference: f64,
     /// Repetition limits.
     pub limits: RepeatLimits,
     /// Seed of every random draw (default 0).
@@ -225,8 +232,16 @@ impl ShapeExtractionParams {
     /// Validates every part into a [`ShapeExtractor`].
     ///
     /// # Errors
-    /// [`ConsensusError::InvalidParameter`] from any part, or `max_shapes == 0`.
+    /// [`ConsensusError::InvalidParameter`] from any part, `max_shapes == 0`, or a
+    /// `sphere_preference` outside `[0, 0.99]`.
     pub fn check(self) -> Result<ShapeExtractor, ConsensusError> {
+        if !(0.0..=0.99).contains(&self.sphere_preference) {
+            return Err(ConsensusError::InvalidParameter {
+                name: "sphere_preference",
+                value: self.sphere_preference,
+                reason: "must lie in [0, 0.99]",
+            });
+        }
         if self.limits.max_shapes == 0 {
             return Err(ConsensusError::InvalidParameter {
                 name: "limits.max_shapes",
@@ -321,7 +336,7 @@ impl ShapeExtractor {
         data: &[OrientedPoint],
         sampler: &impl Fn(usize, u64) -> UniformSampler,
     ) -> Result<Vec<Extracted<Shape>>, ConsensusError> {
-        let limits = &self.params.limits;
+        let (p, limits) = (&self.params, &self.params.limits);
         let mut remaining: Vec<usize> = (0..data.len())
             .filter(|&i| data[i].has_finite_position())
             .collect();
@@ -340,7 +355,7 @@ impl ShapeExtractor {
             )?;
             round += 1;
             let chosen = match (sphere, cylinder) {
-                (Some(s), Some(c)) if c.cost < s.cost => {
+                (Some(s), Some(c)) if cylinder_wins(c.cost, s.cost, p.sphere_preference) => {
                     take_shape(c, Shape::Cylinder, &mut remaining)
                 }
                 (Some(s), _) => take_shape(s, Shape::Sphere, &mut remaining),
@@ -354,6 +369,12 @@ impl ShapeExtractor {
 }
 
 /// The fit if it passed acceptance and has enough inliers; "too few points" means no candidate.
+/// Whether a round's accepted cylinder (cost `cylinder_cost`) is taken over its accepted sphere
+/// under [`ShapeExtractionParams::sphere_preference`].
+fn cylinder_wins(cylinder_cost: f64, sphere_cost: f64, sphere_preference: f64) -> bool {
+    cylinder_cost < (1.0 - sphere_preference) * sphere_cost
+}
+
 fn accepted<M>(
     fit: Result<Option<Fit<M>>, ConsensusError>,
     limits: &RepeatLimits,
@@ -375,5 +396,30 @@ fn take_shape<M>(
         model: wrap(e.model),
         inliers: e.inliers,
         cost: e.cost,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_sphere_preference_lets_only_a_much_cheaper_cylinder_win() {
+        // Without preference the lower cost wins, ties go to the sphere.
+        assert!(cylinder_wins(0.9, 1.0, 0.0));
+        assert!(!cylinder_wins(1.0, 1.0, 0.0));
+        // With 0.3 a cylinder must cost less than 70 % of the sphere.
+        assert!(!cylinder_wins(0.8, 1.0, 0.3));
+        assert!(cylinder_wins(0.6, 1.0, 0.3));
+        let out_of_range = ShapeExtractionParams {
+            sphere_preference: 1.0,
+            ..Default::default()
+        };
+        assert!(out_of_range.check().is_err());
+        let negative = ShapeExtractionParams {
+            sphere_preference: -0.1,
+            ..Default::default()
+        };
+        assert!(negative.check().is_err());
     }
 }

@@ -20,6 +20,7 @@
 //! * Each round and shape kind draws from its own ChaCha stream derived from the seed (SplitMix64
 //!   of seed and stream number), so results are reproducible and independent of thread count.
 
+use nalgebra::Point3;
 use serde::{Deserialize, Serialize};
 
 use crate::{
@@ -207,6 +208,13 @@ pub struct ShapeExtractionParams {
     /// fruit is cheaper by far (not in seed 002, which fits one shape per crop).
     #[serde(default)]
     pub sphere_preference: f64,
+    /// With [`ShapeChoice::Both`]: a round's cylinder is tested against two spheres, one fitted to
+    /// each half of its inliers along the axis, and replaced by them when their summed truncated
+    /// cost is below this fraction of the cylinder's — two touching round fruit that one cylinder
+    /// spans (default `None`: off; not in seed 002). A straight elongated fruit is fitted better
+    /// by its cylinder than by two balls. At most 1.
+    #[serde(default)]
+    pub round_pair_cost_ratio: Option<f64>,
     /// Repetition limits.
     pub limits: RepeatLimits,
     /// Seed of every random draw (default 0).
@@ -232,8 +240,8 @@ impl ShapeExtractionParams {
     /// Validates every part into a [`ShapeExtractor`].
     ///
     /// # Errors
-    /// [`ConsensusError::InvalidParameter`] from any part, `max_shapes == 0`, or a
-    /// `sphere_preference` outside `[0, 0.99]`.
+    /// [`ConsensusError::InvalidParameter`] from any part, `max_shapes == 0`, a
+    /// `sphere_preference` outside `[0, 0.99]` or a `round_pair_cost_ratio` outside `(0, 1]`.
     pub fn check(self) -> Result<ShapeExtractor, ConsensusError> {
         if !(0.0..=0.99).contains(&self.sphere_preference) {
             return Err(ConsensusError::InvalidParameter {
@@ -241,6 +249,15 @@ impl ShapeExtractionParams {
                 value: self.sphere_preference,
                 reason: "must lie in [0, 0.99]",
             });
+        }
+        if let Some(ratio) = self.round_pair_cost_ratio {
+            if !(ratio > 0.0 && ratio <= 1.0) {
+                return Err(ConsensusError::InvalidParameter {
+                    name: "round_pair_cost_ratio",
+                    value: ratio,
+                    reason: "must lie in (0, 1]",
+                });
+            }
         }
         if self.limits.max_shapes == 0 {
             return Err(ConsensusError::InvalidParameter {
@@ -354,6 +371,7 @@ impl ShapeExtractor {
                 limits,
             )?;
             round += 1;
+            let cylinder_cost_m = self.cylinder_msac.params().cost_threshold_m;
             let chosen = match (sphere, cylinder) {
                 (Some(s), Some(c)) if cylinder_wins(c.cost, s.cost, p.sphere_preference) => {
                     take_shape(c, Shape::Cylinder, &mut remaining)
@@ -362,6 +380,14 @@ impl ShapeExtractor {
                 (None, Some(c)) => take_shape(c, Shape::Cylinder, &mut remaining),
                 (None, None) => break,
             };
+            if let (Some(ratio), Shape::Cylinder(c)) = (p.round_pair_cost_ratio, &chosen.model) {
+                let range = self.sphere.params().radius_range_m;
+                let pair = round_pair(c, &chosen.inliers, data, range, cylinder_cost_m, ratio);
+                if let Some(pair) = pair {
+                    out.extend(pair);
+                    continue;
+                }
+            }
             out.push(chosen);
         }
         Ok(out)
@@ -369,6 +395,58 @@ impl ShapeExtractor {
 }
 
 /// The fit if it passed acceptance and has enough inliers; "too few points" means no candidate.
+/// Two spheres in place of `cylinder` when they explain its `inliers` (indices into `data`) at a
+/// summed truncated cost (each point's distance from its shape, capped at `cost_m`) below
+/// `max_cost_ratio` times the cylinder's: the inliers split at the middle of the cylinder's
+/// extent along its axis, a least-squares sphere fitted to each half, both radii within
+/// `radius_range_m`. `None` when a half has fewer than four points, a fit fails or the cylinder
+/// is not that much costlier. Each sphere's `cost` is its mean truncated cost on its half.
+fn round_pair(
+    cylinder: &Cylinder,
+    inliers: &[usize],
+    data: &[OrientedPoint],
+    radius_range_m: (f64, f64),
+    cost_m: f64,
+    max_cost_ratio: f64,
+) -> Option<[Extracted<Shape>; 2]> {
+    let along = |p: &Point3<f64>| (p - cylinder.axis_point).dot(&cylinder.axis);
+    let (lo, hi) = cylinder.extent_m?;
+    let middle = 0.5 * (lo + hi);
+    let (first, second): (Vec<usize>, Vec<usize>) = inliers
+        .iter()
+        .partition(|&&i| along(&data[i].position) < middle);
+    let truncated = |d: f64| d.abs().min(cost_m);
+    let mut cost_pair = 0.0;
+    let mut spheres = Vec::with_capacity(2);
+    for half in [first, second] {
+        let points: Vec<Point3<f64>> = half.iter().map(|&i| data[i].position).collect();
+        let sphere = Sphere::fit_least_squares(&points)?;
+        if sphere.radius_m < radius_range_m.0 || sphere.radius_m > radius_range_m.1 {
+            return None;
+        }
+        let cost: f64 = points
+            .iter()
+            .map(|p| truncated(sphere.signed_distance(p)))
+            .sum();
+        cost_pair += cost;
+        spheres.push(Extracted {
+            model: Shape::Sphere(sphere),
+            inliers: half,
+            cost: cost / points.len() as f64,
+        });
+    }
+    let cost_cylinder: f64 = inliers
+        .iter()
+        .map(|&i| truncated(cylinder.signed_distance(&data[i].position)))
+        .sum();
+    if cost_pair >= max_cost_ratio * cost_cylinder {
+        return None;
+    }
+    let second = spheres.pop()?;
+    let first = spheres.pop()?;
+    Some([first, second])
+}
+
 /// Whether a round's accepted cylinder (cost `cylinder_cost`) is taken over its accepted sphere
 /// under [`ShapeExtractionParams::sphere_preference`].
 fn cylinder_wins(cylinder_cost: f64, sphere_cost: f64, sphere_preference: f64) -> bool {

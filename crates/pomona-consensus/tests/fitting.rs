@@ -484,3 +484,61 @@ fn generic_repeated_extraction_with_ransac() {
             .unwrap()
     );
 }
+
+#[test]
+fn a_cylinder_across_two_touching_balls_gives_way_to_them_and_a_real_cylinder_stays() {
+    // The repeated extraction of shape-fit's defaults: truncated cost 25 mm, inliers 12 mm.
+    let msac = MsacParams {
+        inlier_threshold_m: 0.012,
+        acceptance: Acceptance::InlierResidual {
+            max_residual_m: 0.008,
+            min_inlier_fraction: 0.1,
+        },
+        ..Default::default()
+    };
+    let params = |ratio: Option<f64>| ShapeExtractionParams {
+        msac,
+        shapes: ShapeChoice::Both,
+        round_pair_cost_ratio: ratio,
+        limits: RepeatLimits {
+            min_points: 30,
+            min_inliers: 30,
+            max_shapes: 6,
+        },
+        seed: 5,
+        ..Default::default()
+    };
+    let mut r = rng(105);
+    let (a, b) = (Point3::new(-0.034, 0.0, 1.2), Point3::new(0.034, 0.0, 1.2));
+    let mut pair = sphere_cap(a, 0.035, 0.35, 700, 0.002, &mut r);
+    pair.extend(sphere_cap(b, 0.035, 0.35, 700, 0.002, &mut r));
+    let without = params(None).check().unwrap().extract(&pair).unwrap();
+    assert!(
+        matches!(without[0].model, Shape::Cylinder(_)),
+        "{without:?}"
+    );
+    let with = params(Some(0.85)).check().unwrap().extract(&pair).unwrap();
+    let balls: Vec<Point3<f64>> = with
+        .iter()
+        .filter(|e| e.inliers.len() > 500)
+        .map(|e| match e.model {
+            Shape::Sphere(s) => s.center,
+            Shape::Cylinder(_) => panic!("a cylinder is left: {with:?}"),
+        })
+        .collect();
+    assert_eq!(balls.len(), 2, "{with:?}");
+    for truth in [a, b] {
+        assert!(
+            balls.iter().any(|c| (c - truth).norm() < 0.004),
+            "{balls:?}"
+        );
+    }
+
+    let axis = Unit::new_normalize(Vector3::new(1.0, 0.1, 0.2));
+    let c = Point3::new(0.0, 0.0, 0.9);
+    let long = cylinder_half(c, axis, 0.03, 0.2, 1500, 0.001, &mut r);
+    let shapes = params(Some(0.85)).check().unwrap().extract(&long).unwrap();
+    assert!(matches!(shapes[0].model, Shape::Cylinder(_)), "{shapes:?}");
+    assert!(params(Some(1.5)).check().is_err());
+    assert!(params(Some(0.0)).check().is_err());
+}

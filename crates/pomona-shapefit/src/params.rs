@@ -250,10 +250,12 @@ fn default_shapes() -> ShapeExtractionParams {
         },
         cylinder: CylinderEstimatorParams::default(),
         shapes: ShapeChoice::Both,
-        // Training keeps the lower cost: trained with 0.3 one of two 24-frame models lost 0.047
-        // mean AP; the built-in colour model detects with 0.3 (docs/results.md, "Spheres
-        // preferred over marginally cheaper cylinders").
+        // Training keeps the lower cost and no pair test: trained with a sphere preference of
+        // 0.3, one of two 24-frame models lost 0.047 mean AP. The built-in colour model detects
+        // with 0.3 and a pair ratio of 0.85 (docs/results.md, "Spheres preferred over
+        // marginally cheaper cylinders", "Two touching round fruit under one cylinder").
         sphere_preference: 0.0,
+        round_pair_cost_ratio: None,
         limits: RepeatLimits {
             min_points: 30,
             min_inliers: 30,

@@ -10,7 +10,10 @@
 //! The paper names both models but picks one per crop (spheres for peppers and guavas, cylinders
 //! for eggplants) and does not describe a competition between them. [`ShapeChoice`] offers that
 //! per-crop choice, plus [`ShapeChoice::Both`] (our addition): each round fits both and keeps the
-//! accepted model with the lower MSAC cost; ties go to the sphere, the simpler model.
+//! accepted model with the lower MSAC cost; ties go to the sphere, the simpler model. Two knobs
+//! bend that choice: `sphere_preference` keeps the sphere unless the cylinder is cheaper by a
+//! margin, and `round_pair_cost_ratio` replaces a cylinder by two spheres when they explain its
+//! two halves much better (two touching round fruit under one cylinder).
 //!
 //! ## Details the paper leaves open
 //! * Points with non-finite positions are skipped up front (cylinders also skip points without a
@@ -354,6 +357,7 @@ impl ShapeExtractor {
         sampler: &impl Fn(usize, u64) -> UniformSampler,
     ) -> Result<Vec<Extracted<Shape>>, ConsensusError> {
         let (p, limits) = (&self.params, &self.params.limits);
+        let cylinder_cost_m = self.cylinder_msac.params().cost_threshold_m;
         let mut remaining: Vec<usize> = (0..data.len())
             .filter(|&i| data[i].has_finite_position())
             .collect();
@@ -371,7 +375,6 @@ impl ShapeExtractor {
                 limits,
             )?;
             round += 1;
-            let cylinder_cost_m = self.cylinder_msac.params().cost_threshold_m;
             let chosen = match (sphere, cylinder) {
                 (Some(s), Some(c)) if cylinder_wins(c.cost, s.cost, p.sphere_preference) => {
                     take_shape(c, Shape::Cylinder, &mut remaining)
@@ -394,13 +397,13 @@ impl ShapeExtractor {
     }
 }
 
-/// The fit if it passed acceptance and has enough inliers; "too few points" means no candidate.
 /// Two spheres in place of `cylinder` when they explain its `inliers` (indices into `data`) at a
 /// summed truncated cost (each point's distance from its shape, capped at `cost_m`) below
 /// `max_cost_ratio` times the cylinder's: the inliers split at the middle of the cylinder's
 /// extent along its axis, a least-squares sphere fitted to each half, both radii within
 /// `radius_range_m`. `None` when a half has fewer than four points, a fit fails or the cylinder
-/// is not that much costlier. Each sphere's `cost` is its mean truncated cost on its half.
+/// is not that much costlier. Each sphere takes its half of the cylinder's inliers; its `cost` is
+/// its mean truncated cost on them.
 fn round_pair(
     cylinder: &Cylinder,
     inliers: &[usize],
@@ -453,6 +456,7 @@ fn cylinder_wins(cylinder_cost: f64, sphere_cost: f64, sphere_preference: f64) -
     cylinder_cost < (1.0 - sphere_preference) * sphere_cost
 }
 
+/// The fit if it passed acceptance and has enough inliers; "too few points" means no candidate.
 fn accepted<M>(
     fit: Result<Option<Fit<M>>, ConsensusError>,
     limits: &RepeatLimits,

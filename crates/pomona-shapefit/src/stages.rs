@@ -204,7 +204,8 @@ impl<'a> Stage<&'a RgbdFrame, PointCloud> for BackProjectionStage {
     }
 }
 
-/// PCA normals and repeated MSAC per cluster (Algorithm 1). Clusters
+/// PCA normals (only when the estimators read them, [`ShapeExtractionParams::uses_normals`])
+/// and repeated MSAC per cluster (Algorithm 1). Clusters
 /// run in parallel; each uses its own seed derived from the base seed and its index, so the
 /// result does not depend on the number of threads.
 pub struct ShapeStage {

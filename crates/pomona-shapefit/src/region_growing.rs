@@ -162,7 +162,9 @@ fn connected_components(
 ) -> Components {
     const NONE: u32 = u32::MAX;
     let n = width * height;
-    let mut parent = vec![NONE; n];
+    // Filled in raster order (no pass to pre-fill it): every read is of the current pixel or an
+    // earlier one.
+    let mut parent: Vec<u32> = Vec::with_capacity(n);
     let find = |parent: &mut [u32], mut i: u32| {
         while parent[i as usize] != i {
             let grand = parent[parent[i as usize] as usize];
@@ -176,11 +178,12 @@ fn connected_components(
             let i = v * width + u;
             let d = depth_m[i];
             if !keep[i] || !d.is_finite() {
+                parent.push(NONE);
                 continue;
             }
             // `root`: the root of i's component so far (i's parent is kept pointing at it).
             let mut root = i as u32;
-            parent[i] = root;
+            parent.push(root);
             let mut join = |parent: &mut [u32], j: usize| {
                 // An invalid neighbour has no parent (NaN depth would fail the test anyway).
                 if parent[j] == NONE || (depth_m[j] - d).abs() > step {
@@ -213,23 +216,28 @@ fn connected_components(
             parent[i] = root;
         }
     }
-    let mut label = vec![NONE; n];
+    // Labelled in place, in raster order: a root (its own parent) opens the next component; any
+    // other pixel's parent is an earlier pixel of its component (unions and path halving only
+    // ever point to smaller indices), whose entry already holds the component's number.
     let mut sizes = Vec::new();
     for i in 0..n {
-        if parent[i] == NONE {
+        let p = parent[i];
+        if p == NONE {
             continue;
         }
-        let root = find(&mut parent, i as u32) as usize;
-        let c = if root == i {
+        let c = if p as usize == i {
             sizes.push(0);
             (sizes.len() - 1) as u32
         } else {
-            label[root] // the root comes first in raster order, so it is labelled already
+            parent[p as usize]
         };
-        label[i] = c;
+        parent[i] = c;
         sizes[c as usize] += 1;
     }
-    Components { label, sizes }
+    Components {
+        label: parent,
+        sizes,
+    }
 }
 
 /// Median depth of the pixels of `cluster` (all finite); `NaN` for an empty cluster.

@@ -311,6 +311,19 @@ where
     }))
 }
 
+/// `value` must lie in `(0, 1]` (a fraction or ratio that may be whole but not zero).
+pub(crate) fn check_fraction(name: &'static str, value: f64) -> Result<(), ConsensusError> {
+    if value > 0.0 && value <= 1.0 {
+        Ok(())
+    } else {
+        Err(ConsensusError::InvalidParameter {
+            name,
+            value,
+            reason: "must lie in (0, 1]",
+        })
+    }
+}
+
 /// `value` must be finite and strictly positive.
 pub(crate) fn check_positive(name: &'static str, value: f64) -> Result<(), ConsensusError> {
     if value.is_finite() && value > 0.0 {

@@ -254,13 +254,7 @@ impl ShapeExtractionParams {
             });
         }
         if let Some(ratio) = self.round_pair_cost_ratio {
-            if !(ratio > 0.0 && ratio <= 1.0) {
-                return Err(ConsensusError::InvalidParameter {
-                    name: "round_pair_cost_ratio",
-                    value: ratio,
-                    reason: "must lie in (0, 1]",
-                });
-            }
+            crate::consensus::check_fraction("round_pair_cost_ratio", ratio)?;
         }
         if self.limits.max_shapes == 0 {
             return Err(ConsensusError::InvalidParameter {
@@ -419,9 +413,8 @@ fn round_pair(
         .iter()
         .partition(|&&i| along(&data[i].position) < middle);
     let truncated = |d: f64| d.abs().min(cost_m);
-    let mut cost_pair = 0.0;
-    let mut spheres = Vec::with_capacity(2);
-    for half in [first, second] {
+    // A half's sphere, with its summed truncated cost; `None` when it cannot stand for a fruit.
+    let ball = |half: Vec<usize>| -> Option<(Extracted<Shape>, f64)> {
         let points: Vec<Point3<f64>> = half.iter().map(|&i| data[i].position).collect();
         let sphere = Sphere::fit_least_squares(&points)?;
         if sphere.radius_m < radius_range_m.0 || sphere.radius_m > radius_range_m.1 {
@@ -431,23 +424,24 @@ fn round_pair(
             .iter()
             .map(|p| truncated(sphere.signed_distance(p)))
             .sum();
-        cost_pair += cost;
-        spheres.push(Extracted {
-            model: Shape::Sphere(sphere),
-            inliers: half,
-            cost: cost / points.len() as f64,
-        });
-    }
+        let mean_cost = cost / points.len() as f64;
+        let model = Shape::Sphere(sphere);
+        Some((
+            Extracted {
+                model,
+                inliers: half,
+                cost: mean_cost,
+            },
+            cost,
+        ))
+    };
+    let (first, first_cost) = ball(first)?;
+    let (second, second_cost) = ball(second)?;
     let cost_cylinder: f64 = inliers
         .iter()
         .map(|&i| truncated(cylinder.signed_distance(&data[i].position)))
         .sum();
-    if cost_pair >= max_cost_ratio * cost_cylinder {
-        return None;
-    }
-    let second = spheres.pop()?;
-    let first = spheres.pop()?;
-    Some([first, second])
+    (first_cost + second_cost < max_cost_ratio * cost_cylinder).then_some([first, second])
 }
 
 /// Whether a round's accepted cylinder (cost `cylinder_cost`) is taken over its accepted sphere

@@ -37,7 +37,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::consensus::{check_positive, run_loop, LoopSettings};
+use crate::consensus::{check_fraction, check_positive, run_loop, LoopSettings};
 use crate::{Consensus, ConsensusError, Estimator, Fit, Sampler};
 
 /// The per-residual cost ρ of MSAC.
@@ -88,15 +88,7 @@ impl Acceptance {
                 min_inlier_fraction,
             } => {
                 check_positive("acceptance.max_residual_m", max_residual_m)?;
-                if min_inlier_fraction > 0.0 && min_inlier_fraction <= 1.0 {
-                    Ok(())
-                } else {
-                    Err(ConsensusError::InvalidParameter {
-                        name: "acceptance.min_inlier_fraction",
-                        value: min_inlier_fraction,
-                        reason: "must lie in (0, 1]",
-                    })
-                }
+                check_fraction("acceptance.min_inlier_fraction", min_inlier_fraction)
             }
             Acceptance::Always => Ok(()),
         }

@@ -6,7 +6,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::consensus::{check_positive, run_loop, LoopSettings};
+use crate::consensus::{check_fraction, check_positive, run_loop, LoopSettings};
 use crate::{Consensus, ConsensusError, Estimator, Fit, Sampler};
 
 /// RANSAC parameters; validate with [`RansacParams::check`].
@@ -50,13 +50,7 @@ impl RansacParams {
             check_positive("refine_threshold_m", r)?;
         }
         if let Some(f) = self.min_inlier_fraction {
-            if !(f > 0.0 && f <= 1.0) {
-                return Err(ConsensusError::InvalidParameter {
-                    name: "min_inlier_fraction",
-                    value: f,
-                    reason: "must lie in (0, 1]",
-                });
-            }
+            check_fraction("min_inlier_fraction", f)?;
         }
         if let Some(c) = self.early_stop_confidence {
             if !(c > 0.0 && c < 1.0) {

@@ -96,7 +96,8 @@ pub struct ContourCircle {
     pub center_px: Point2<f64>,
     /// Radius, pixels.
     pub radius_px: f64,
-    /// Arc length the group spans divided by the circumference, in (0, 1].
+    /// Arc length the group spans divided by the circumference, in (0, 1] (for ray circles,
+    /// the fraction of rays ending on the circle).
     pub support: f64,
 }
 

@@ -42,6 +42,7 @@ mod circle_merging;
 mod circle_pruning;
 mod contour;
 mod contour_circles;
+mod distance_transform;
 mod edge_scan;
 mod hsigma;
 mod hsigma_lut;
@@ -52,6 +53,7 @@ mod mlp;
 mod params;
 mod pipeline;
 mod pixel_f1;
+mod ray_circles;
 mod spiral_search;
 pub mod stages;
 mod tracking;
@@ -66,6 +68,7 @@ pub use contour::{smooth_mask, trace_contours, Contour};
 pub use contour_circles::{
     contour_arcs, contour_circles, ContourArc, ContourCircle, EdgeFitParams, GroupCircle,
 };
+pub use distance_transform::squared_distance_to_background;
 pub use edge_scan::{
     circle_from_boundaries, scan_four_directions, EdgeScanParams, ScanEnd, SCAN_DIRECTIONS,
 };
@@ -80,6 +83,7 @@ pub use pipeline::{
     ColorContourDetector, ColorContourPipeline, ColorContourStageParams, PIPELINE_NAME,
 };
 pub use pixel_f1::{best_f1_threshold, pixel_counts, value_histograms, PixelCounts};
+pub use ray_circles::{ray_circles, RayCircleParams};
 pub use spiral_search::{spiral_points, SpiralParams};
 pub use tracking::{ApproachTracker, TrackEstimate, TrackParams, TrackStatus};
 pub use training_pixels::{fruit_labels, taught_labels, training_pixels};

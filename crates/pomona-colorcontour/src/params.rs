@@ -4,7 +4,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::{EdgeFitParams, MlpParams, PruneRank};
+use crate::{EdgeFitParams, MlpParams, PruneRank, RayCircleParams};
 
 /// Parameters of every stage.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -54,6 +54,13 @@ pub struct ColorContourParams {
     pub mask_closing_px: usize,
     /// The adaptive edge fitting (Eq. 8).
     pub edge_fit: EdgeFitParams,
+    /// Circles from rays cast out of the mask's inscribed discs, added to the edge fit's (not
+    /// in the paper, see [`crate::ray_circles`]): fruit that touch in a row or overlap, whose
+    /// share of the common outline is too short for the edge fit. On by default (chosen on
+    /// orchard scenes, seed 700, docs/results.md); `None` (what model files without the key
+    /// mean) = off, the paper's circles only.
+    #[serde(default)]
+    pub ray_circles: Option<RayCircleParams>,
     /// Circles need at least this support (arc spanned over circumference) to be reported.
     pub min_support: f64,
     /// Of two circles sharing more than this fraction of the smaller one's area, the weaker is
@@ -130,6 +137,7 @@ impl Default for ColorContourParams {
             min_component_px: 40,
             mask_closing_px: 2,
             edge_fit: EdgeFitParams::default(),
+            ray_circles: Some(RayCircleParams::default()),
             min_support: 0.15,
             max_overlap: 0.4,
             prune_rank: PruneRank::ArcLength,

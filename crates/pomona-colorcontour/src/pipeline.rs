@@ -10,10 +10,12 @@ use pomona_pipeline::{
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use crate::stages::{ColorClassStage, ContourStage, EdgeFitStage, FruitStage};
+use crate::stages::{
+    ColorClassStage, ContourStage, EdgeFitStage, FruitStage, MaskCleaningStage, RayCircleStage,
+};
 use crate::{
     best_f1_threshold, quantise_probability, taught_labels, training_pixels, value_histograms,
-    ColorContourParams, ContourCircle, HSigmaLut, Mlp, SampledRegion,
+    ColorContourParams, ContourCircle, HSigmaLut, Mlp, RayCircleParams, SampledRegion,
 };
 
 /// Name of the pipeline on the command line and in model files.
@@ -248,6 +250,7 @@ pub struct ColorContourDetector {
     min_component_px: usize,
     mask_closing_px: usize,
     edge_fit: EdgeFitStage,
+    ray_circles: Option<RayCircleParams>,
     fruit: FruitStage,
 }
 
@@ -303,6 +306,9 @@ impl ColorContourDetector {
         if p.prior_radius_m.is_nan() || p.prior_radius_m <= 0.0 {
             return Err(invalid("prior_radius_m", "must be positive"));
         }
+        if let Some((name, reason)) = p.ray_circles.as_ref().and_then(|r| r.problem()) {
+            return Err(invalid(name, reason));
+        }
         if !(p.depth_refit_tolerance_m.is_finite() && p.depth_refit_tolerance_m >= 0.0) {
             return Err(invalid(
                 "depth_refit_tolerance_m",
@@ -315,6 +321,7 @@ impl ColorContourDetector {
             min_component_px: p.min_component_px,
             mask_closing_px: p.mask_closing_px,
             edge_fit: EdgeFitStage { params: p.edge_fit },
+            ray_circles: p.ray_circles,
             fruit: FruitStage { params: p.clone() },
         })
     }
@@ -341,7 +348,8 @@ impl ColorContourDetector {
     }
 
     /// The circles fitted on the outlines of a fruit mask (row-major, `width` wide): the
-    /// contour and edge-fit stages, merged circles at most `max_radius_px` in radius.
+    /// mask cleaning, contour and edge-fit stages, merged circles at most `max_radius_px` in
+    /// radius, and the ray circles when the parameters ask for them.
     fn circles_of_mask(
         &self,
         fruit: &[bool],
@@ -349,18 +357,27 @@ impl ColorContourDetector {
         max_radius_px: f64,
         timings: &mut StageTimings,
     ) -> Result<Vec<ContourCircle>, PipelineError> {
-        let contour_stage = ContourStage {
+        let cleaning = MaskCleaningStage {
             closing_px: self.mask_closing_px,
+            width,
+        };
+        let cleaned = run_stage(&cleaning, fruit, timings)?;
+        let contour_stage = ContourStage {
             min_component_px: self.min_component_px,
             smoothing_half_window: self.smoothing_half_window,
             width,
         };
-        let contours = run_stage(&contour_stage, fruit, timings)?;
-        run_stage(
+        let contours = run_stage(&contour_stage, cleaned.as_slice(), timings)?;
+        let mut circles = run_stage(
             &self.edge_fit,
             (contours.as_slice(), max_radius_px),
             timings,
-        )
+        )?;
+        if let Some(params) = self.ray_circles {
+            let rays = RayCircleStage { params, width };
+            circles.extend(run_stage(&rays, cleaned.as_slice(), timings)?);
+        }
+        Ok(circles)
     }
 
     /// The compiled colour table and the table value from which a pixel is fruit.

@@ -1,5 +1,6 @@
-//! The four stages of the detector, each behind [`pomona_pipeline::Stage`] so it can be timed,
-//! benchmarked or replaced alone: colour lookup → contours → edge fitting → circles to fruit.
+//! The stages of the detector, each behind [`pomona_pipeline::Stage`] so it can be timed,
+//! benchmarked or replaced alone: colour lookup → mask cleaning → contours → edge fitting (and,
+//! optionally, ray circles from the cleaned mask) → circles to fruit.
 
 use pomona_core::nalgebra::Point2;
 use pomona_core::{Detection, PixelBox, RgbdFrame};
@@ -7,8 +8,9 @@ use pomona_pipeline::{PipelineError, Stage};
 
 use crate::{
     close_mask, contour_arcs, hysteresis_mask, merge_arcs, prune_overlapping, quantise_probability,
-    smooth_mask, sphere_from_depth, sphere_from_size, trace_contours, ColorContourParams, Contour,
-    ContourArc, ContourCircle, EdgeFitParams, HSigmaLut, PIPELINE_NAME,
+    ray_circles, smooth_mask, sphere_from_depth, sphere_from_size, trace_contours,
+    ColorContourParams, Contour, ContourArc, ContourCircle, EdgeFitParams, HSigmaLut,
+    RayCircleParams, PIPELINE_NAME,
 };
 
 /// Per pixel: the lookup table's value at or above the threshold (§3.1), or, with a lower
@@ -84,12 +86,31 @@ impl ColorClassStage {
     }
 }
 
-/// Optional closing ([`crate::close_mask`]), 5×5 Gaussian, threshold, outer borders of the
-/// components, smoothed (see [`crate::Contour`]).
+/// The mask the outlines are read from: optional closing ([`crate::close_mask`]), then the
+/// 5×5 Gaussian and threshold of §3.2 ([`crate::smooth_mask`]).
 #[derive(Debug, Clone)]
-pub struct ContourStage {
+pub struct MaskCleaningStage {
     /// Half-width of the closing square, pixels (0: no closing).
     pub closing_px: usize,
+    /// Image width, pixels (the mask is row-major).
+    pub width: usize,
+}
+
+impl Stage<&[bool], Vec<bool>> for MaskCleaningStage {
+    fn name(&self) -> &'static str {
+        "mask-cleaning"
+    }
+
+    fn run(&self, mask: &[bool]) -> Result<Vec<bool>, PipelineError> {
+        let w = self.width.max(1);
+        let h = mask.len() / w;
+        Ok(smooth_mask(&close_mask(mask, w, h, self.closing_px), w, h))
+    }
+}
+
+/// Outer borders of the cleaned mask's components, smoothed (see [`crate::Contour`]).
+#[derive(Debug, Clone)]
+pub struct ContourStage {
     /// Smallest component traced, pixels.
     pub min_component_px: usize,
     /// Moving-average half-width applied to each contour.
@@ -106,8 +127,7 @@ impl Stage<&[bool], Vec<Contour>> for ContourStage {
     fn run(&self, mask: &[bool]) -> Result<Vec<Contour>, PipelineError> {
         let w = self.width.max(1);
         let h = mask.len() / w;
-        let smooth = smooth_mask(&close_mask(mask, w, h, self.closing_px), w, h);
-        Ok(trace_contours(&smooth, w, h, self.min_component_px)
+        Ok(trace_contours(mask, w, h, self.min_component_px)
             .iter()
             .map(|c| c.smoothed(self.smoothing_half_window))
             .collect())
@@ -148,6 +168,26 @@ impl Stage<(&[Contour], f64), Vec<ContourCircle>> for EdgeFitStage {
             self.params.merge_max_rms,
             max_radius_px,
         ))
+    }
+}
+
+/// Circles from rays cast out of the cleaned mask's inscribed discs ([`crate::ray_circles`];
+/// not in the paper), added to the edge fit's.
+#[derive(Debug, Clone)]
+pub struct RayCircleStage {
+    /// Ray settings.
+    pub params: RayCircleParams,
+    /// Image width, pixels (the mask is row-major).
+    pub width: usize,
+}
+
+impl Stage<&[bool], Vec<ContourCircle>> for RayCircleStage {
+    fn name(&self) -> &'static str {
+        "ray-circles"
+    }
+
+    fn run(&self, mask: &[bool]) -> Result<Vec<ContourCircle>, PipelineError> {
+        Ok(ray_circles(mask, self.width, &self.params))
     }
 }
 

@@ -19,24 +19,25 @@ pub fn squared_distance_to_background(mask: &[bool], width: usize, height: usize
     if mask.len() != width * height || mask.is_empty() {
         return Vec::new();
     }
-    // Distance to the nearest background pixel of the column: down, then up.
-    let mut d = vec![0f32; mask.len()];
-    for y in 0..height {
-        for x in 0..width {
-            let i = y * width + x;
-            if mask[i] {
-                d[i] = if y == 0 {
-                    f32::INFINITY
-                } else {
-                    d[i - width] + 1.0
-                };
-            }
+    // Distance to the nearest background pixel of the column: down, then up (row by row, so
+    // that each step is one pass over two contiguous rows).
+    let mut d: Vec<f32> = mask[..width]
+        .iter()
+        .map(|&fruit| if fruit { f32::INFINITY } else { 0.0 })
+        .collect();
+    d.resize(mask.len(), 0.0);
+    for y in 1..height {
+        let (above, rest) = d.split_at_mut(y * width);
+        let above = &above[(y - 1) * width..];
+        let fruit = &mask[y * width..(y + 1) * width];
+        for ((v, &up), &f) in rest[..width].iter_mut().zip(above).zip(fruit) {
+            *v = if f { up + 1.0 } else { 0.0 };
         }
     }
     for y in (0..height.saturating_sub(1)).rev() {
-        for x in 0..width {
-            let i = y * width + x;
-            d[i] = d[i].min(d[i + width] + 1.0);
+        let (upper, below) = d.split_at_mut((y + 1) * width);
+        for (v, &down) in upper[y * width..].iter_mut().zip(&below[..width]) {
+            *v = v.min(down + 1.0);
         }
     }
     for v in &mut d {

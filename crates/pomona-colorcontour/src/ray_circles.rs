@@ -194,43 +194,44 @@ fn circle_from_rays(
 ) -> Option<ContourCircle> {
     let ends = ray_ends(mask, width, height, center, inscribed, params);
     let n = ends.len();
+    let edges: Vec<Point2<f64>> = ends.iter().flatten().copied().collect();
+    if edges.len() < params.min_inliers {
+        return None;
+    }
     let tolerance = |r: f64| params.inlier_px.max(params.inlier_fraction * r);
-    let on_circle = |(c, r): (Point2<f64>, f64)| -> Vec<Point2<f64>> {
-        ends.iter()
-            .flatten()
-            .filter(|p| ((*p - c).norm() - r).abs() <= tolerance(r))
-            .copied()
-            .collect()
-    };
+    let is_on =
+        |(c, r): (Point2<f64>, f64), p: &Point2<f64>| ((p - c).norm() - r).abs() <= tolerance(r);
+    let count_on = |circle: (Point2<f64>, f64)| edges.iter().filter(|p| is_on(circle, p)).count();
     let plausible = |(c, r): (Point2<f64>, f64)| {
         r >= inscribed * 0.9 && r <= params.max_radius_ratio * inscribed && (center - c).norm() < r
     };
     let mut best: Option<((Point2<f64>, f64), usize)> = None;
     for span in [8, 6, 4, 3].map(|parts| (n / parts).max(1)) {
         for i in 0..n {
-            let triple = [i, (i + span) % n, (i + 2 * span) % n];
-            let Some(points) = triple
-                .iter()
-                .map(|&k| ends[k])
-                .collect::<Option<Vec<Point2<f64>>>>()
+            let (Some(a), Some(b), Some(c)) =
+                (ends[i], ends[(i + span) % n], ends[(i + 2 * span) % n])
             else {
                 continue;
             };
-            let Some(circle) = fit_circle(&points).filter(|&c| plausible(c)) else {
+            let Some(circle) = fit_circle(&[a, b, c]).filter(|&c| plausible(c)) else {
                 continue;
             };
-            let count = on_circle(circle).len();
+            let count = count_on(circle);
             if best.is_none_or(|(_, b)| count > b) {
                 best = Some((circle, count));
             }
         }
     }
     let (hypothesis, count) = best?;
-    let inliers = on_circle(hypothesis);
+    let inliers: Vec<Point2<f64>> = edges
+        .iter()
+        .filter(|p| is_on(hypothesis, p))
+        .copied()
+        .collect();
     // Refit on the ends the hypothesis explains; keep the refit only if it explains as many.
     let (circle, count) = refine_circle(&inliers, hypothesis, 10)
         .filter(|&c| plausible(c))
-        .map(|c| (c, on_circle(c).len()))
+        .map(|c| (c, count_on(c)))
         .filter(|&(_, k)| k >= count)
         .unwrap_or((hypothesis, count));
     (count >= params.min_inliers).then(|| ContourCircle {

@@ -123,7 +123,8 @@ pub fn settable_keys(params: &Value) -> Vec<String> {
 }
 
 /// Applies `overrides` in order to `params`; `what` names the parameters' owner in messages
-/// ("the model of `shape-fit` (the built-in model)").
+/// ("the model of `shape-fit` (the built-in model)"). A value replaces one parameter; `null`
+/// also switches off an optional group of them (`ray_circles=null`).
 ///
 /// ```
 /// let mut params = serde_json::json!({"msac": {"iterations": 500}});
@@ -152,7 +153,8 @@ pub fn apply_overrides(
                 .and_then(|v| v.as_object_mut())
                 .and_then(|m| m.get_mut(segment));
         }
-        let Some(slot) = slot.filter(|s| !s.is_object()) else {
+        // A group of parameters is not set whole, only switched off (`null`), when optional.
+        let Some(slot) = slot.filter(|s| !s.is_object() || o.value.is_null()) else {
             let known = if keys.is_empty() {
                 "it has no stage parameters".to_owned()
             } else if keys.len() > MAX_LISTED {
@@ -233,5 +235,8 @@ mod tests {
         assert_eq!(p["msac"]["t_m"], Value::Null);
         assert_eq!(settable_keys(&p).len(), 3);
         assert_eq!(overrides_to_json(&[parse("a.b=1")]), json!({"a.b": 1}));
+        // A group is switched off whole (an optional stage), never replaced by a value.
+        apply_overrides(&mut p, &[parse("msac=null")], "m").unwrap();
+        assert_eq!(p["msac"], Value::Null);
     }
 }

@@ -24,8 +24,9 @@
 //! a closing of the mask ([`close_mask`]), least-squares circles of each group's contour points
 //! ([`GroupCircle`], [`refine_circle`]), merging of arcs that lie on one circle
 //! ([`merge_arcs`]), ranking overlapping circles by arc length ([`PruneRank`]) and taking them
-//! for one fruit only when their centres are close ([`clash`]). Not built here: stereo matching
-//! (§4).
+//! for one fruit only when their centres are close ([`clash`]), and circles from rays cast out
+//! of the mask's inscribed discs ([`ray_circles`], [`squared_distance_to_background`]) beside
+//! the edge fit's, for fruit that touch or overlap. Not built here: stereo matching (§4).
 //!
 //! Tracking during the arm's approach (§3.3) is [`ApproachTracker`]: a 5×5 colour check at the
 //! expected position, a four-direction edge scan and circle fit ([`scan_four_directions`],

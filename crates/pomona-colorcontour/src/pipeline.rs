@@ -444,10 +444,16 @@ mod tests {
     fn model_files_without_the_pruning_settings_run_the_previous_behaviour() {
         let mut json = serde_json::to_value(built_in()).unwrap();
         let params = json["params"].as_object_mut().unwrap();
-        for key in ["prune_rank", "prune_center_reach", "radius_tolerance"] {
+        for key in [
+            "prune_rank",
+            "prune_center_reach",
+            "radius_tolerance",
+            "ray_circles",
+        ] {
             assert!(params.remove(key).is_some(), "{key}");
         }
         let old: ColorContourStageParams = serde_json::from_value(json).unwrap();
+        assert_eq!(old.params.ray_circles, None);
         assert_eq!(old.params.prune_rank, crate::PruneRank::Score);
         assert_eq!(old.params.prune_center_reach, 0.0);
         // The paper's size test, exactly its range.
@@ -478,6 +484,8 @@ mod tests {
         assert_eq!(stage.params.prune_rank, defaults.prune_rank);
         assert_eq!(stage.params.prune_center_reach, defaults.prune_center_reach);
         assert_eq!(stage.params.radius_tolerance, defaults.radius_tolerance);
+        assert_eq!(stage.params.ray_circles, defaults.ray_circles);
+        assert!(stage.params.ray_circles.is_some());
         let (lo, hi) = stage.params.accepted_radius_range_m();
         assert!((lo - 0.025 / 1.1).abs() < 1e-12 && (hi - 0.055 * 1.1).abs() < 1e-12);
         // Written before the centre refit existed: runs it with the default tolerance.
@@ -505,6 +513,12 @@ mod tests {
             }),
             ("depth_refit_tolerance_m", |p| {
                 p.depth_refit_tolerance_m = f64::INFINITY
+            }),
+            ("ray_circles.min_inliers", |p| {
+                p.ray_circles = Some(crate::RayCircleParams {
+                    min_inliers: 40,
+                    ..crate::RayCircleParams::default()
+                })
             }),
         ] {
             let mut bad = stage.clone();

@@ -66,6 +66,13 @@ pub struct StereoArgs {
     /// color-contour model file (default: the built-in model).
     #[arg(long, value_name = "M")]
     pub model: Option<PathBuf>,
+    /// Override a stage parameter of the model, KEY=VALUE (dotted keys, JSON values); repeat.
+    /// The ray circles are off here unless set (`--set 'params.ray_circles={}'`): matching
+    /// pairs the circles' image centres, and a ray circle on a piece of fruit is centred on the
+    /// piece, not the fruit, differently in the two views (the RGB-D path refits the centre to
+    /// the depth points instead); docs/results.md, "Ray circles from inscribed discs".
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub set: Vec<pomona::ParamOverride>,
     /// Keep 2D detections whose calibrated confidence is at least C before matching. Default:
     /// the model's operating confidence; models without calibration keep every detection.
     #[arg(long, value_name = "C")]
@@ -401,7 +408,13 @@ pub fn run(args: &StereoArgs) -> Result<()> {
     let rig = read_rig(&args.data, &dataset)?;
     let registry = pomona::pipelines();
     let pipeline = pomona::find_pipeline(&registry, STEREO_PIPELINE)?;
-    let detector = load_detector(pipeline, args.model.as_deref(), &[])?;
+    let overrides: Vec<pomona::ParamOverride> = std::iter::once(pomona::ParamOverride::new(
+        "params.ray_circles",
+        serde_json::Value::Null,
+    ))
+    .chain(args.set.iter().cloned())
+    .collect();
+    let detector = load_detector(pipeline, args.model.as_deref(), &overrides)?;
     let threshold = min_confidence(&detector, args.min_confidence)?;
     let d = rig.pivot_distance_m;
     let (near, far) = args.reach_m.unwrap_or((d + 0.2, d + 2.0));

@@ -56,9 +56,12 @@ pub struct ColorContourParams {
     pub edge_fit: EdgeFitParams,
     /// Circles from rays cast out of the mask's inscribed discs, added to the edge fit's (not
     /// in the paper, see [`crate::ray_circles`]): fruit that touch in a row or overlap, whose
-    /// share of the common outline is too short for the edge fit. On by default (chosen on
-    /// orchard scenes, seed 700, docs/results.md); `None` (what model files without the key
-    /// mean) = off, the paper's circles only.
+    /// share of the common outline is too short for the edge fit. `None` (default, and what
+    /// model files without the key mean) = off, the paper's circles only; `--set
+    /// 'params.ray_circles={}'` turns them on with the defaults of [`RayCircleParams`] (chosen
+    /// on orchard scenes, seed 700). Off by default because they cost stereo accuracy and
+    /// precision on close-up `wide` scenes while they gain on orchard scenes and real apples
+    /// (docs/results.md, "Ray circles from inscribed discs").
     #[serde(default)]
     pub ray_circles: Option<RayCircleParams>,
     /// Circles need at least this support (arc spanned over circumference) to be reported.
@@ -137,7 +140,7 @@ impl Default for ColorContourParams {
             min_component_px: 40,
             mask_closing_px: 2,
             edge_fit: EdgeFitParams::default(),
-            ray_circles: Some(RayCircleParams::default()),
+            ray_circles: None,
             min_support: 0.15,
             max_overlap: 0.4,
             prune_rank: PruneRank::ArcLength,

@@ -448,10 +448,10 @@ mod tests {
             "prune_rank",
             "prune_center_reach",
             "radius_tolerance",
-            "ray_circles",
         ] {
             assert!(params.remove(key).is_some(), "{key}");
         }
+        assert!(params.remove("ray_circles").is_none_or(|v| v.is_null()));
         let old: ColorContourStageParams = serde_json::from_value(json).unwrap();
         assert_eq!(old.params.ray_circles, None);
         assert_eq!(old.params.prune_rank, crate::PruneRank::Score);
@@ -485,7 +485,7 @@ mod tests {
         assert_eq!(stage.params.prune_center_reach, defaults.prune_center_reach);
         assert_eq!(stage.params.radius_tolerance, defaults.radius_tolerance);
         assert_eq!(stage.params.ray_circles, defaults.ray_circles);
-        assert!(stage.params.ray_circles.is_some());
+        assert!(stage.params.ray_circles.is_none());
         let (lo, hi) = stage.params.accepted_radius_range_m();
         assert!((lo - 0.025 / 1.1).abs() < 1e-12 && (hi - 0.055 * 1.1).abs() < 1e-12);
         // Written before the centre refit existed: runs it with the default tolerance.

@@ -13,9 +13,13 @@
 //! ```
 //!
 //! With `--no-orchard` after the folder, the 40 `wide` frames alone (the built-in recipe until 3
-//! December; docs/results.md, "Training on orchard light", explains the change).
+//! December; docs/results.md, "Training on orchard light", explains the change). With
+//! `--ray-circles`, the model runs and is calibrated with the ray circles on (the "after" model of
+//! docs/results.md, "Ray circles from inscribed discs").
 
-use pomona_colorcontour::{pixel_counts, ColorContourPipeline, ColorContourStageParams, HSigmaLut};
+use pomona_colorcontour::{
+    pixel_counts, ColorContourPipeline, ColorContourStageParams, HSigmaLut, RayCircleParams,
+};
 use pomona_pipeline::{
     train_calibrated, CalibrationParams, ChainedFrames, FrameSource, SyntheticFrames, TrainOptions,
 };
@@ -104,17 +108,20 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         args.next()
             .unwrap_or_else(|| "crates/pomona-colorcontour/models".into()),
     );
-    let with_orchard = match args.next().as_deref() {
-        None => true,
-        Some("--no-orchard") => false,
-        Some(other) => {
-            return Err(format!(
-                "unexpected argument `{other}`; usage: train_color_contour_default [DIR] \
-                 [--no-orchard]"
-            )
-            .into())
+    let (mut with_orchard, mut ray_circles) = (true, false);
+    for arg in args {
+        match arg.as_str() {
+            "--no-orchard" => with_orchard = false,
+            "--ray-circles" => ray_circles = true,
+            other => {
+                return Err(format!(
+                    "unexpected argument `{other}`; usage: train_color_contour_default [DIR] \
+                     [--no-orchard] [--ray-circles]"
+                )
+                .into())
+            }
         }
-    };
+    }
     let rendered = ChainedFrames(
         CAMERAS
             .iter()
@@ -130,7 +137,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             .collect(),
     );
     let frames = rendered.load_all()?;
-    let pipeline = ColorContourPipeline::default();
+    let mut pipeline = ColorContourPipeline::default();
+    if ray_circles {
+        pipeline.params.ray_circles = Some(RayCircleParams::default());
+    }
     let options = TrainOptions {
         seed: TRAIN_SEED,
         ..TrainOptions::default()

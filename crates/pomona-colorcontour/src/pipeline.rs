@@ -444,11 +444,7 @@ mod tests {
     fn model_files_without_the_pruning_settings_run_the_previous_behaviour() {
         let mut json = serde_json::to_value(built_in()).unwrap();
         let params = json["params"].as_object_mut().unwrap();
-        for key in [
-            "prune_rank",
-            "prune_center_reach",
-            "radius_tolerance",
-        ] {
+        for key in ["prune_rank", "prune_center_reach", "radius_tolerance"] {
             assert!(params.remove(key).is_some(), "{key}");
         }
         assert!(params.remove("ray_circles").is_none_or(|v| v.is_null()));

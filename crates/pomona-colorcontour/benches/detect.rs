@@ -10,12 +10,17 @@
 //!   (D435i colour, 2D detection); skipped with a message when the data folder is absent (and a
 //!   failure with `POMONA_REQUIRE_DATA=1`).
 //!
+//! * `... ray circles on` / `ray circles alone`: the orchard frames with the opt-in ray circles
+//!   (`params.ray_circles`), end to end and the stage alone on their fruit masks.
+//!
 //! `cargo bench -p pomona-colorcontour --bench detect`
 
 #![allow(missing_docs)]
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use pomona_colorcontour::ColorContourPipeline;
+use pomona_colorcontour::{
+    ray_circles, ColorContourDetector, ColorContourPipeline, ColorContourStageParams,
+};
 use pomona_core::RgbdFrame;
 use pomona_io::Dataset;
 use pomona_learn::ModelFile;
@@ -85,6 +90,45 @@ fn detect(c: &mut Criterion) {
         .num_threads(1)
         .build()
         .unwrap_or_else(|e| panic!("{e}"));
+    // The opt-in ray circles: the orchard frames end to end with them on, and the stage alone
+    // on those frames' fruit masks.
+    let mut with_rays = model.clone();
+    with_rays.stage_params["params"]["ray_circles"] = serde_json::json!({});
+    let rays_detector = pipeline.load(&with_rays).unwrap_or_else(|e| panic!("{e}"));
+    let orchard_frames = &sets[1].1;
+    c.bench_function(
+        "color-contour detect 3 orchard kinect-v2 frames, ray circles on",
+        |b| {
+            b.iter(|| {
+                one.install(|| {
+                    for frame in orchard_frames {
+                        let found = rays_detector.detect(frame, &mut StageTimings::default());
+                        criterion::black_box(found.unwrap_or_else(|e| panic!("{e}")));
+                    }
+                })
+            })
+        },
+    );
+    let stage_params: ColorContourStageParams =
+        serde_json::from_value(with_rays.stage_params).unwrap_or_else(|e| panic!("{e}"));
+    let rays = stage_params.params.ray_circles.unwrap_or_default();
+    let by_color = ColorContourDetector::new(&stage_params).unwrap_or_else(|e| panic!("{e}"));
+    let masks: Vec<(Vec<bool>, usize)> = orchard_frames
+        .iter()
+        .map(|f| {
+            let (mask, _) = by_color
+                .fitted_circles(f, &mut StageTimings::default())
+                .unwrap_or_else(|e| panic!("{e}"));
+            (mask, f.camera().width as usize)
+        })
+        .collect();
+    c.bench_function("ray circles alone on 3 orchard kinect-v2 masks", |b| {
+        b.iter(|| {
+            for (mask, width) in &masks {
+                criterion::black_box(ray_circles(mask, *width, &rays));
+            }
+        })
+    });
     for (name, frames) in &sets {
         c.bench_function(name, |b| {
             b.iter(|| {

@@ -104,7 +104,8 @@ pub fn ray_circles(mask: &[bool], width: usize, params: &RayCircleParams) -> Vec
     inscribed_centers(&squared, width, height, params)
         .into_iter()
         .filter_map(|(center, inscribed)| {
-            circle_from_rays(mask, width, height, center, inscribed, params)
+            let ends = ray_ends(mask, width, height, center, inscribed, params);
+            circle_through_ends(&ends, center, inscribed, params)
         })
         .collect()
 }
@@ -183,16 +184,14 @@ fn ray_ends(
         .collect()
 }
 
-/// The best circle through the ray ends of one centre (see the module docs).
-fn circle_from_rays(
-    mask: &[bool],
-    width: usize,
-    height: usize,
+/// The best circle through the ends of the rays cast from `center` (inscribed radius
+/// `inscribed`), in ray order (see the module docs).
+fn circle_through_ends(
+    ends: &[Option<Point2<f64>>],
     center: Point2<f64>,
     inscribed: f64,
     params: &RayCircleParams,
 ) -> Option<ContourCircle> {
-    let ends = ray_ends(mask, width, height, center, inscribed, params);
     let n = ends.len();
     let edges: Vec<Point2<f64>> = ends.iter().flatten().copied().collect();
     if edges.len() < params.min_inliers {

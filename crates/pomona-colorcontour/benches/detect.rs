@@ -11,13 +11,14 @@
 //!   failure with `POMONA_REQUIRE_DATA=1`).
 //!
 //! * `... ray circles on` / `ray circles alone`: the orchard frames with the opt-in ray circles
-//!   (`params.ray_circles`), end to end and the stage alone on their fruit masks.
+//!   (`params.ray_circles`), end to end and the stage alone on their cleaned fruit masks.
 //!
 //! `cargo bench -p pomona-colorcontour --bench detect`
 
 #![allow(missing_docs)]
 
 use criterion::{criterion_group, criterion_main, Criterion};
+use pomona_colorcontour::stages::MaskCleaningStage;
 use pomona_colorcontour::{
     ray_circles, ColorContourDetector, ColorContourPipeline, ColorContourStageParams,
 };
@@ -25,7 +26,7 @@ use pomona_core::RgbdFrame;
 use pomona_io::Dataset;
 use pomona_learn::ModelFile;
 use pomona_pipeline::SyntheticFrames;
-use pomona_pipeline::{DatasetFrames, FrameSource, Pipeline, StageTimings};
+use pomona_pipeline::{DatasetFrames, FrameSource, Pipeline, Stage, StageTimings};
 use pomona_synth::{
     CameraPreset, Domain, FruitChoice, FruitKind, LightPreset, NoiseModel, SceneSpec,
 };
@@ -113,13 +114,20 @@ fn detect(c: &mut Criterion) {
         serde_json::from_value(with_rays.stage_params).unwrap_or_else(|e| panic!("{e}"));
     let rays = stage_params.params.ray_circles.unwrap_or_default();
     let by_color = ColorContourDetector::new(&stage_params).unwrap_or_else(|e| panic!("{e}"));
+    // The stage reads the cleaned mask (closing, Gaussian, threshold), as in the pipeline.
     let masks: Vec<(Vec<bool>, usize)> = orchard_frames
         .iter()
         .map(|f| {
             let (mask, _) = by_color
                 .fitted_circles(f, &mut StageTimings::default())
                 .unwrap_or_else(|e| panic!("{e}"));
-            (mask, f.camera().width as usize)
+            let width = f.camera().width as usize;
+            let cleaning = MaskCleaningStage {
+                closing_px: stage_params.params.mask_closing_px,
+                width,
+            };
+            let cleaned = cleaning.run(&mask).unwrap_or_else(|e| panic!("{e}"));
+            (cleaned, width)
         })
         .collect();
     c.bench_function("ray circles alone on 3 orchard kinect-v2 masks", |b| {

@@ -205,8 +205,12 @@ fn circle_through_ends(
         r >= inscribed * 0.9 && r <= params.max_radius_ratio * inscribed && (center - c).norm() < r
     };
     let mut best: Option<((Point2<f64>, f64), usize)> = None;
-    for span in [8, 6, 4, 3].map(|parts| (n / parts).max(1)) {
+    'spans: for span in [8, 6, 4, 3].map(|parts| (n / parts).max(1)) {
         for i in 0..n {
+            // A hypothesis on every end cannot be beaten (later ones must do strictly better).
+            if best.is_some_and(|(_, b)| b == edges.len()) {
+                break 'spans;
+            }
             let (Some(a), Some(b), Some(c)) =
                 (ends[i], ends[(i + span) % n], ends[(i + 2 * span) % n])
             else {

@@ -21,6 +21,8 @@ pub struct ShapeFitParams {
     /// Colour segmentation (Eqs. 1–2); ignored for depth-only models.
     pub color: ColorBayesParams,
     /// Depth beyond this is dropped before clustering (paper: 1500 mm, out of the arm's reach).
+    /// Training with `size_prior: from-truth` widens it to the deepest training fruit (plus
+    /// 15 %) and never narrows it ([`SizePrior::apply`]).
     pub max_depth_m: f64,
     /// Region growing on the masked depth image.
     pub regions: RegionGrowingParams,

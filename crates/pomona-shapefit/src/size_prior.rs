@@ -14,7 +14,12 @@
 //!   [`ELONGATED_RATIO`] × `diameter_m`), cylinders only when every one is elongated, both when
 //!   mixed; when some fruit have no `height_m` (e.g. synthetic truth) the configured choice is
 //!   kept and both radius ranges come from every fruit;
-//! * **depth limit**: the deepest training fruit centre plus [`DEPTH_MARGIN`] (15 %);
+//! * **depth limit**: widened to the deepest training fruit centre plus [`DEPTH_MARGIN`] (15 %)
+//!   when that lies beyond the configured `max_depth_m` (the arm's reach, 1.5 m in the paper);
+//!   never narrowed below it. Fruit are where the robot works, not only where the training
+//!   frames happened to be taken: a limit learnt from near training frames dropped every fruit
+//!   of a farther test scene (the cross-domain matrix's far band, `docs/results.md`). The
+//!   symmetry detectors' working range follows the same rule;
 //! * **minimum cluster**: a cluster must cover [`MIN_VISIBLE_FRACTION`] (15 %) of the image
 //!   area of the smallest expected fruit at the cluster's own depth
 //!   ([`crate::MinFruitArea`]), instead of a fixed pixel count.
@@ -165,7 +170,9 @@ impl SizePrior {
         if let Some(shapes) = self.shapes() {
             params.shapes.shapes = shapes;
         }
-        params.max_depth_m = self.max_center_depth_m * (1.0 + DEPTH_MARGIN);
+        params.max_depth_m = params
+            .max_depth_m
+            .max(self.max_center_depth_m * (1.0 + DEPTH_MARGIN));
         let smallest = [self.sphere_range_m(), self.cylinder_range_m()]
             .into_iter()
             .flatten()
@@ -240,6 +247,14 @@ mod tests {
         assert_eq!(prior.shapes(), Some(ShapeChoice::Cylinder));
         assert!(close(prior.cylinder_range_m().unwrap(), (0.027, 0.0385)));
         assert_eq!(prior.sphere_radius_m, None);
+        // Near training fruit leave the configured reach as it is; a shorter configured reach
+        // is widened to the training fruit.
+        let mut params = ShapeFitParams::default();
+        prior.apply(&mut params);
+        assert_eq!(params.max_depth_m, ShapeFitParams::default().max_depth_m);
+        params.max_depth_m = 0.5;
+        prior.apply(&mut params);
+        assert!((params.max_depth_m - 0.9 * 1.15).abs() < 1e-12);
         let mixed = [long[0].clone(), fruit("apple", 0.07, Some(0.07), Some(1.0))];
         let prior = SizePrior::from_truth(&mixed, &[]).unwrap();
         assert_eq!(prior.shapes(), Some(ShapeChoice::Both));

@@ -286,7 +286,7 @@ pub struct TrainingParams {
 #[serde(rename_all = "kebab-case")]
 pub enum WorkingRange {
     /// Widened to the distance of the farthest annotated fruit centre when that lies beyond
-    /// the configured range (ours, as `shape-fit` learns its depth limit from the truth): a
+    /// the configured range (ours, as `shape-fit` widens its depth limit): a
     /// camera that sees fruit at 1.9 m needs boxes centred there. Never narrowed.
     #[default]
     FromTruth,

@@ -27,6 +27,7 @@
 mod candidate;
 mod cluster_lattice;
 mod color_model;
+mod curvature_check;
 mod depth_proposals;
 mod gpcd;
 mod negative_selection;
@@ -39,6 +40,7 @@ pub mod stages;
 pub use candidate::Candidate;
 pub use cluster_lattice::ClusterLattice;
 pub use color_model::{ColorBayes, ColorBayesParams, ColorHistograms, ColorLut};
+pub use curvature_check::CurvatureCheck;
 pub use depth_proposals::DepthProposalParams;
 pub use gpcd::{gpcd, GpcdParams, HueStatistics, GPCD_LEN};
 pub use negative_selection::MINING_MIN_SCORE;

@@ -11,8 +11,8 @@ use pomona_pipeline::FreeSpaceCheck;
 use serde::{Deserialize, Serialize};
 
 use crate::{
-    ClusterLattice, ColorBayesParams, DepthProposalParams, GpcdParams, RadiusCalibration,
-    RegionGrowingParams, SizePrior, SizePriorMode,
+    ClusterLattice, ColorBayesParams, CurvatureCheck, DepthProposalParams, GpcdParams,
+    RadiusCalibration, RegionGrowingParams, SizePrior, SizePriorMode,
 };
 
 /// Parameters of every stage.
@@ -107,6 +107,13 @@ pub struct ShapeFitParams {
     /// models trained before it run with it unchanged (docs/results.md, "Free-space check").
     #[serde(default)]
     pub free_space: FreeSpaceCheck,
+    /// Detection only: shapes beyond the training fruit that a plane fits about as well are
+    /// dropped before the descriptor (not in the paper; see [`CurvatureCheck`]). Off (`None`)
+    /// by default; training with `size_prior: from-truth` switches it on beyond the deepest
+    /// training fruit when the depth limit reaches past them ([`SizePrior::apply`]). Absent in
+    /// older model files: off.
+    #[serde(default)]
+    pub curvature: Option<CurvatureCheck>,
 }
 
 impl Default for ShapeFitParams {
@@ -140,6 +147,7 @@ impl Default for ShapeFitParams {
             radius_calibration: None,
             depth_proposals: DepthProposalParams::default(),
             free_space: FreeSpaceCheck::default(),
+            curvature: None,
         }
     }
 }
@@ -352,5 +360,23 @@ mod tests {
         assert!(json.as_object_mut().unwrap().remove("free_space").is_some());
         let old: ShapeFitParams = serde_json::from_value(json).unwrap();
         assert_eq!(old, fresh);
+    }
+
+    #[test]
+    fn older_files_run_without_the_curvature_check_and_new_ones_keep_theirs() {
+        let mut with = ShapeFitParams {
+            curvature: Some(CurvatureCheck {
+                from_depth_m: 1.2,
+                ..CurvatureCheck::default()
+            }),
+            ..ShapeFitParams::default()
+        };
+        let mut json = serde_json::to_value(&with).unwrap();
+        let back: ShapeFitParams = serde_json::from_value(json.clone()).unwrap();
+        assert_eq!(back, with);
+        assert!(json.as_object_mut().unwrap().remove("curvature").is_some());
+        let old: ShapeFitParams = serde_json::from_value(json).unwrap();
+        with.curvature = None;
+        assert_eq!(old, with);
     }
 }

@@ -17,8 +17,9 @@ use serde::{Deserialize, Serialize};
 
 use crate::negative_selection::{cap_negatives, hardest_negatives};
 use crate::stages::{
-    pixel_colors, BackProjectionStage, ClassifierStage, ColorMaskStage, DepthProposalStage,
-    DescriptorStage, FreeSpaceStage, ProposalScreenStage, RegionGrowingStage, ShapeStage,
+    pixel_colors, BackProjectionStage, ClassifierStage, ColorMaskStage, CurvatureStage,
+    DepthProposalStage, DescriptorStage, FreeSpaceStage, ProposalScreenStage, RegionGrowingStage,
+    ShapeStage,
 };
 use crate::{
     Candidate, CoaxialMergeParams, ColorBayes, ColorHistograms, ColorLut, GpcdParams, LabelRule,
@@ -327,6 +328,7 @@ impl ShapeFitPipeline {
             },
             regions: RegionGrowingStage { params: p.regions },
             free_space: None,
+            curvature: None,
             shapes: ShapeStage {
                 normals,
                 shapes: p.shapes,
@@ -353,6 +355,8 @@ struct Stages {
     /// The free-space check of the shapes (a loaded detector's, when switched on; training
     /// sees every shape, as in the paper).
     free_space: Option<FreeSpaceStage>,
+    /// The curvature check of the shapes (a loaded detector's, when switched on).
+    curvature: Option<CurvatureStage>,
     descriptor: DescriptorStage,
 }
 
@@ -396,15 +400,19 @@ impl Stages {
         })
     }
 
-    /// `shapes` less those the free-space check refuses, when it is on.
+    /// `shapes` less those the free-space and curvature checks refuse, when they are on.
     fn admitted(
         &self,
         frame: &RgbdFrame,
         shapes: Vec<Candidate>,
         t: &mut StageTimings,
     ) -> Result<Vec<Candidate>, PipelineError> {
-        match &self.free_space {
-            Some(check) => run_stage(check, (frame, shapes), t),
+        let shapes = match &self.free_space {
+            Some(check) => run_stage(check, (frame, shapes), t)?,
+            None => shapes,
+        };
+        match &self.curvature {
+            Some(check) => run_stage(check, shapes, t),
             None => Ok(shapes),
         }
     }
@@ -514,6 +522,15 @@ impl Pipeline for ShapeFitPipeline {
             stages.free_space = Some(FreeSpaceStage {
                 check: p.free_space,
             });
+        }
+        if let Some(check) = p.curvature {
+            if let Some((name, value, reason)) = check.invalid_reason() {
+                return Err(PipelineError::InvalidParameter {
+                    name: format!("params.{name}"),
+                    reason: format!("{value} {reason}"),
+                });
+            }
+            stages.curvature = Some(CurvatureStage { check });
         }
         Ok(Box::new(ShapeFitDetector {
             stages,

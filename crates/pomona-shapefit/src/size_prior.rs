@@ -19,7 +19,10 @@
 //!   never narrowed below it. Fruit are where the robot works, not only where the training
 //!   frames happened to be taken: a limit learnt from near training frames dropped every fruit
 //!   of a farther test scene (the cross-domain matrix's far band, `docs/results.md`). The
-//!   symmetry detectors' working range follows the same rule;
+//!   symmetry detectors' working range follows the same rule. Between the training fruit and
+//!   the reach the classifier has seen no fruit, and background it never met there (soil under
+//!   a camera trained on crop rows) can score as fruit, so there the detector also asks for a
+//!   curved surface ([`crate::CurvatureCheck`] from that depth on);
 //! * **minimum cluster**: a cluster must cover [`MIN_VISIBLE_FRACTION`] (15 %) of the image
 //!   area of the smallest expected fruit at the cluster's own depth
 //!   ([`crate::MinFruitArea`]), instead of a fixed pixel count.
@@ -37,7 +40,7 @@ use pomona_consensus::ShapeChoice;
 use pomona_core::FruitTruth;
 use serde::{Deserialize, Serialize};
 
-use crate::{MinFruitArea, ShapeFitParams};
+use crate::{CurvatureCheck, MinFruitArea, ShapeFitParams};
 
 /// Radius ranges are the observed `[min, max]` widened by this fraction on each side.
 pub const RADIUS_MARGIN: f64 = 0.1;
@@ -170,9 +173,15 @@ impl SizePrior {
         if let Some(shapes) = self.shapes() {
             params.shapes.shapes = shapes;
         }
-        params.max_depth_m = params
-            .max_depth_m
-            .max(self.max_center_depth_m * (1.0 + DEPTH_MARGIN));
+        let fruit_depth_m = self.max_center_depth_m * (1.0 + DEPTH_MARGIN);
+        if fruit_depth_m < params.max_depth_m {
+            params.curvature = Some(CurvatureCheck {
+                from_depth_m: fruit_depth_m,
+                ..params.curvature.unwrap_or_default()
+            });
+        } else {
+            params.max_depth_m = fruit_depth_m;
+        }
         let smallest = [self.sphere_range_m(), self.cylinder_range_m()]
             .into_iter()
             .flatten()
@@ -252,9 +261,15 @@ mod tests {
         let mut params = ShapeFitParams::default();
         prior.apply(&mut params);
         assert_eq!(params.max_depth_m, ShapeFitParams::default().max_depth_m);
-        params.max_depth_m = 0.5;
+        let check = params.curvature.expect("checked beyond the training fruit");
+        assert!((check.from_depth_m - 0.9 * 1.15).abs() < 1e-12);
+        let mut params = ShapeFitParams {
+            max_depth_m: 0.5,
+            ..ShapeFitParams::default()
+        };
         prior.apply(&mut params);
         assert!((params.max_depth_m - 0.9 * 1.15).abs() < 1e-12);
+        assert_eq!(params.curvature, None);
         let mixed = [long[0].clone(), fruit("apple", 0.07, Some(0.07), Some(1.0))];
         let prior = SizePrior::from_truth(&mixed, &[]).unwrap();
         assert_eq!(prior.shapes(), Some(ShapeChoice::Both));

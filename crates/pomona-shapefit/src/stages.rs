@@ -1,7 +1,7 @@
 //! The stages of the detector, each behind [`pomona_pipeline::Stage`] so it can be timed,
 //! benchmarked or replaced alone: seed 002's colour mask → region growing → back-projection →
 //! MSAC shapes → GPCD → SVM, and our depth proposals with their screen, which feed more clusters
-//! to the same MSAC stage.
+//! to the same MSAC stage, and the free-space and curvature checks of the shapes.
 
 use pomona_consensus::nalgebra::Point3;
 use pomona_consensus::{OrientedPoint, RepeatLimits, ShapeExtractionParams, WindowNormals};
@@ -11,8 +11,8 @@ use pomona_pipeline::{FreeSpaceCheck, PipelineError, Stage};
 use rayon::prelude::*;
 
 use crate::{
-    gpcd, grow_regions, Candidate, ClusterLattice, ColorLut, DepthProposalParams, GpcdParams,
-    RegionGrowingParams, ShapeFitParams,
+    gpcd, grow_regions, Candidate, ClusterLattice, ColorLut, CurvatureCheck, DepthProposalParams,
+    GpcdParams, RegionGrowingParams, ShapeFitParams,
 };
 
 /// Colour posterior ≥ threshold and depth within range (Eq. 2, then the masked depth image).
@@ -336,6 +336,24 @@ impl<'a> Stage<(&'a RgbdFrame, Vec<Candidate>), Vec<Candidate>> for FreeSpaceSta
         self.check.retain_admitted(frame, &mut candidates, |c| {
             (c.shape.center(), c.shape.radius_m())
         });
+        Ok(candidates)
+    }
+}
+
+/// Drops the candidates a plane explains about as well as their shape ([`CurvatureCheck`]). A
+/// loaded detector runs it on the shapes before the descriptor, after the free-space check.
+pub struct CurvatureStage {
+    /// The check and its limit.
+    pub check: CurvatureCheck,
+}
+
+impl Stage<Vec<Candidate>, Vec<Candidate>> for CurvatureStage {
+    fn name(&self) -> &'static str {
+        "curvature"
+    }
+
+    fn run(&self, mut candidates: Vec<Candidate>) -> Result<Vec<Candidate>, PipelineError> {
+        candidates.retain(|c| self.check.admits(&c.shape, &c.points));
         Ok(candidates)
     }
 }

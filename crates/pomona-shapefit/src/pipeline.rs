@@ -15,6 +15,7 @@ use pomona_pipeline::{
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
+use crate::curvature_check::rms;
 use crate::negative_selection::{cap_negatives, hardest_negatives};
 use crate::stages::{
     pixel_colors, BackProjectionStage, ClassifierStage, ColorMaskStage, CurvatureStage,
@@ -767,14 +768,7 @@ fn detection(c: &Candidate, shape: &Shape, score: f64, camera: &PinholeCamera) -
 
 /// RMS distance of `points` from the surface of `shape`; `None` without points.
 fn fit_rms_m(shape: &Shape, points: &[Point3<f64>]) -> Option<f64> {
-    if points.is_empty() {
-        return None;
-    }
-    let sum: f64 = points
-        .iter()
-        .map(|p| shape.signed_distance(p).powi(2))
-        .sum();
-    Some((sum / points.len() as f64).sqrt())
+    (!points.is_empty()).then(|| rms(points, |p| shape.signed_distance(p)))
 }
 
 /// Whether `p` lies inside the space `shape` claims: the sphere's ball, or the cylinder's

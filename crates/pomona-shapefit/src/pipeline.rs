@@ -514,23 +514,13 @@ impl Pipeline for ShapeFitPipeline {
             });
         }
         if p.free_space.enabled {
-            if let Some((name, value, reason)) = p.free_space.invalid_reason() {
-                return Err(PipelineError::InvalidParameter {
-                    name: format!("params.{name}"),
-                    reason: format!("{value} {reason}"),
-                });
-            }
+            usable(p.free_space.invalid_reason())?;
             stages.free_space = Some(FreeSpaceStage {
                 check: p.free_space,
             });
         }
         if let Some(check) = p.curvature {
-            if let Some((name, value, reason)) = check.invalid_reason() {
-                return Err(PipelineError::InvalidParameter {
-                    name: format!("params.{name}"),
-                    reason: format!("{value} {reason}"),
-                });
-            }
+            usable(check.invalid_reason())?;
             stages.curvature = Some(CurvatureStage { check });
         }
         Ok(Box::new(ShapeFitDetector {
@@ -541,6 +531,17 @@ impl Pipeline for ShapeFitPipeline {
             calibration: stage_params.params.radius_calibration,
             sphere_range_m: stage_params.params.shapes.sphere.radius_range_m,
         }))
+    }
+}
+
+/// A detection check's `invalid_reason` — `(name, value, reason)` under `params.` — as an error.
+fn usable(invalid: Option<(&str, f64, &str)>) -> Result<(), PipelineError> {
+    match invalid {
+        Some((name, value, reason)) => Err(PipelineError::InvalidParameter {
+            name: format!("params.{name}"),
+            reason: format!("{value} {reason}"),
+        }),
+        None => Ok(()),
     }
 }
 

@@ -6,6 +6,15 @@
 //! every training fold so held-out data never leaks into the ranges). Cells run in parallel but
 //! every cell uses the same seeded folds, so the result is the same for any thread count; ties go
 //! to the smaller `C`, then the smaller `γ` (the smoother model).
+//!
+//! Which cell is taken is a choice ([`CellSelection`]): the best score (`grid.py`), or the
+//! one-standard-error rule (Hastie, Tibshirani and Friedman, *The Elements of Statistical
+//! Learning*, §7.10): the smallest `C` — the most regularised model — whose score is within one
+//! standard error of the best. An RBF SVM's cross-validated score is typically flat along a
+//! ridge of `C · γ`, where the best cell is chosen by noise between cells that classify the
+//! training distribution equally well but extrapolate very differently: a large `C` with a small
+//! `γ` is a near-linear fit with large weights, a small `C` a bounded one (docs/results.md,
+//! "The grid search's choice along the ridge").
 
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -45,6 +54,19 @@ pub enum CvMetric {
     BalancedAccuracy,
 }
 
+/// Which cell of the grid a search takes (see the module docs).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum CellSelection {
+    /// The best cross-validated score (`grid.py`'s choice).
+    #[default]
+    Best,
+    /// The smallest `C` whose score is within one standard error of the best cell's (the best
+    /// cell's binomial standard error of the metric over the held-out predictions); among those
+    /// of that `C`, the best score.
+    OneStandardError,
+}
+
 /// Unchecked grid-search parameters.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct GridSearchParams {
@@ -60,6 +82,9 @@ pub struct GridSearchParams {
     pub seed: u64,
     /// Criterion.
     pub metric: CvMetric,
+    /// Which cell is taken (default: the best score).
+    #[serde(default)]
+    pub selection: CellSelection,
     /// Everything else (class weights, scaling, tolerance, probabilities of the final model);
     /// its `c` and `gamma` are replaced by the grid values.
     pub base: SvmParams,
@@ -82,6 +107,7 @@ impl Default for GridSearchParams {
             fine: true,
             seed: 0,
             metric: CvMetric::Accuracy,
+            selection: CellSelection::Best,
             base: SvmParams::default(),
         }
     }
@@ -128,6 +154,8 @@ pub struct GridCell {
     pub log2_gamma: f64,
     /// Cross-validated score.
     pub score: f64,
+    /// Binomial standard error of `score` over the held-out predictions.
+    pub standard_error: f64,
 }
 
 /// Outcome of a grid search.
@@ -167,7 +195,7 @@ impl ValidGridSearch {
             .flat_map(|c| p.log2_gamma.values().into_iter().map(move |g| (c, g)))
             .collect();
         let mut cells = self.evaluate(data, &folds, &coarse)?;
-        let mut best = best_cell(&cells);
+        let mut best = select_cell(&cells, p.selection);
         if p.fine {
             let step_c = p.log2_c.step.abs() / 4.0;
             let step_g = p.log2_gamma.step.abs() / 4.0;
@@ -184,7 +212,7 @@ impl ValidGridSearch {
                 }
             }
             cells.extend(self.evaluate(data, &folds, &fine)?);
-            best = best_cell(&cells);
+            best = select_cell(&cells, p.selection);
         }
         let model = p
             .base
@@ -213,18 +241,21 @@ impl ValidGridSearch {
                     .gamma(log2_gamma.exp2())
                     .probability(false)
                     .check()?;
-                let score = cross_validate(&params, data, folds, self.0.folds, self.0.metric)?;
+                let (score, standard_error) =
+                    cross_validate(&params, data, folds, self.0.folds, self.0.metric)?;
                 Ok(GridCell {
                     log2_c,
                     log2_gamma,
                     score,
+                    standard_error,
                 })
             })
             .collect()
     }
 }
 
-/// Cross-validated score of one parameter setting with the given fold assignment.
+/// Cross-validated score of one parameter setting with the given fold assignment, and its
+/// binomial standard error over the held-out predictions (per class for balanced accuracy).
 ///
 /// # Errors
 /// As [`crate::ValidSvmParams::fit`].
@@ -234,7 +265,7 @@ pub(crate) fn cross_validate(
     folds: &[usize],
     k: usize,
     metric: CvMetric,
-) -> Result<f64, LearnError> {
+) -> Result<(f64, f64), LearnError> {
     let mut correct = [0usize; 2];
     let mut total = [0usize; 2];
     for fold in 0..k {
@@ -251,13 +282,54 @@ pub(crate) fn cross_validate(
             correct[usize::from(l)] += usize::from(p == l);
         }
     }
+    Ok(score_and_error(metric, correct, total))
+}
+
+/// The metric of `correct` of `total` held-out predictions per class (negatives, positives) and
+/// its binomial standard error (per class for balanced accuracy).
+fn score_and_error(metric: CvMetric, correct: [usize; 2], total: [usize; 2]) -> (f64, f64) {
     let ratio = |a: usize, b: usize| if b == 0 { 0.0 } else { a as f64 / b as f64 };
-    Ok(match metric {
-        CvMetric::Accuracy => ratio(correct[0] + correct[1], total[0] + total[1]),
-        CvMetric::BalancedAccuracy => {
-            0.5 * (ratio(correct[0], total[0]) + ratio(correct[1], total[1]))
+    // Variance of a proportion of `b` trials, p (1 − p) / b (0 without trials).
+    let variance = |a: usize, b: usize| {
+        let p = ratio(a, b);
+        if b == 0 {
+            0.0
+        } else {
+            p * (1.0 - p) / b as f64
         }
-    })
+    };
+    match metric {
+        CvMetric::Accuracy => {
+            let (a, b) = (correct[0] + correct[1], total[0] + total[1]);
+            (ratio(a, b), variance(a, b).sqrt())
+        }
+        CvMetric::BalancedAccuracy => (
+            0.5 * (ratio(correct[0], total[0]) + ratio(correct[1], total[1])),
+            0.5 * (variance(correct[0], total[0]) + variance(correct[1], total[1])).sqrt(),
+        ),
+    }
+}
+
+/// The cell `selection` takes from `cells`.
+fn select_cell(cells: &[GridCell], selection: CellSelection) -> GridCell {
+    let best = best_cell(cells);
+    match selection {
+        CellSelection::Best => best,
+        CellSelection::OneStandardError => {
+            let floor = best.score - best.standard_error;
+            let within: Vec<GridCell> =
+                cells.iter().copied().filter(|c| c.score >= floor).collect();
+            let smallest_c = within
+                .iter()
+                .map(|c| c.log2_c)
+                .fold(f64::INFINITY, f64::min);
+            let of_that_c: Vec<GridCell> = within
+                .into_iter()
+                .filter(|c| c.log2_c == smallest_c)
+                .collect();
+            best_cell(&of_that_c)
+        }
+    }
 }
 
 fn best_cell(cells: &[GridCell]) -> GridCell {
@@ -272,4 +344,54 @@ fn best_cell(cells: &[GridCell]) -> GridCell {
         }
     }
     best
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cell(log2_c: f64, log2_gamma: f64, score: f64) -> GridCell {
+        GridCell {
+            log2_c,
+            log2_gamma,
+            score,
+            standard_error: 0.01,
+        }
+    }
+
+    #[test]
+    fn one_standard_error_takes_the_smallest_c_on_a_flat_ridge() {
+        // A ridge of C·γ where the best score is at the largest C by a hair.
+        let cells = [
+            cell(-1.0, -3.0, 0.930),
+            cell(-1.0, -1.0, 0.915),
+            cell(3.0, -5.0, 0.9306),
+            cell(11.0, -9.0, 0.9307),
+            cell(-3.0, 1.0, 0.85),
+        ];
+        let best = select_cell(&cells, CellSelection::Best);
+        assert_eq!((best.log2_c, best.log2_gamma), (11.0, -9.0));
+        let chosen = select_cell(&cells, CellSelection::OneStandardError);
+        assert_eq!((chosen.log2_c, chosen.log2_gamma), (-1.0, -3.0));
+        // Outside one standard error the best stands.
+        let steep = [cell(-1.0, -3.0, 0.90), cell(11.0, -9.0, 0.93)];
+        let chosen = select_cell(&steep, CellSelection::OneStandardError);
+        assert_eq!(chosen.log2_c, 11.0);
+    }
+
+    #[test]
+    fn the_standard_error_is_binomial_per_class_for_balanced_accuracy() {
+        // 90 of 100 negatives and 8 of 10 positives held out correctly.
+        let (score, se) = score_and_error(CvMetric::BalancedAccuracy, [90, 8], [100, 10]);
+        assert!((score - 0.85).abs() < 1e-12);
+        let expected = 0.5 * (0.9 * 0.1 / 100.0 + 0.8 * 0.2 / 10.0_f64).sqrt();
+        assert!((se - expected).abs() < 1e-12, "{se} against {expected}");
+        let (score, se) = score_and_error(CvMetric::Accuracy, [90, 8], [100, 10]);
+        assert!((score - 98.0 / 110.0).abs() < 1e-12);
+        assert!((se - (score * (1.0 - score) / 110.0).sqrt()).abs() < 1e-12);
+        assert_eq!(
+            score_and_error(CvMetric::BalancedAccuracy, [0, 0], [0, 0]),
+            (0.0, 0.0)
+        );
+    }
 }

@@ -54,7 +54,8 @@ pub use batched_decision::{BatchedClassifier, DECISION_BLOCK};
 pub use error::{LearnError, ModelFileError};
 pub use folds::stratified_folds;
 pub use grid_search::{
-    CvMetric, GridAxis, GridCell, GridSearchParams, GridSearchResult, ValidGridSearch,
+    CellSelection, CvMetric, GridAxis, GridCell, GridSearchParams, GridSearchResult,
+    ValidGridSearch,
 };
 pub use model_file::{
     ModelFile, MAX_MODEL_FILE_BYTES, MAX_STAGE_PARAMS_BYTES, MODEL_FORMAT, MODEL_VERSION,

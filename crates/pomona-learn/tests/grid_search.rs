@@ -2,7 +2,7 @@
 
 #![allow(clippy::unwrap_used, clippy::expect_used)]
 
-use pomona_learn::{CvMetric, GridAxis, GridSearchParams, SvmParams, TrainingSet};
+use pomona_learn::{CellSelection, CvMetric, GridAxis, GridSearchParams, SvmParams, TrainingSet};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -38,6 +38,7 @@ fn params() -> GridSearchParams {
         fine: false,
         seed: 11,
         metric: CvMetric::Accuracy,
+        selection: CellSelection::Best,
         base: SvmParams::default(),
     }
 }

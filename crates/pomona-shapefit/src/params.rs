@@ -6,7 +6,7 @@ use pomona_consensus::{
     Acceptance, CylinderEstimatorParams, MsacParams, RepeatLimits, ShapeChoice,
     ShapeExtractionParams, SphereEstimatorParams, WindowNormalParams,
 };
-use pomona_learn::{ClassWeights, CvMetric};
+use pomona_learn::{CellSelection, ClassWeights, CvMetric};
 use pomona_pipeline::FreeSpaceCheck;
 use serde::{Deserialize, Serialize};
 
@@ -60,6 +60,11 @@ pub struct ShapeFitParams {
     /// What the grid search's cross-validation maximises.
     #[serde(default = "balanced_accuracy")]
     pub cv_metric: CvMetric,
+    /// Which cell of the grid training takes: the best cross-validated score (`best`, and in
+    /// older model files) or the most regularised within one standard error of it
+    /// (`one-standard-error`; see `pomona_learn::CellSelection`).
+    #[serde(default)]
+    pub cv_selection: CellSelection,
     /// Training keeps at most this many negative candidates per positive (seeded choice).
     pub max_negatives_per_positive: f64,
     /// Rounds of hard-negative mining in training (not in the paper; see
@@ -136,6 +141,7 @@ impl Default for ShapeFitParams {
             label_rule: LabelRule::default(),
             class_weights: balanced(),
             cv_metric: balanced_accuracy(),
+            cv_selection: CellSelection::Best,
             max_negatives_per_positive: 5.0,
             hard_negative_rounds: 1,
             hard_negatives_per_positive: hard_negatives_per_positive(),

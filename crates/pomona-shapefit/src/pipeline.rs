@@ -696,6 +696,7 @@ fn grid_search(
         fine: options.full_grid,
         seed: options.seed,
         metric: params.cv_metric,
+        selection: params.cv_selection,
         base: SvmParams::default()
             .class_weights(params.class_weights)
             .seed(options.seed),

@@ -369,6 +369,23 @@ mod tests {
     }
 
     #[test]
+    fn the_grid_cell_selection_reads_and_defaults_to_the_best_score() {
+        let fresh = ShapeFitParams::default();
+        assert_eq!(fresh.cv_selection, CellSelection::Best);
+        let mut json = serde_json::to_value(&fresh).unwrap();
+        json["cv_selection"] = serde_json::json!("one-standard-error");
+        let set: ShapeFitParams = serde_json::from_value(json.clone()).unwrap();
+        assert_eq!(set.cv_selection, CellSelection::OneStandardError);
+        assert!(json
+            .as_object_mut()
+            .unwrap()
+            .remove("cv_selection")
+            .is_some());
+        let old: ShapeFitParams = serde_json::from_value(json).unwrap();
+        assert_eq!(old, fresh);
+    }
+
+    #[test]
     fn older_files_run_without_the_curvature_check_and_new_ones_keep_theirs() {
         let mut with = ShapeFitParams {
             curvature: Some(CurvatureCheck {

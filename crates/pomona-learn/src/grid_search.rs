@@ -1,7 +1,7 @@
 //! Cross-validated grid search over `log2 C` × `log2 γ`, LIBSVM `grid.py` style.
 //!
 //! The coarse grid defaults to `grid.py`'s (`log2 C` −5..15 step 2, `log2 γ` 3..−15 step −2);
-//! an optional fine pass then searches a grid of a quarter of the coarse step around the best
+//! an optional fine pass then searches a grid of a quarter of the coarse step around the selected
 //! coarse cell. Each cell is scored by stratified k-fold cross-validation (scaling is refitted on
 //! every training fold so held-out data never leaks into the ranges). Cells run in parallel but
 //! every cell uses the same seeded folds, so the result is the same for any thread count; ties go
@@ -76,7 +76,7 @@ pub struct GridSearchParams {
     pub log2_gamma: GridAxis,
     /// Number of cross-validation folds.
     pub folds: usize,
-    /// Whether to refine around the best coarse cell.
+    /// Whether to refine around the selected coarse cell.
     pub fine: bool,
     /// Seed of the fold assignment.
     pub seed: u64,
@@ -161,7 +161,7 @@ pub struct GridCell {
 /// Outcome of a grid search.
 #[derive(Debug, Clone)]
 pub struct GridSearchResult {
-    /// The best cell.
+    /// The cell taken ([`GridSearchParams::selection`]: the best score by default).
     pub best: GridCell,
     /// Every evaluated cell, coarse then fine, in evaluation order.
     pub cells: Vec<GridCell>,

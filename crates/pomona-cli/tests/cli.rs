@@ -537,6 +537,11 @@ fn experiment_splits_are_seeded_and_reported() {
     assert_eq!(saved["per_split"].as_array().unwrap().len(), 2);
     assert!(saved["summary"]["ap"]["mean"].is_number(), "{saved}");
     assert!(saved["per_split"][0]["report"]["ap_voc11"].is_number());
+    assert_eq!(
+        saved["train_set"],
+        serde_json::json!({}),
+        "training overrides recorded"
+    );
 
     let again = experiment::run_with(&pipelines, &experiment_args(&ds, 3, &json)).unwrap();
     let b = experiment::run_with(&pipelines, &experiment_args(&ds, 4, &json)).unwrap();

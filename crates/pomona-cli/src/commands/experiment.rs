@@ -204,6 +204,8 @@ pub struct ExperimentReport {
     pub kinds: Vec<String>,
     /// `--set` overrides applied before detection.
     pub set: serde_json::Value,
+    /// `--train-set` overrides applied to the pipeline before every split's training.
+    pub train_set: serde_json::Value,
     /// Mean ± sd over splits of AP, precision, recall, centre error, and the mean PR curve.
     pub summary: SplitSummary,
     /// Every test frame of every split in one evaluation, when no frame was tested twice
@@ -655,6 +657,7 @@ pub fn run_with(
         eval: config,
         kinds: args.kind.clone(),
         set: pomona::overrides_to_json(&args.set),
+        train_set: pomona::overrides_to_json(&args.train_set),
         summary: SplitSummary::new(&reports),
         pooled,
         train_ms_per_frame: MeanSd::of(per_split.iter().map(|s| Some(s.train_ms_per_frame))),

@@ -5,18 +5,22 @@
 #
 #   scripts/cross_domain.sh [OUT] [PIPELINE] [TRAIN_FRAMES] [TEST_FRAMES]
 #
-# POMONA=/path/to/pomona uses that binary instead of building one. Defaults: OUT=/tmp/pomona-cross-domain, PIPELINE=shape-fit, 40 training and 12 test frames per
-# set. SEEDS="1 2 3" trains every cell once per training seed (default "1") and reports the mean
-# (± sd) AP: one seed moves a cell trained on narrow worlds by up to 0.4 AP (docs/results.md, "The
+# POMONA=/path/to/pomona uses that binary instead of building one. Defaults:
+# OUT=/tmp/pomona-cross-domain, PIPELINE=shape-fit, 40 training and 12 test frames per set.
+#
+# SEEDS="1 2 3" trains every cell once per training seed (default "1") and reports the mean
+# (± sd): one seed moves a cell trained on narrow worlds by up to 0.4 AP (docs/results.md, "The
 # grid search's choice along the ridge"). EXPERIMENT_ARGS is added to every `pomona experiment`
-# call, e.g. EXPERIMENT_ARGS="--train-set cv_selection=\"one-standard-error\"". Rows (each "held out" row is compared with the in-domain row testing the same set):
+# call, e.g. EXPERIMENT_ARGS='--train-set cv_selection="one-standard-error"'.
+#
+# Rows (each "held out" row is compared with the in-domain row testing the same set):
 #   narrow → narrow, narrow → wide, wide → narrow, wide → wide
 #   each leaf family: trained on wide worlds without it vs with every family, tested on it alone
 #   each camera: trained on the other two cameras vs on all three, tested on it
 #   distance bands: near (0.3–0.8 m) ↔ far (0.8–1.6 m), vs trained on both bands
 # Mixed fruit throughout, green fraction 0.2, each camera's own depth-noise model. Seeds: training
 # sets 2000+, test sets 3000+ (never the built-in models' 1000/1001). Prints a Markdown table and
-# writes OUT/matrix.md; every cell's JSON report is kept in OUT/reports/.
+# writes OUT/matrix-PIPELINE.md; every cell's JSON report is kept in OUT/reports/.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 OUT=${1:-/tmp/pomona-cross-domain}

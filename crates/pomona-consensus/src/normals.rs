@@ -297,6 +297,26 @@ pub struct WindowNormalParams {
     /// patch, and the patch is what the reference window defines.
     #[serde(default)]
     pub keep_sample_count: bool,
+    /// The depth, metres, at which the window has the size the other settings give it
+    /// (default `None`, and in older files: the same pixels at every depth). When set, the
+    /// window at a pixel of depth `z < reference_depth_m` spans `reference_depth_m / z` times as
+    /// many pixels, so that near surfaces are fitted over about the patch, in millimetres, that
+    /// the window spans at the reference depth: a fixed 5×5 window of a Kinect v2 spans about
+    /// 2 mm of a fruit at 0.4 m and 5.5 mm at 1 m, so near fruit give normals noisier than any
+    /// the classifier met farther away. With [`WindowNormalParams::keep_sample_count`] a grown
+    /// window is sampled more sparsely, so the cost per normal stays about that of the
+    /// reference window; without it, every pixel of the grown window is read. Windows grow to
+    /// at most 65×65 pixels.
+    #[serde(default)]
+    pub reference_depth_m: Option<f64>,
+    /// With `reference_depth_m`: also shrink the window beyond the reference depth, to as few
+    /// as 3×3 pixels, so that the patch is the same size at every depth (default off, and in
+    /// older files: beyond the reference depth the camera's window is kept). Off because depth
+    /// noise grows with distance — with the square of it on a stereo camera — and a fixed
+    /// pixel window's growing patch averages it out (docs/results.md, "Normal window scaled to
+    /// the depth").
+    #[serde(default)]
+    pub shrink_past_reference_depth: bool,
 }
 
 fn one() -> u32 {
@@ -313,6 +333,8 @@ impl Default for WindowNormalParams {
             reference_focal_px: None,
             sample_step_px: 1,
             keep_sample_count: false,
+            reference_depth_m: None,
+            shrink_past_reference_depth: false,
         }
     }
 }
@@ -353,7 +375,14 @@ impl WindowNormalParams {
         if let Some(f) = self.reference_focal_px {
             crate::consensus::check_positive("reference_focal_px", f)?;
         }
-        Ok(WindowNormals { params: self })
+        if let Some(z) = self.reference_depth_m {
+            crate::consensus::check_positive("reference_depth_m", z)?;
+        }
+        Ok(WindowNormals {
+            params: self,
+            reference: self,
+            focal_ratio: 1.0,
+        })
     }
 }
 
@@ -361,7 +390,12 @@ impl WindowNormalParams {
 /// [`WindowNormalParams::check`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct WindowNormals {
+    /// The window for this camera (after [`WindowNormals::for_focal`]).
     params: WindowNormalParams,
+    /// The parameters as checked, before any scaling: what the depth scaling starts from.
+    reference: WindowNormalParams,
+    /// The camera's focal length over `reference_focal_px` (1 before [`WindowNormals::for_focal`]).
+    focal_ratio: f64,
 }
 
 impl WindowNormals {
@@ -401,25 +435,55 @@ impl WindowNormals {
     /// # Ok::<(), pomona_consensus::ConsensusError>(())
     /// ```
     pub fn for_focal(&self, fx_px: f64) -> Self {
-        match self.params.reference_focal_px {
+        match self.reference.reference_focal_px {
             Some(reference) if fx_px.is_finite() && fx_px > 0.0 => {
                 let ratio = fx_px / reference;
-                let (step, samples_per_step) = if self.params.keep_sample_count {
-                    let step = ratio.floor().clamp(1.0, MAX_SCALED_HALF_WINDOW);
-                    (step as u32, ratio / step)
-                } else {
-                    (self.params.sample_step_px, ratio)
-                };
-                let scaled = (f64::from(self.params.half_window) * samples_per_step).round();
+                let (half_window, sample_step_px) = self.scaled_window(ratio);
                 Self {
                     params: WindowNormalParams {
-                        half_window: scaled.clamp(1.0, MAX_SCALED_HALF_WINDOW) as u32,
-                        sample_step_px: step,
-                        ..self.params
+                        half_window,
+                        sample_step_px,
+                        ..self.reference
                     },
+                    focal_ratio: ratio,
+                    ..*self
                 }
             }
             _ => *self,
+        }
+    }
+
+    /// The reference window scaled by `ratio` in span: `(half window in samples, pixels between
+    /// samples)`, with the samples spread out by `⌊ratio⌋` when `keep_sample_count` is on.
+    fn scaled_window(&self, ratio: f64) -> (u32, u32) {
+        let r = &self.reference;
+        let (step, samples_per_step) = if r.keep_sample_count {
+            let step = ratio.floor().clamp(1.0, MAX_SCALED_HALF_WINDOW);
+            (step as u32, ratio / step)
+        } else {
+            (r.sample_step_px, ratio)
+        };
+        let scaled = (f64::from(r.half_window) * samples_per_step).round();
+        (scaled.clamp(1.0, MAX_SCALED_HALF_WINDOW) as u32, step)
+    }
+
+    /// The window at a point `depth_m` away: this camera's window, or with
+    /// [`WindowNormalParams::reference_depth_m`] the one scaled to that depth (its reach in
+    /// pixels capped at [`MAX_SCALED_HALF_WINDOW`]; never below the camera's window unless
+    /// [`WindowNormalParams::shrink_past_reference_depth`]).
+    fn window_at(&self, depth_m: f64) -> (u32, u32) {
+        match self.reference.reference_depth_m {
+            Some(z_ref) if depth_m > 0.0 => {
+                let reach =
+                    f64::from(self.reference.half_window) * self.focal_ratio * z_ref / depth_m;
+                let mut ratio =
+                    reach.min(MAX_SCALED_HALF_WINDOW) / f64::from(self.reference.half_window);
+                if !self.reference.shrink_past_reference_depth {
+                    ratio = ratio.max(self.focal_ratio);
+                }
+                self.scaled_window(ratio)
+            }
+            _ => (self.params.half_window, self.params.sample_step_px),
         }
     }
 
@@ -509,20 +573,21 @@ impl WindowNormals {
         v: usize,
     ) -> Option<Unit<Vector3<f64>>> {
         let p = &self.params;
-        let step = p.sample_step_px.max(1) as usize;
+        let centre = point(pts[v * w + u]);
+        if !centre.iter().all(|c| c.is_finite()) {
+            return None;
+        }
+        let (half_window, step) = self.window_at(centre.z);
+        let step = step.max(1) as usize;
         // The window's reach in pixels, trimmed at the image border to whole steps so that the
         // samples stay on the lattice through (u, v).
-        let reach = p.half_window as usize * step;
+        let reach = half_window as usize * step;
         let (u0, v0) = (
             u - (u.min(reach) / step) * step,
             v - (v.min(reach) / step) * step,
         );
         let (u1, v1) = ((u + reach).min(w - 1), (v + reach).min(h - 1));
         let max_d2 = p.max_neighbor_distance_m * p.max_neighbor_distance_m;
-        let centre = point(pts[v * w + u]);
-        if !centre.iter().all(|c| c.is_finite()) {
-            return None;
-        }
         let mut count = 0usize;
         let mut sum = Vector3::zeros();
         let mut sums = OuterSums::default();
@@ -877,11 +942,11 @@ mod tests {
             let n = n.unwrap();
             assert!(angle_deg(&n, &-Vector3::z()) < 1e-6);
         }
-        assert!(WindowNormals {
-            params: WindowNormalParams::default()
-        }
-        .estimate(&PointCloud::unorganized(vec![]))
-        .is_err());
+        assert!(WindowNormalParams::default()
+            .check()
+            .unwrap()
+            .estimate(&PointCloud::unorganized(vec![]))
+            .is_err());
         assert!(KnnNormalParams {
             k: 2,
             ..Default::default()
@@ -927,13 +992,82 @@ mod tests {
     }
 
     #[test]
+    fn a_reference_depth_scales_the_window_with_each_points_depth() {
+        // The plane lies at 0.75–0.85 m: a 5×5 window meant for 1.6 m spans 9×9 pixels there,
+        // one meant for 0.4 m 3×3 when it may shrink and 5×5 when not; sparse sampling keeps
+        // 5×5 samples two pixels apart.
+        let (cloud, _) = organised_scene("plane");
+        let window = |half_window, sample_step_px, reference_depth_m, sparse, shrink| {
+            WindowNormalParams {
+                half_window,
+                sample_step_px,
+                reference_depth_m,
+                keep_sample_count: sparse,
+                shrink_past_reference_depth: shrink,
+                ..WindowNormalParams::default()
+            }
+            .check()
+            .unwrap()
+            .estimate(&cloud)
+            .unwrap()
+        };
+        let fixed =
+            |half_window, sample_step_px| window(half_window, sample_step_px, None, false, false);
+        // Each case holds where the scaled reach 2 · z_ref / z rounds to the fixed window (and,
+        // when sparse, where ⌊z_ref / z⌋ = 2 pixels between samples).
+        type Normals = Vec<Option<Unit<Vector3<f64>>>>;
+        type Case = (Normals, Normals, fn(f64) -> bool);
+        let cases: [Case; 5] = [
+            (window(2, 1, Some(1.6), false, false), fixed(4, 1), |z| {
+                (3.2 / z).round() == 4.0
+            }),
+            (window(2, 1, Some(1.6), false, true), fixed(4, 1), |z| {
+                (3.2 / z).round() == 4.0
+            }),
+            (window(2, 1, Some(0.4), false, true), fixed(1, 1), |z| {
+                (0.8 / z).round() == 1.0
+            }),
+            (window(2, 1, Some(0.4), false, false), fixed(2, 1), |_| true),
+            (window(2, 1, Some(1.6), true, false), fixed(2, 2), |z| {
+                (1.6 / z).floor() == 2.0 && (1.6 / z).round() == 2.0
+            }),
+        ];
+        for (k, (scaled, fixed, applies)) in cases.iter().enumerate() {
+            let mut compared = 0;
+            for (i, p) in cloud.points().iter().enumerate() {
+                let z = f64::from(p.z);
+                if z.is_finite() && applies(z) {
+                    assert_eq!(scaled[i], fixed[i], "case {k}, pixel {i}");
+                    compared += 1;
+                }
+            }
+            assert!(compared > 500, "case {k}: {compared} pixels");
+        }
+        let at_reference = window(2, 1, Some(0.8), false, true);
+        let differs = at_reference
+            .iter()
+            .zip(fixed(2, 1))
+            .filter(|(a, b)| **a != *b)
+            .count();
+        assert!(differs < cloud.points().len() / 10, "{differs}");
+        let bad = WindowNormalParams {
+            reference_depth_m: Some(0.0),
+            ..WindowNormalParams::default()
+        };
+        assert!(bad.check().is_err());
+    }
+
+    #[test]
     fn parameters_written_before_the_reference_focal_length_read_as_fixed_pixels() {
         let mut json = serde_json::to_value(WindowNormalParams {
             reference_focal_px: Some(365.0),
             ..WindowNormalParams::default()
         })
         .unwrap();
-        json.as_object_mut().unwrap().remove("reference_focal_px");
+        let fields = json.as_object_mut().unwrap();
+        fields.remove("reference_focal_px");
+        assert!(fields.remove("reference_depth_m").is_some());
+        assert!(fields.remove("shrink_past_reference_depth").is_some());
         let old: WindowNormalParams = serde_json::from_value(json).unwrap();
         assert_eq!(old, WindowNormalParams::default());
     }

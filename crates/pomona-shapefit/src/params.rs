@@ -33,7 +33,10 @@ pub struct ShapeFitParams {
     /// where 1 mm depth steps and noise decide the normal. Models written before it keep fixed
     /// pixels. New models also sample the scaled window sparsely where the camera has at least
     /// twice the reference focal length (`normals.keep_sample_count`: 7×7 samples two pixels
-    /// apart instead of 11×11 on the Azure Kinect); older files sample every pixel.
+    /// apart instead of 11×11 on the Azure Kinect); older files sample every pixel. Scaling the
+    /// window with each pixel's depth as well (`normals.reference_depth_m`) is available and off
+    /// by default: it helps across distance bands and costs on the D435 (docs/results.md,
+    /// "Normal window scaled to the depth").
     pub normals: WindowNormalParams,
     /// Clusters thinned to a pixel lattice before normals and MSAC on cameras of higher
     /// resolution than seed 002's Kinect v2 (not in the paper; see [`ClusterLattice`]). Off by

@@ -299,24 +299,23 @@ pub struct WindowNormalParams {
     pub keep_sample_count: bool,
     /// The depth, metres, at which the window has the size the other settings give it
     /// (default `None`, and in older files: the same pixels at every depth). When set, the
-    /// window at a pixel of depth `z < reference_depth_m` spans `reference_depth_m / z` times as
-    /// many pixels, so that near surfaces are fitted over about the patch, in millimetres, that
-    /// the window spans at the reference depth: a fixed 5×5 window of a Kinect v2 spans about
-    /// 2 mm of a fruit at 0.4 m and 5.5 mm at 1 m, so near fruit give normals noisier than any
-    /// the classifier met farther away. With [`WindowNormalParams::keep_sample_count`] a grown
-    /// window is sampled more sparsely, so the cost per normal stays about that of the
-    /// reference window; without it, every pixel of the grown window is read. Windows grow to
-    /// at most 65×65 pixels.
+    /// window at a pixel of depth `z` spans `reference_depth_m / z` times as many pixels, so
+    /// that every normal is a plane fit to about the same patch of surface, in millimetres,
+    /// whatever the distance: a fixed 5×5 window of a Kinect v2 spans about 2 mm of a fruit at
+    /// 0.4 m and 8 mm of one at 1.5 m, so a classifier trained on fruit at one distance meets
+    /// other normals at another. With [`WindowNormalParams::keep_sample_count`] a grown window
+    /// is sampled more sparsely, so the cost per normal stays about that of the reference
+    /// window; without it, every pixel of the grown window is read. Windows stay between 3×3
+    /// and 65×65 pixels.
     #[serde(default)]
     pub reference_depth_m: Option<f64>,
-    /// With `reference_depth_m`: also shrink the window beyond the reference depth, to as few
-    /// as 3×3 pixels, so that the patch is the same size at every depth (default off, and in
-    /// older files: beyond the reference depth the camera's window is kept). Off because depth
-    /// noise grows with distance — with the square of it on a stereo camera — and a fixed
-    /// pixel window's growing patch averages it out (docs/results.md, "Normal window scaled to
-    /// the depth").
+    /// With `reference_depth_m`: only grow the window for nearer surfaces, keeping the
+    /// camera's window beyond the reference depth (default off, and in older files: the window
+    /// shrinks there too). Depth noise grows with distance, and a fixed pixel window's growing
+    /// patch averages it; measured, this gave no better results than shrinking
+    /// (docs/results.md, "Normal window scaled to the depth").
     #[serde(default)]
-    pub shrink_past_reference_depth: bool,
+    pub grow_only: bool,
 }
 
 fn one() -> u32 {
@@ -334,7 +333,7 @@ impl Default for WindowNormalParams {
             sample_step_px: 1,
             keep_sample_count: false,
             reference_depth_m: None,
-            shrink_past_reference_depth: false,
+            grow_only: false,
         }
     }
 }
@@ -469,8 +468,8 @@ impl WindowNormals {
 
     /// The window at a point `depth_m` away: this camera's window, or with
     /// [`WindowNormalParams::reference_depth_m`] the one scaled to that depth (its reach in
-    /// pixels capped at [`MAX_SCALED_HALF_WINDOW`]; never below the camera's window unless
-    /// [`WindowNormalParams::shrink_past_reference_depth`]).
+    /// pixels capped at [`MAX_SCALED_HALF_WINDOW`]; never below the camera's window with
+    /// [`WindowNormalParams::grow_only`]).
     fn window_at(&self, depth_m: f64) -> (u32, u32) {
         match self.reference.reference_depth_m {
             Some(z_ref) if depth_m > 0.0 => {
@@ -478,7 +477,7 @@ impl WindowNormals {
                     f64::from(self.reference.half_window) * self.focal_ratio * z_ref / depth_m;
                 let mut ratio =
                     reach.min(MAX_SCALED_HALF_WINDOW) / f64::from(self.reference.half_window);
-                if !self.reference.shrink_past_reference_depth {
+                if self.reference.grow_only {
                     ratio = ratio.max(self.focal_ratio);
                 }
                 self.scaled_window(ratio)
@@ -994,16 +993,16 @@ mod tests {
     #[test]
     fn a_reference_depth_scales_the_window_with_each_points_depth() {
         // The plane lies at 0.75–0.85 m: a 5×5 window meant for 1.6 m spans 9×9 pixels there,
-        // one meant for 0.4 m 3×3 when it may shrink and 5×5 when not; sparse sampling keeps
-        // 5×5 samples two pixels apart.
+        // one meant for 0.4 m 3×3, or 5×5 when it may only grow; sparse sampling keeps 5×5
+        // samples two pixels apart.
         let (cloud, _) = organised_scene("plane");
-        let window = |half_window, sample_step_px, reference_depth_m, sparse, shrink| {
+        let window = |half_window, sample_step_px, reference_depth_m, sparse, grow_only| {
             WindowNormalParams {
                 half_window,
                 sample_step_px,
                 reference_depth_m,
                 keep_sample_count: sparse,
-                shrink_past_reference_depth: shrink,
+                grow_only,
                 ..WindowNormalParams::default()
             }
             .check()
@@ -1018,16 +1017,16 @@ mod tests {
         type Normals = Vec<Option<Unit<Vector3<f64>>>>;
         type Case = (Normals, Normals, fn(f64) -> bool);
         let cases: [Case; 5] = [
-            (window(2, 1, Some(1.6), false, false), fixed(4, 1), |z| {
-                (3.2 / z).round() == 4.0
-            }),
             (window(2, 1, Some(1.6), false, true), fixed(4, 1), |z| {
                 (3.2 / z).round() == 4.0
             }),
-            (window(2, 1, Some(0.4), false, true), fixed(1, 1), |z| {
+            (window(2, 1, Some(1.6), false, false), fixed(4, 1), |z| {
+                (3.2 / z).round() == 4.0
+            }),
+            (window(2, 1, Some(0.4), false, false), fixed(1, 1), |z| {
                 (0.8 / z).round() == 1.0
             }),
-            (window(2, 1, Some(0.4), false, false), fixed(2, 1), |_| true),
+            (window(2, 1, Some(0.4), false, true), fixed(2, 1), |_| true),
             (window(2, 1, Some(1.6), true, false), fixed(2, 2), |z| {
                 (1.6 / z).floor() == 2.0 && (1.6 / z).round() == 2.0
             }),
@@ -1043,7 +1042,7 @@ mod tests {
             }
             assert!(compared > 500, "case {k}: {compared} pixels");
         }
-        let at_reference = window(2, 1, Some(0.8), false, true);
+        let at_reference = window(2, 1, Some(0.8), false, false);
         let differs = at_reference
             .iter()
             .zip(fixed(2, 1))
@@ -1067,7 +1066,7 @@ mod tests {
         let fields = json.as_object_mut().unwrap();
         fields.remove("reference_focal_px");
         assert!(fields.remove("reference_depth_m").is_some());
-        assert!(fields.remove("shrink_past_reference_depth").is_some());
+        assert!(fields.remove("grow_only").is_some());
         let old: WindowNormalParams = serde_json::from_value(json).unwrap();
         assert_eq!(old, WindowNormalParams::default());
     }

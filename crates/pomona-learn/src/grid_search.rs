@@ -292,11 +292,7 @@ fn score_and_error(metric: CvMetric, correct: [usize; 2], total: [usize; 2]) -> 
     // Variance of a proportion of `b` trials, p (1 − p) / b (0 without trials).
     let variance = |a: usize, b: usize| {
         let p = ratio(a, b);
-        if b == 0 {
-            0.0
-        } else {
-            p * (1.0 - p) / b as f64
-        }
+        p * (1.0 - p) / b.max(1) as f64
     };
     match metric {
         CvMetric::Accuracy => {
@@ -317,15 +313,11 @@ fn select_cell(cells: &[GridCell], selection: CellSelection) -> GridCell {
         CellSelection::Best => best,
         CellSelection::OneStandardError => {
             let floor = best.score - best.standard_error;
-            let within: Vec<GridCell> =
-                cells.iter().copied().filter(|c| c.score >= floor).collect();
-            let smallest_c = within
-                .iter()
-                .map(|c| c.log2_c)
-                .fold(f64::INFINITY, f64::min);
-            let of_that_c: Vec<GridCell> = within
-                .into_iter()
+            let within = || cells.iter().filter(move |c| c.score >= floor);
+            let smallest_c = within().map(|c| c.log2_c).fold(f64::INFINITY, f64::min);
+            let of_that_c: Vec<GridCell> = within()
                 .filter(|c| c.log2_c == smallest_c)
+                .copied()
                 .collect();
             best_cell(&of_that_c)
         }

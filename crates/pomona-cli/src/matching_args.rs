@@ -1,5 +1,6 @@
 //! The matching flags `pomona eval` and `pomona experiment` share: how a detection is matched to
-//! a truth fruit (a 3D centre tolerance, or in the image with `--2d`) and which truth counts.
+//! a truth fruit (a 3D centre tolerance, or in the image with `--2d`) and which truth counts
+//! (visibility, a band of depths).
 //! One struct, flattened into both commands, so the two cannot drift apart.
 
 use pomona_eval::EvalConfig;
@@ -22,6 +23,20 @@ pub struct MatchingArgs {
     /// Truth fruit less visible than this (0–1) are ignored: neither found nor missed.
     #[arg(long, default_value_t = 0.5)]
     pub min_visibility: f64,
+    /// Score one band of depths, `NEAR,FAR` metres (e.g. an arm's reach): truth fruit whose
+    /// centre lies outside `NEAR ≤ z < FAR` are ignored, and so are detections outside it that
+    /// match no counted fruit.
+    #[arg(long, value_name = "NEAR,FAR", value_parser = depth_range, conflicts_with = "image_2d")]
+    pub depth_range_m: Option<(f64, f64)>,
+}
+
+fn depth_range(s: &str) -> Result<(f64, f64), String> {
+    let (near, far) =
+        crate::number_pair::parse_number_pair(s, "NEAR,FAR in metres (e.g. 0.3,0.8)")?;
+    if !(near >= 0.0 && near < far) {
+        return Err(format!("need 0 <= NEAR < FAR metres, got {near},{far}"));
+    }
+    Ok((near, far))
 }
 
 impl Default for MatchingArgs {
@@ -31,6 +46,7 @@ impl Default for MatchingArgs {
             image_2d: false,
             radius_fraction: 0.5,
             min_visibility: 0.5,
+            depth_range_m: None,
         }
     }
 }
@@ -45,6 +61,7 @@ impl MatchingArgs {
             tolerance_m: self.tolerance_mm / 1000.0,
             min_visibility: self.min_visibility,
             radius_fraction_2d: self.image_2d.then_some(self.radius_fraction),
+            depth_range_m: self.depth_range_m,
             ..base
         }
         .for_data(data_has_depth);

@@ -1,5 +1,6 @@
 //! Options that take two numbers, `A,B` (`--distance-m MIN,MAX`, `--reach-m NEAR,FAR`,
-//! `--distortion K1,K2`): one parser, so they all read and complain alike.
+//! `--depth-range-m NEAR,FAR`, `--distortion K1,K2`): one parser, so they all read and complain
+//! alike.
 
 /// Parses `A,B` into two finite numbers; `example` shows the form in the error message.
 ///

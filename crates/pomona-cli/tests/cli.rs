@@ -192,6 +192,31 @@ fn eval_scores_hand_made_detections() {
     assert!((r["diameter_error_m"]["mean_abs"].as_f64().unwrap() - 0.002).abs() < 1e-9);
     assert!(stdout(&out).contains("AP (VOC 11-point)"));
 
+    // --depth-range-m: a band holding both fruit changes nothing but the report's record of it;
+    // one beyond them leaves no fruit counted, and a reversed band is refused by name.
+    let out = eval(&["--depth-range-m", "0.4,0.6"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let r: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+    assert_eq!(
+        (r["fruits"].as_u64(), r["precision"].as_f64()),
+        (Some(2), Some(0.5))
+    );
+    assert_eq!(r["depth_range_m"], serde_json::json!([0.4, 0.6]));
+    assert!(stdout(&out).contains("0.4–0.6 m deep"), "{}", stdout(&out));
+    let out = eval(&["--depth-range-m", "0.6,1.5"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let r: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+    assert_eq!(
+        (r["fruits"].as_u64(), r["ignored"].as_u64()),
+        (Some(0), Some(2))
+    );
+    assert_eq!(r["false_positives"], 0);
+    let out = eval(&["--depth-range-m", "1.0,0.5"]);
+    assert!(!out.status.success());
+    assert!(stderr(&out).contains("NEAR < FAR"), "{}", stderr(&out));
+
     // --kind: fruit 2 becomes a reference ball; evaluating apples leaves it out (recall 1/1),
     // and a kind nobody has is a clear error.
     std::fs::write(

@@ -1,6 +1,7 @@
 //! The knobs of an evaluation: match tolerance (a 3D distance, or in the image a fraction of the
-//! fruit's radius), visibility below which truth is ignored, and the operating point (a raw score
-//! threshold, or a calibrated confidence threshold).
+//! fruit's radius), which truth counts (visibility, and optionally a band of depths, e.g. an
+//! arm's reach), and the operating point (a raw score threshold, or a calibrated confidence
+//! threshold).
 
 use serde::{Deserialize, Serialize};
 
@@ -27,6 +28,12 @@ pub struct EvalConfig {
     /// Circles come from [`pomona_core::ImageCircle::from_parts`].
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub radius_fraction_2d: Option<f64>,
+    /// When set, `(near, far)` metres: only truth fruit whose centre lies at a depth `z` with
+    /// `near ≤ z < far` count; the others (and truth without a 3D centre) are ignored, and a
+    /// detection that matches no counted fruit and lies outside the band is ignored too rather
+    /// than a false positive. Scores a detector on one distance band, e.g. an arm's reach.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub depth_range_m: Option<(f64, f64)>,
 }
 
 impl Default for EvalConfig {
@@ -37,6 +44,7 @@ impl Default for EvalConfig {
             threshold: 0.0,
             min_confidence: None,
             radius_fraction_2d: None,
+            depth_range_m: None,
         }
     }
 }
@@ -68,8 +76,8 @@ impl EvalConfig {
     ///
     /// # Errors
     /// [`EvalError::InvalidParameter`] for a tolerance that is not finite and positive, a
-    /// visibility outside `[0, 1]`, a NaN threshold, or a 2D radius fraction that is not finite
-    /// and positive.
+    /// visibility outside `[0, 1]`, a NaN threshold, a 2D radius fraction that is not finite
+    /// and positive, or a depth band that is not `0 ≤ near < far` (far may be infinite).
     pub fn validate(&self) -> Result<(), EvalError> {
         if !(self.tolerance_m.is_finite() && self.tolerance_m > 0.0) {
             return Err(EvalError::InvalidParameter {
@@ -101,6 +109,19 @@ impl EvalConfig {
                 });
             }
         }
+        if let Some((near, far)) = self.depth_range_m {
+            if !(near.is_finite() && near >= 0.0 && far > near) {
+                return Err(EvalError::InvalidParameter {
+                    name: "depth_range_m",
+                    value: if near.is_finite() && near >= 0.0 {
+                        far
+                    } else {
+                        near
+                    },
+                    reason: "must be 0 <= near < far, metres",
+                });
+            }
+        }
         if let Some(c) = self.min_confidence {
             if !(0.0..=1.0).contains(&c) {
                 return Err(EvalError::InvalidParameter {
@@ -111,6 +132,12 @@ impl EvalConfig {
             }
         }
         Ok(())
+    }
+
+    /// Whether a point `depth_m` deep lies in the depth band (always, without one).
+    pub fn in_depth_range(&self, depth_m: f64) -> bool {
+        self.depth_range_m
+            .is_none_or(|(near, far)| near <= depth_m && depth_m < far)
     }
 
     /// Whether `detection` belongs to the operating point: its confidence reaches

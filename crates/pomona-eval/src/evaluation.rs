@@ -247,6 +247,7 @@ impl Tally {
             diameter_error_m: DiameterError { mean_abs: diameter },
             per_frame: self.per_frame,
             min_visibility: config.min_visibility,
+            depth_range_m: config.depth_range_m,
             true_positives: self.tp,
             false_positives: self.fp,
             null_reasons,

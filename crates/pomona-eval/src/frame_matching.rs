@@ -16,7 +16,10 @@
 //!    located; in 2D, no circle), is *ignored*: a detection taking it is [`DetectionOutcome::Ignored`], it is not a
 //!    miss, and further detections within reach of it once it is taken are ignored as well (as
 //!    PASCAL VOC treats "difficult" objects) rather than counted as duplicates.
-//! 4. Otherwise a detection with nothing in reach is a false positive — including a second
+//! 4. With a depth band ([`EvalConfig::depth_range_m`]), truth whose centre lies outside it (or
+//!    that has no 3D centre) is ignored as in rule 3, and a detection with no counted fruit in
+//!    reach whose centre lies outside the band is ignored as well.
+//! 5. Otherwise a detection with nothing in reach is a false positive — including a second
 //!    detection of an already-found fruit (duplicates are false positives, as in VOC).
 
 use pomona_core::{Detection, FrameTruth, FruitTruth, ImageCircle, PinholeCamera};
@@ -83,7 +86,9 @@ fn is_ignored(f: &FruitTruth, circle: Option<&ImageCircle>, config: &EvalConfig)
         Some(_) => circle.is_none(),
         None => f.center_m.is_none() && f.bbox_px.is_none(),
     };
-    too_hidden || unlocatable
+    let out_of_band =
+        config.depth_range_m.is_some() && !f.center_m.is_some_and(|c| config.in_depth_range(c.z));
+    too_hidden || unlocatable || out_of_band
 }
 
 /// Distance key of a truth fruit within reach of a detection: `(0, metres)` for a 3D match,
@@ -211,7 +216,9 @@ pub fn match_frame(
                     }
                 }
             }
-            None if near_taken_ignored => DetectionOutcome::Ignored,
+            None if near_taken_ignored || !config.in_depth_range(det.center_m.z) => {
+                DetectionOutcome::Ignored
+            }
             None => DetectionOutcome::FalsePositive,
         };
     }

@@ -92,6 +92,9 @@ pub struct EvalReport {
     pub per_frame: Vec<FrameReport>,
     /// Visibility below which truth was ignored.
     pub min_visibility: f64,
+    /// The depth band, metres, outside which truth and unmatched detections were ignored.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub depth_range_m: Option<(f64, f64)>,
     /// True positives at the threshold.
     pub true_positives: usize,
     /// False positives at the threshold.
@@ -119,6 +122,7 @@ impl EvalReport {
             threshold: self.threshold,
             min_confidence: self.min_confidence,
             radius_fraction_2d: self.radius_fraction_2d,
+            depth_range_m: self.depth_range_m,
         }
         .operating_point()
     }
@@ -129,6 +133,10 @@ impl EvalReport {
         let tolerance = match self.radius_fraction_2d {
             Some(f) => format!("matched in the image within {f} truth radii"),
             None => format!("tolerance {:.0} mm", self.tolerance_m * 1000.0),
+        };
+        let tolerance = match self.depth_range_m {
+            Some((near, far)) => format!("{tolerance}, fruit {near}–{far} m deep"),
+            None => tolerance,
         };
         let _ = writeln!(
             s,

@@ -469,3 +469,72 @@ fn image_2d_matching_uses_half_the_truth_radius() {
     assert!((radii.median.unwrap() - 0.44982).abs() < 1e-4, "{radii:?}");
     assert!(report.to_markdown().contains("truth radii"));
 }
+
+/// A depth band keeps the fruit inside it and drops, rather than counts, what lies outside:
+/// fruit at z = 0.5, 1.0 and 1.5 m, band [0.8, 1.2) m.
+///
+/// | detection | where | outcome |
+/// |---|---|---|
+/// | 0.9 on the 1 m fruit | in band | true positive |
+/// | 0.8 on the 0.5 m fruit | out of band, its fruit ignored | ignored |
+/// | 0.7 at 1.1 m, no fruit | in band | false positive |
+/// | 0.6 at 1.4 m, no fruit | out of band | ignored |
+///
+/// One counted fruit, found; one false positive: precision 1/2, recall 1, AP 1 (the hit ranks
+/// first).
+#[test]
+fn a_depth_band_counts_only_the_fruit_and_stray_detections_inside_it() {
+    let t = truth(
+        true,
+        vec![
+            fruit("near", Some([0.0, 0.0, 0.5]), Some(1.0)),
+            fruit("mid", Some([0.2, 0.0, 1.0]), Some(1.0)),
+            fruit("far", Some([0.4, 0.0, 1.5]), Some(1.0)),
+            fruit("unplaced", None, Some(1.0)),
+        ],
+    );
+    let d = vec![
+        det([0.2, 0.0, 1.01], 0.9),
+        det([0.0, 0.0, 0.51], 0.8),
+        det([-0.3, 0.0, 1.1], 0.7),
+        det([-0.3, 0.0, 1.4], 0.6),
+    ];
+    let band = EvalConfig {
+        depth_range_m: Some((0.8, 1.2)),
+        ..EvalConfig::default()
+    };
+    let m = match_frame(&t, &d, &camera(), &band);
+    assert!(matches!(
+        m.detections[0],
+        DetectionOutcome::TruePositive { truth: 1, .. }
+    ));
+    assert_eq!(m.detections[1], DetectionOutcome::Ignored);
+    assert_eq!(m.detections[2], DetectionOutcome::FalsePositive);
+    assert_eq!(m.detections[3], DetectionOutcome::Ignored);
+    assert_eq!(
+        m.truth,
+        vec![
+            TruthStatus::Ignored,
+            TruthStatus::Found { by: 0 },
+            TruthStatus::Ignored,
+            TruthStatus::Ignored,
+        ]
+    );
+    let report = evaluate(&[frame("f", t.clone(), d.clone())], &camera(), &band).unwrap();
+    assert_eq!((report.fruits, report.ignored), (1, 3));
+    assert_eq!(report.precision, Some(0.5));
+    assert_eq!(report.recall, Some(1.0));
+    assert_eq!(report.ap_voc11, Some(1.0));
+    assert_eq!(report.depth_range_m, Some((0.8, 1.2)));
+    // Without the band every placed fruit counts: the 1.5 m fruit is missed.
+    let all = evaluate(&[frame("f", t, d)], &camera(), &EvalConfig::default()).unwrap();
+    assert_eq!(all.fruits, 3);
+    assert_eq!(all.depth_range_m, None);
+    for bad in [(1.2, 0.8), (-0.1, 1.0), (0.5, 0.5), (f64::NAN, 1.0)] {
+        let config = EvalConfig {
+            depth_range_m: Some(bad),
+            ..EvalConfig::default()
+        };
+        assert!(config.validate().is_err(), "{bad:?}");
+    }
+}

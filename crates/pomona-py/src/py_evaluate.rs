@@ -15,7 +15,10 @@ use crate::py_error::to_py;
 ///
 /// A detection matches a fruit within ``tolerance_mm`` of its centre, or with ``image_2d`` (and
 /// always on data without depth) when its image circle's centre is within half the fruit's image
-/// radius, as ``pomona eval --2d``; truth less visible than ``min_visibility`` is ignored. The operating point is ``min_confidence`` when given, else
+/// radius, as ``pomona eval --2d``; truth less visible than ``min_visibility`` is ignored, and
+/// with ``depth_range_m = (near, far)`` so is truth outside that band of depths (metres), with
+/// unmatched detections outside it (``pomona eval --depth-range-m``). The operating point is
+/// ``min_confidence`` when given, else
 /// score ``threshold`` when given, else the operating confidence the files record (score 0 for
 /// uncalibrated models). Frames without a detection file count as having none; frames without
 /// truth are left out.
@@ -24,7 +27,7 @@ use crate::py_error::to_py;
 /// dataset lacks, a dataset without truth, or invalid parameters.
 #[pyfunction]
 #[allow(clippy::too_many_arguments)] // one per keyword argument of the Python function
-#[pyo3(signature = (data, detections, *, tolerance_mm = 50.0, min_visibility = 0.5, min_confidence = None, threshold = None, image_2d = false))]
+#[pyo3(signature = (data, detections, *, tolerance_mm = 50.0, min_visibility = 0.5, min_confidence = None, threshold = None, image_2d = false, depth_range_m = None))]
 pub fn evaluate<'py>(
     py: Python<'py>,
     data: PathBuf,
@@ -34,6 +37,7 @@ pub fn evaluate<'py>(
     min_confidence: Option<f64>,
     threshold: Option<f64>,
     image_2d: bool,
+    depth_range_m: Option<(f64, f64)>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let dataset = pomona::Dataset::open(&data).map_err(to_py)?;
     let mut found = load_detections(&detections, &dataset).map_err(to_py)?;
@@ -50,6 +54,7 @@ pub fn evaluate<'py>(
         radius_fraction_2d: image_2d
             .then(|| EvalConfig::image_2d().radius_fraction_2d)
             .flatten(),
+        depth_range_m,
     }
     .for_data(dataset.has_depth());
     let mut frames = Vec::new();

@@ -87,3 +87,7 @@ def test_evaluate_scores_detection_files_against_truth(oranges, tmp_path):
     assert report["ap_voc11"] is not None and 0.0 < report["ap_voc11"] <= 1.0
     strict = pomona.evaluate(oranges.path, out, tolerance_mm=0.001)
     assert strict["true_positives"] < report["true_positives"]
+    beyond = pomona.evaluate(oranges.path, out, depth_range_m=(5.0, 6.0))
+    assert beyond["fruits"] == 0 and beyond["depth_range_m"] == [5.0, 6.0]
+    with pytest.raises(pomona.PomonaError, match="depth_range_m"):
+        pomona.evaluate(oranges.path, out, depth_range_m=(1.0, 0.5))

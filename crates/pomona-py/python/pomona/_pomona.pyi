@@ -94,6 +94,7 @@ def evaluate(
     min_confidence: Optional[float] = None,
     threshold: Optional[float] = None,
     image_2d: bool = False,
+    depth_range_m: Optional[tuple[float, float]] = None,
 ) -> dict[str, Any]: ...
 def write_failures(
     out: StrPath,

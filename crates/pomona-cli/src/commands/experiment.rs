@@ -356,6 +356,10 @@ fn summary_heading(r: &ExperimentReport) -> String {
         Some(f) => format!("matched in the image within {f} truth radii"),
         None => format!("tolerance {:.0} mm", r.eval.tolerance_m * 1e3),
     };
+    let matching = match r.eval.depth_range_m {
+        Some((near, far)) => format!("{matching}, fruit {near}–{far} m deep"),
+        None => matching,
+    };
     format!(
         "## Experiment: `{}` {what}, seed {}, {matching}, operating point: {operating}{kinds}\n\n\
          | metric | mean ± sd over splits | pooled test frames |\n|---|---|---|\n",

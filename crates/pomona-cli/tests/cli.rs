@@ -176,10 +176,12 @@ fn eval_scores_hand_made_detections() {
         args.extend_from_slice(extra);
         pomona(&args)
     };
+    let read_report = || -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap()
+    };
     let out = eval(&[]);
     assert!(out.status.success(), "{}", stderr(&out));
-    let r: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+    let r = read_report();
     assert_eq!(r["fruits"], 2);
     assert_eq!(r["precision"], 0.5);
     assert_eq!(r["recall"], 0.5);
@@ -196,8 +198,7 @@ fn eval_scores_hand_made_detections() {
     // one beyond them leaves no fruit counted, and a reversed band is refused by name.
     let out = eval(&["--depth-range-m", "0.4,0.6"]);
     assert!(out.status.success(), "{}", stderr(&out));
-    let r: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+    let r = read_report();
     assert_eq!(
         (r["fruits"].as_u64(), r["precision"].as_f64()),
         (Some(2), Some(0.5))
@@ -206,8 +207,7 @@ fn eval_scores_hand_made_detections() {
     assert!(stdout(&out).contains("0.4–0.6 m deep"), "{}", stdout(&out));
     let out = eval(&["--depth-range-m", "0.6,1.5"]);
     assert!(out.status.success(), "{}", stderr(&out));
-    let r: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+    let r = read_report();
     assert_eq!(
         (r["fruits"].as_u64(), r["ignored"].as_u64()),
         (Some(0), Some(2))
@@ -235,8 +235,7 @@ fn eval_scores_hand_made_detections() {
         "{}",
         stderr(&out)
     );
-    let r: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+    let r = read_report();
     assert_eq!(
         (r["fruits"].as_u64(), r["recall"].as_f64()),
         (Some(1), Some(1.0))

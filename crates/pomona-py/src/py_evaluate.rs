@@ -18,10 +18,9 @@ use crate::py_error::to_py;
 /// radius, as ``pomona eval --2d``; truth less visible than ``min_visibility`` is ignored, and
 /// with ``depth_range_m = (near, far)`` so is truth outside that band of depths (metres), with
 /// unmatched detections outside it (``pomona eval --depth-range-m``). The operating point is
-/// ``min_confidence`` when given, else
-/// score ``threshold`` when given, else the operating confidence the files record (score 0 for
-/// uncalibrated models). Frames without a detection file count as having none; frames without
-/// truth are left out.
+/// ``min_confidence`` when given, else score ``threshold`` when given, else the operating
+/// confidence the files record (score 0 for uncalibrated models). Frames without a detection
+/// file count as having none; frames without truth are left out.
 ///
 /// Raises ``PomonaError`` for unreadable files (naming them), a detection file of a frame the
 /// dataset lacks, a dataset without truth, or invalid parameters.

@@ -20,7 +20,8 @@
 #   distance bands: near (0.3–0.8 m) ↔ far (0.8–1.6 m), vs trained on both bands
 # Mixed fruit throughout, green fraction 0.2, each camera's own depth-noise model. Seeds: training
 # sets 2000+, test sets 3000+ (never the built-in models' 1000/1001). Prints a Markdown table and
-# writes OUT/matrix-PIPELINE.md; every cell's JSON report is kept in OUT/reports/.
+# writes OUT/matrix-PIPELINE.md; every cell's JSON report is kept in OUT/reports/ and reused by
+# later runs with the same binary (reports of another binary are moved to OUT/reports-CKSUM).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 OUT=${1:-/tmp/pomona-cross-domain}
@@ -37,6 +38,16 @@ if [ -z "${POMONA:-}" ]; then
   POMONA=$(pwd)/target/release/pomona
 fi
 mkdir -p "$OUT/data" "$OUT/reports"
+# Reports are reused only when the same binary made them: another binary's are moved aside.
+BIN_SUM=$(cksum < "$POMONA" | cut -d' ' -f1)
+if [ -f "$OUT/reports/binary.cksum" ] && [ "$(cat "$OUT/reports/binary.cksum")" != "$BIN_SUM" ]; then
+  OLD="$OUT/reports-$(cat "$OUT/reports/binary.cksum")"
+  echo "note: the reports in $OUT/reports were made by another pomona binary; moved to $OLD" >&2
+  rm -rf "$OLD"
+  mv "$OUT/reports" "$OLD"
+  mkdir -p "$OUT/reports"
+fi
+echo "$BIN_SUM" > "$OUT/reports/binary.cksum"
 
 # set NAME SEED FRAMES ARGS... : render a dataset once (kept between runs).
 set_() {

@@ -41,14 +41,14 @@ pub fn load_detector(
     })
 }
 
-/// The confidence threshold of a detection run: `--min-confidence` when given, else the model's
-/// operating confidence, else none ([`Detector::min_confidence_for`]).
+/// The threshold of a detection run: `--min-confidence` when given, else the model's operating
+/// confidence, else score ≥ 0 ([`Detector::keep_rule_for`]).
 ///
 /// # Errors
-/// `--min-confidence` outside `[0, 1]` or given for a model without calibration.
-pub fn min_confidence(detector: &Detector, requested: Option<f64>) -> Result<Option<f64>> {
+/// `--min-confidence` outside `[0, 1]`, or above 0 for a model without calibration.
+pub fn keep_rule(detector: &Detector, requested: Option<f64>) -> Result<pomona::KeepRule> {
     detector
-        .min_confidence_for(requested)
+        .keep_rule_for(requested)
         .context("bad --min-confidence")
 }
 

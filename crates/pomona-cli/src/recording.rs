@@ -12,9 +12,9 @@
 //!   `id kind ⌀ mm` (frames with a truth file);
 //! - `world/detections`: the detections the run kept (those written to the detection files), red
 //!   spheres of their diameter labelled with confidence, score and diameter;
-//! - `world/detections_below_threshold`: the detections the run's confidence threshold dropped,
-//!   drawn faint (translucent pink), so a user sees what the threshold removed; a run without a
-//!   threshold keeps every detection and this entity stays empty;
+//! - `world/detections_below_threshold`: the detections the run's threshold (confidence, or
+//!   score ≥ 0 for a model without calibration) dropped, drawn faint (translucent pink), so a
+//!   user sees what the threshold removed; a run that keeps every detection leaves it empty;
 //! - `frame`: a text line naming the frame (its stem) and what was found.
 //!
 //! Logged once as static: `world` is the camera frame (x right, y down, z forward: rerun's
@@ -50,8 +50,8 @@ pub struct RunDescription<'a> {
     pub pipeline: &'a str,
     /// The model's identity.
     pub model_id: &'a str,
-    /// The run's confidence threshold (`None`: every detection is kept).
-    pub min_confidence: Option<f64>,
+    /// Which detections the run keeps.
+    pub keep: pomona::KeepRule,
 }
 
 #[cfg(feature = "rerun")]
@@ -176,12 +176,13 @@ mod with_rerun {
                 .with_principal_point([camera.cx as f32, camera.cy as f32])
                 .with_camera_xyz(rerun::components::ViewCoordinates::RDF),
             )?;
-            let threshold = match run.min_confidence {
-                Some(c) => format!(
-                    "kept: confidence ≥ {c:.3} (red, `world/detections`); the rest drawn faint \
-                     in `world/detections_below_threshold`"
+            let threshold = match run.keep {
+                pomona::KeepRule::All => "no threshold: every detection kept (red)".to_owned(),
+                keep => format!(
+                    "kept: {} (red, `world/detections`); the rest drawn faint in \
+                     `world/detections_below_threshold`",
+                    keep.describe()
                 ),
-                None => "no confidence threshold: every detection kept (red)".to_owned(),
             };
             s.log_static(
                 "run",

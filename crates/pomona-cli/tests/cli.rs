@@ -647,6 +647,37 @@ fn calibrated_model_round_trips_and_sets_the_default_operating_point() {
     args.min_confidence = Some(0.5);
     let err = format!("{:#}", detect::run_with(&pipelines, &args).unwrap_err());
     assert!(err.contains("calibration"), "{err}");
+    // By default it keeps what its classifier accepts (score ≥ 0, recorded as `min_score`);
+    // --min-confidence 0 keeps every detection.
+    let accepted_dir = dir.path().join("accepted");
+    detect::run_with(
+        &pipelines,
+        &detect_args(blob::NAME, Some(&raw), &test_ds, &accepted_dir),
+    )
+    .unwrap();
+    let accepted = read_detections(&accepted_dir);
+    assert!(accepted
+        .iter()
+        .all(|f| f.min_score == Some(0.0) && f.min_confidence.is_none()));
+    let accepted: Vec<Detection> = accepted.into_iter().flat_map(|f| f.detections).collect();
+    assert!(accepted.iter().all(|d| d.score >= 0.0));
+    let every_dir = dir.path().join("every");
+    let mut args = detect_args(blob::NAME, Some(&raw), &test_ds, &every_dir);
+    args.min_confidence = Some(0.0);
+    detect::run_with(&pipelines, &args).unwrap();
+    let every = read_detections(&every_dir);
+    assert!(every
+        .iter()
+        .all(|f| f.min_score.is_none() && f.min_confidence.is_none()));
+    let every: Vec<Detection> = every.into_iter().flat_map(|f| f.detections).collect();
+    assert!(
+        every.iter().any(|d| d.score < 0.0),
+        "the blob detector scores some detections below 0"
+    );
+    assert_eq!(
+        every.iter().filter(|d| d.score >= 0.0).count(),
+        accepted.len()
+    );
 }
 
 #[test]

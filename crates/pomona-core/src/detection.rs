@@ -134,9 +134,13 @@ pub struct FrameDetections {
     /// above `min_confidence` (see below), and `pomona eval` reports its operating point here.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub operating_confidence: Option<f64>,
-    /// The lowest confidence kept in this file (`None`: every detection was kept).
+    /// The lowest confidence kept in this file (`None`: no confidence threshold).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub min_confidence: Option<f64>,
+    /// The lowest score kept in this file, for a model without calibration (0: what its
+    /// classifier accepts); `None`: no score threshold. Neither threshold: every detection.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub min_score: Option<f64>,
     /// Identity of the model that produced the detections (a hash of the model file after
     /// parameter overrides), so `pomona detect --resume` never mixes two models' output.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -170,6 +174,8 @@ struct FrameDetectionsFile {
     operating_confidence: Option<f64>,
     #[serde(default)]
     min_confidence: Option<f64>,
+    #[serde(default)]
+    min_score: Option<f64>,
     #[serde(default)]
     model_id: Option<String>,
     #[serde(default)]
@@ -207,6 +213,7 @@ impl From<FrameDetectionsFile> for FrameDetections {
             detections,
             operating_confidence: file.operating_confidence,
             min_confidence: file.min_confidence,
+            min_score: file.min_score,
             model_id: file.model_id,
             stamp_ns: file.stamp_ns,
             frame_id: file.frame_id,
@@ -239,6 +246,7 @@ mod tests {
             }],
             operating_confidence: Some(0.5),
             min_confidence: None,
+            min_score: Some(0.0),
             model_id: Some("0123456789abcdef".into()),
             stamp_ns: None,
             frame_id: None,
@@ -247,6 +255,7 @@ mod tests {
         assert!(json.contains(r#""center_m":[0.1,-0.2,0.7]"#));
         assert!(!json.contains("symmetry_plane_normal") && !json.contains(r#""axis""#));
         assert_eq!(serde_json::from_str::<FrameDetections>(&json).unwrap(), d);
+        assert!(json.contains(r#""min_score":0.0"#));
         // Recording fields are written only when present, so dataset files stay as they were.
         assert!(!json.contains("stamp_ns") && !json.contains("frame_id"));
         let recorded = FrameDetections {

@@ -2,7 +2,7 @@
 //! overrides) and called on many frames, from numpy arrays or straight from a dataset folder.
 //!
 //! Both calls return or write exactly what `pomona detect` writes: the same facade detector,
-//! the same confidence threshold rule ([`pomona::Detector::min_confidence_for`]) and the same
+//! the same threshold rule ([`pomona::Detector::keep_rule_for`]) and the same
 //! detection file record ([`pomona::Detector::frame_record`]). Detection runs with the GIL
 //! released. `prepare_folder` applies `pomona detect`'s output-folder rules
 //! ([`pomona::prepare_detection_folder`]) for runners such as the Dask one.
@@ -56,17 +56,15 @@ impl Detector {
         Ok((dataset, frames))
     }
 
-    /// Detections of `frame` kept at `min_confidence`, as the detection file's list.
+    /// Detections of `frame` kept by the rule `min_confidence` gives, as the detection file's
+    /// list.
     fn detect_frame(
         &self,
         py: Python<'_>,
         frame: &RgbdFrame,
         min_confidence: Option<f64>,
     ) -> PyResult<pomona::FrameDetections> {
-        let threshold = self
-            .inner
-            .min_confidence_for(min_confidence)
-            .map_err(to_py)?;
+        let threshold = self.inner.keep_rule_for(min_confidence).map_err(to_py)?;
         let found = py.detach(|| self.inner.detect(frame)).map_err(to_py)?;
         Ok(self
             .inner
@@ -124,8 +122,8 @@ impl Detector {
     /// metres; ``color``: (H, W, 3) uint8 RGB or ``None``; ``camera``: a dict with the keys of
     /// ``camera.json``. Returns a list of dicts with the detection JSON's keys (``center_m`` in
     /// the camera frame, metres; ``score``; ``confidence``; ``diameter_m``...). ``min_confidence``
-    /// ``None`` keeps those at the model's operating confidence (as ``pomona detect``), ``0.0``
-    /// keeps every detection.
+    /// ``None`` keeps those at the model's operating confidence (as ``pomona detect``; score ≥ 0
+    /// for a model without calibration), ``0.0`` keeps every detection.
     ///
     /// Raises ``TypeError`` for arrays of another dtype or shape, ``PomonaError`` for sizes that
     /// disagree, an invalid camera or a threshold the model cannot apply.
@@ -163,10 +161,7 @@ impl Detector {
         frames: Option<Vec<String>>,
         min_confidence: Option<f64>,
     ) -> PyResult<Bound<'py, PyList>> {
-        let threshold = self
-            .inner
-            .min_confidence_for(min_confidence)
-            .map_err(to_py)?;
+        let threshold = self.inner.keep_rule_for(min_confidence).map_err(to_py)?;
         let (dataset, frames) = self.open_dataset(&data, frames)?;
         std::fs::create_dir_all(&out)
             .map_err(|e| to_py(format!("cannot create {}: {e}", out.display())))?;
@@ -239,10 +234,7 @@ impl Detector {
         frames: Option<Vec<String>>,
         min_confidence: Option<f64>,
     ) -> PyResult<Vec<String>> {
-        let threshold = self
-            .inner
-            .min_confidence_for(min_confidence)
-            .map_err(to_py)?;
+        let threshold = self.inner.keep_rule_for(min_confidence).map_err(to_py)?;
         let (dataset, frames) = self.open_dataset(&data, frames)?;
         let identity = self.inner.run_identity(dataset.has_color(), threshold);
         let done = pomona::prepare_detection_folder(&out, &frames, &identity).map_err(to_py)?;

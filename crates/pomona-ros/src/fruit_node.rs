@@ -21,7 +21,7 @@ use std::thread::JoinHandle;
 use std::time::Instant;
 
 use futures::StreamExt;
-use pomona::Detector;
+use pomona::{Detector, KeepRule};
 use pomona_core::{Detection, RgbdFrame};
 use pomona_recording::{CameraInfo, Image};
 use ros2_client::{
@@ -185,8 +185,8 @@ impl FruitNode {
     /// [`RosError::Thread`] when a thread cannot be spawned.
     pub fn start(detector: Detector, config: NodeConfig) -> Result<Self, RosError> {
         config.validate()?;
-        let min_confidence = detector
-            .min_confidence_for(config.min_confidence)
+        let keep = detector
+            .keep_rule_for(config.min_confidence)
             .map_err(|e| RosError::Config {
                 setting: "minimum confidence",
                 reason: e.to_string(),
@@ -264,7 +264,7 @@ impl FruitNode {
             let shared = Arc::clone(&shared);
             std::thread::Builder::new()
                 .name("pomona-detect".into())
-                .spawn(move || detect_loop(&shared, &detector, min_confidence, &outputs))
+                .spawn(move || detect_loop(&shared, &detector, keep, &outputs))
                 .map_err(|e| RosError::Thread {
                     thread: "pomona-detect",
                     reason: e.to_string(),
@@ -401,12 +401,7 @@ pub fn decode_frame(messages: &FrameMessages<impl Sized>) -> Result<RgbdFrame, S
     RgbdFrame::new(camera, depth, Some(color)).map_err(|e| format!("frame {stamp}: {e}"))
 }
 
-fn detect_loop(
-    shared: &Shared,
-    detector: &Detector,
-    min_confidence: Option<f64>,
-    outputs: &Outputs,
-) {
+fn detect_loop(shared: &Shared, detector: &Detector, keep: KeepRule, outputs: &Outputs) {
     while let Some(messages) = shared.mailbox.take() {
         let started = Instant::now();
         let frame = match decode_frame(&messages) {
@@ -425,10 +420,7 @@ fn detect_loop(
             }
         };
         let detected = Instant::now();
-        let kept: Vec<Detection> = detections
-            .into_iter()
-            .filter(|d| min_confidence.is_none_or(|c| d.confidence_at_least(c)))
-            .collect();
+        let kept: Vec<Detection> = detections.into_iter().filter(|d| keep.keeps(d)).collect();
         let header = &messages.color.header;
         let mut published = outputs
             .detections

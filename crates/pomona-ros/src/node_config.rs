@@ -24,7 +24,8 @@ pub struct NodeConfig {
     pub markers_topic: Option<String>,
     /// Largest difference between the colour and depth stamps of one frame, nanoseconds (20 ms).
     pub sync_tolerance_ns: u64,
-    /// Lowest calibrated confidence published (`None`: every detection).
+    /// Lowest calibrated confidence published (`None`: the model's operating confidence, or
+    /// score ≥ 0 for a model without calibration; `Some(0.0)`: every detection).
     pub min_confidence: Option<f64>,
     /// How many frame timings [`crate::NodeStats::recent`] keeps (1000).
     pub timing_window: usize,

@@ -15,7 +15,7 @@ use std::path::{Path, PathBuf};
 
 use pomona_core::FrameDetections;
 
-use crate::{Detector, Error};
+use crate::{Detector, Error, KeepRule};
 
 /// What makes a detection file this run's: the fields every file of the run shares.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -24,28 +24,28 @@ pub struct RunIdentity<'a> {
     pub pipeline: &'a str,
     /// The model's identity ([`crate::ModelInfo::id`]).
     pub model_id: &'a str,
-    /// The confidence threshold the files are written at.
-    pub min_confidence: Option<f64>,
+    /// The threshold the files are written at.
+    pub keep: KeepRule,
 }
 
 impl Detector {
     /// The identity of the detection files this detector writes ([`Detector::frame_record`]) on
-    /// frames with or without colour (`has_color`) at `min_confidence` (from
-    /// [`Detector::min_confidence_for`]).
+    /// frames with or without colour (`has_color`) kept by `keep` (from
+    /// [`Detector::keep_rule_for`]).
     ///
     /// ```
     /// # fn main() -> Result<(), pomona::Error> {
     /// let detector = pomona::Detector::builtin("shape-fit")?;
-    /// let run = detector.run_identity(true, Some(0.5));
+    /// let run = detector.run_identity(true, pomona::KeepRule::Confidence(0.5));
     /// assert_eq!((run.pipeline, run.model_id), ("shape-fit", detector.model().id.as_str()));
     /// # Ok(())
     /// # }
     /// ```
-    pub fn run_identity(&self, has_color: bool, min_confidence: Option<f64>) -> RunIdentity<'_> {
+    pub fn run_identity(&self, has_color: bool, keep: KeepRule) -> RunIdentity<'_> {
         RunIdentity {
             pipeline: self.pipeline(),
             model_id: &self.model_for_color(has_color).id,
-            min_confidence,
+            keep,
         }
     }
 }
@@ -69,12 +69,18 @@ impl RunIdentity<'_> {
             }
             Some(_) => {}
         }
-        (file.min_confidence != self.min_confidence).then(|| {
-            let show = |c: Option<f64>| c.map_or("none".to_owned(), |c| c.to_string());
+        let same = file.min_confidence == self.keep.min_confidence()
+            && file.min_score == self.keep.min_score();
+        (!same).then(|| {
+            let show = |c: Option<f64>, s: Option<f64>| match (c, s) {
+                (Some(c), _) => format!("confidence ≥ {c}"),
+                (None, Some(s)) => format!("score ≥ {s}"),
+                (None, None) => "every detection".to_owned(),
+            };
             format!(
-                "minimum confidence {} (this run: {})",
-                show(file.min_confidence),
-                show(self.min_confidence)
+                "threshold {} (this run: {})",
+                show(file.min_confidence, file.min_score),
+                show(self.keep.min_confidence(), self.keep.min_score())
             )
         })
     }
@@ -158,6 +164,7 @@ mod tests {
             detections: Vec::new(),
             operating_confidence: None,
             min_confidence: min,
+            min_score: None,
             model_id: model_id.map(str::to_owned),
             stamp_ns: None,
             frame_id: None,
@@ -167,7 +174,7 @@ mod tests {
     const RUN: RunIdentity<'static> = RunIdentity {
         pipeline: "p",
         model_id: "1",
-        min_confidence: Some(0.5),
+        keep: KeepRule::Confidence(0.5),
     };
 
     fn write(dir: &Path, name: &str, f: &FrameDetections) {
@@ -183,7 +190,7 @@ mod tests {
         let run = RunIdentity {
             pipeline: "shape-fit",
             model_id: "00ff",
-            min_confidence: Some(0.3),
+            keep: KeepRule::Confidence(0.3),
         };
         assert_eq!(
             run.difference(&file("shape-fit", Some("00ff"), Some(0.3))),
@@ -195,7 +202,14 @@ mod tests {
             (file("shape-fit", None, Some(0.3)), "no model id"),
             (
                 file("shape-fit", Some("00ff"), None),
-                "minimum confidence none",
+                "threshold every detection (this run: confidence ≥ 0.3)",
+            ),
+            (
+                FrameDetections {
+                    min_score: Some(0.0),
+                    ..file("shape-fit", Some("00ff"), None)
+                },
+                "threshold score ≥ 0 (this run: confidence ≥ 0.3)",
             ),
         ] {
             let why = run.difference(&other).unwrap_or_default();
@@ -228,8 +242,11 @@ mod tests {
                 "pipeline `q` (this run: `p`)",
             ),
             (file("p", Some("2"), Some(0.5)), "model 2 (this run: 1"),
-            (file("p", Some("1"), Some(0.25)), "minimum confidence 0.25"),
-            (file("p", Some("1"), None), "minimum confidence none"),
+            (
+                file("p", Some("1"), Some(0.25)),
+                "threshold confidence ≥ 0.25",
+            ),
+            (file("p", Some("1"), None), "threshold every detection"),
         ] {
             let dir = tempfile::tempdir().unwrap();
             write(dir.path(), "a.json", &file("p", Some("1"), Some(0.5)));
@@ -308,12 +325,21 @@ mod tests {
     #[test]
     fn the_identity_is_the_one_frame_records_carry() {
         let detector = Detector::builtin("shape-fit").unwrap();
-        let record = detector.frame_record("f", false, &[], Some(0.5));
-        let run = detector.run_identity(false, Some(0.5));
-        assert_eq!(run.difference(&record), None);
-        assert!(detector
-            .run_identity(false, None)
-            .difference(&record)
-            .is_some());
+        for keep in [
+            KeepRule::Confidence(0.5),
+            KeepRule::Score(0.0),
+            KeepRule::All,
+        ] {
+            let record = detector.frame_record("f", false, &[], keep);
+            let run = detector.run_identity(false, keep);
+            assert_eq!(run.difference(&record), None, "{keep:?}");
+        }
+        let record = detector.frame_record("f", false, &[], KeepRule::Confidence(0.5));
+        for other in [KeepRule::Score(0.0), KeepRule::All] {
+            assert!(detector
+                .run_identity(false, other)
+                .difference(&record)
+                .is_some());
+        }
     }
 }

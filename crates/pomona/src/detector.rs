@@ -134,10 +134,13 @@ impl Detector {
     }
 
     /// Whether `pomona detect` would keep `detection` by default: its confidence reaches the
-    /// model's operating confidence (everything is kept for an uncalibrated model).
+    /// model's operating confidence, or for a model without calibration its score reaches 0
+    /// (the classifier accepts it).
     pub fn keeps(&self, detection: &Detection) -> bool {
-        self.operating_confidence()
-            .is_none_or(|c| detection.confidence_at_least(c))
+        match self.operating_confidence() {
+            Some(c) => detection.confidence_at_least(c),
+            None => detection.score >= 0.0,
+        }
     }
 
     /// Finds fruit in `frame`: every detection, unthresholded, in the camera frame (metres).

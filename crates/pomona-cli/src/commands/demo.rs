@@ -225,6 +225,7 @@ fn run_pipeline(demo: &DemoData, pipeline: &dyn Pipeline, out: &Path) -> Result<
                 detections: result.detections.clone(),
                 operating_confidence: result.model.operating_confidence,
                 min_confidence: None,
+                min_score: None,
                 model_id: Some(result.model.id.clone()),
                 stamp_ns: None,
                 frame_id: None,

@@ -19,7 +19,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use crate::detect_input::DetectInput;
-use crate::detection_run::{detect_frames, load_detector, min_confidence, thread_pool};
+use crate::detection_run::{detect_frames, keep_rule, load_detector, thread_pool};
 use crate::error_line::error_line;
 use crate::exit_status::FramesFailed;
 use crate::overlay::{shown, view_of, write_overlay};
@@ -71,7 +71,8 @@ pub struct DetectArgs {
     #[arg(long, value_name = "DIR")]
     pub overlay: Option<PathBuf>,
     /// Keep detections whose calibrated confidence is at least C (0 keeps all). Default: the
-    /// model's operating confidence; models without calibration keep every detection.
+    /// model's operating confidence; a model without calibration keeps detections scoring ≥ 0
+    /// (its classifier's boundary).
     #[arg(long, value_name = "C")]
     pub min_confidence: Option<f64>,
     /// Continue an interrupted run: skip frames whose detection file exists and was made by the
@@ -164,21 +165,21 @@ pub fn run_with(pipelines: &[Box<dyn Pipeline>], args: &DetectArgs) -> Result<De
     }
     input.check(pipeline)?;
     let detector = load_detector(pipeline, args.model.as_deref(), &args.set)?;
-    let min_confidence = min_confidence(&detector, args.min_confidence)?;
+    let keep = keep_rule(&detector, args.min_confidence)?;
     let model = detector.model_for_color(input.has_color()).clone();
     let name = pipeline.name();
-    let identity = detector.run_identity(input.has_color(), min_confidence);
+    let identity = detector.run_identity(input.has_color(), keep);
     let (frames, resumed) = frames_to_run(args, &input, &identity)?;
     let description = RunDescription {
         pipeline: name,
         model_id: &model.id,
-        min_confidence,
+        keep,
     };
     let writer = FrameWriter {
         args,
         input: &input,
         detector: &detector,
-        min_confidence,
+        keep,
         name,
         recording: match dataset {
             Some(dataset) => recording::open(args.rrd.as_deref(), dataset, &description)?,
@@ -225,7 +226,7 @@ pub fn run_with(pipelines: &[Box<dyn Pipeline>], args: &DetectArgs) -> Result<De
     }
     let shard = args.shard.map(|s| (s.index, s.count));
     let report = write_failures(&args.out, shard, name, frames.len(), &failures)?;
-    let kept = |d: &Detection| min_confidence.is_none_or(|c| d.confidence_at_least(c));
+    let kept = |d: &Detection| keep.keeps(d);
     let found: Vec<&[Detection]> = batch
         .done
         .iter()
@@ -245,7 +246,7 @@ pub fn run_with(pipelines: &[Box<dyn Pipeline>], args: &DetectArgs) -> Result<De
         model: model.source.clone(),
     };
     warn_foreign_files(&args.out, input.frames());
-    let thresholds = (min_confidence, model.operating_confidence);
+    let thresholds = (keep, model.operating_confidence);
     print_summary(
         args,
         &input.path(),
@@ -297,7 +298,7 @@ struct FrameWriter<'a> {
     args: &'a DetectArgs,
     input: &'a DetectInput,
     detector: &'a pomona::Detector,
-    min_confidence: Option<f64>,
+    keep: pomona::KeepRule,
     name: &'static str,
     recording: Option<recording::RunRecording>,
 }
@@ -305,9 +306,9 @@ struct FrameWriter<'a> {
 impl FrameWriter<'_> {
     fn write(&self, stem: &str, detections: &[Detection]) -> Result<()> {
         let (args, input) = (self.args, self.input);
-        let mut record =
-            self.detector
-                .frame_record(stem, input.has_color(), detections, self.min_confidence);
+        let mut record = self
+            .detector
+            .frame_record(stem, input.has_color(), detections, self.keep);
         input.annotate(stem, &mut record)?;
         pomona_io::write_json(&args.out.join(format!("{stem}.json")), &record)?;
         // Recordings and overlays need a dataset's files (checked before the run).
@@ -315,19 +316,19 @@ impl FrameWriter<'_> {
             return Ok(());
         };
         if let Some(recording) = &self.recording {
-            let kept = |d: &Detection| self.min_confidence.is_none_or(|c| d.confidence_at_least(c));
+            let kept = |d: &Detection| self.keep.keeps(d);
             recording.record_frame(dataset, stem, detections, &kept)?;
         }
         let Some(dir) = &args.overlay else {
             return Ok(());
         };
         let (image, truth) = view_of(dataset, stem)?;
-        let (shown, kept_words) = match self.min_confidence {
-            Some(c) => (
+        let (shown, kept_words) = match self.keep {
+            pomona::KeepRule::All => (shown(detections, 0.0), "scoring ≥ 0".to_owned()),
+            keep => (
                 record.detections.clone(),
-                format!("with confidence ≥ {c:.2}"),
+                format!("with {}", keep.describe()),
             ),
-            None => (shown(detections, 0.0), "scoring ≥ 0".to_owned()),
         };
         write_overlay(
             &dir.join(format!("{stem}.png")),
@@ -348,24 +349,21 @@ fn print_summary(
     name: &str,
     summary: &DetectSummary,
     found: &[&[Detection]],
-    (min_confidence, operating): (Option<f64>, Option<f64>),
+    (keep, operating): (pomona::KeepRule, Option<f64>),
     wall_s: f64,
 ) {
     let all: usize = found.iter().map(|d| d.len()).sum();
     let written = summary.detections;
-    let kept_note = match (min_confidence, operating) {
-        (Some(c), Some(op)) if c == op => {
+    let kept_note = match (keep, operating) {
+        (pomona::KeepRule::Confidence(c), Some(op)) if c == op => {
             format!("{written} kept at the model's operating confidence {c:.3}")
         }
-        (Some(c), _) => format!("{written} kept at confidence ≥ {c:.3}"),
-        (None, _) => format!(
-            "all kept: the model has no confidence calibration; {} score ≥ 0",
-            found
-                .iter()
-                .flat_map(|d| d.iter())
-                .filter(|d| d.score >= 0.0)
-                .count()
+        (pomona::KeepRule::Confidence(c), _) => format!("{written} kept at confidence ≥ {c:.3}"),
+        (pomona::KeepRule::Score(s), _) => format!(
+            "{written} kept at score ≥ {s}: the model has no confidence calibration, so the \
+             classifier's boundary; --min-confidence 0 keeps all"
         ),
+        (pomona::KeepRule::All, _) => format!("all {written} kept"),
     };
     let resumed_note = if summary.resumed > 0 {
         format!(" ({} already done, skipped)", summary.resumed)

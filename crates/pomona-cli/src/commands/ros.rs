@@ -19,7 +19,7 @@ use pomona_recording::{DEFAULT_COLOR_TOPIC, DEFAULT_DEPTH_TOPIC, DEFAULT_INFO_TO
 use pomona_ros::{FruitNode, LatencySummary, NodeConfig, NodeStats};
 use serde::Serialize;
 
-use crate::detection_run::{load_detector, min_confidence};
+use crate::detection_run::{keep_rule, load_detector};
 
 /// Arguments of `pomona ros`.
 #[derive(Debug, Clone, clap::Args)]
@@ -34,7 +34,8 @@ pub struct RosArgs {
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub set: Vec<pomona::ParamOverride>,
     /// Publish detections whose calibrated confidence is at least C (0 publishes all). Default:
-    /// the model's operating confidence.
+    /// the model's operating confidence; a model without calibration publishes those scoring
+    /// ≥ 0 (its classifier's boundary).
     #[arg(long, value_name = "C")]
     pub min_confidence: Option<f64>,
     /// Colour image topic (`sensor_msgs/Image`, rgb8 or bgr8).
@@ -159,7 +160,8 @@ pub fn run(args: &RosArgs) -> Result<()> {
     let pipelines = pomona::pipelines();
     let pipeline = pomona::find_pipeline(&pipelines, &args.pipeline)?;
     let detector = load_detector(pipeline, args.model.as_deref(), &args.set)?;
-    let min_confidence = min_confidence(&detector, args.min_confidence)?;
+    // Checked here for a clear message; the node applies the same rule.
+    keep_rule(&detector, args.min_confidence)?;
     let config = NodeConfig {
         node_name: args.node_name.clone(),
         namespace: args.namespace.clone(),
@@ -172,7 +174,7 @@ pub fn run(args: &RosArgs) -> Result<()> {
         detections_topic: args.detections_topic.clone(),
         markers_topic: (!args.no_markers).then(|| args.markers_topic.clone()),
         sync_tolerance_ns: (ms * 1e6).round() as u64,
-        min_confidence,
+        min_confidence: args.min_confidence,
         ..NodeConfig::default()
     };
     let domain = config.domain_id;

@@ -43,7 +43,7 @@ use pomona_synth::RigFile;
 use rayon::prelude::*;
 
 use crate::commands::stereo_report::{LocatedPair, StereoFrameOutcome, StereoReport};
-use crate::detection_run::{load_detector, min_confidence, thread_pool};
+use crate::detection_run::{keep_rule, load_detector, thread_pool};
 use crate::number_pair::parse_number_pair;
 
 /// The pipeline whose circles are matched.
@@ -74,7 +74,7 @@ pub struct StereoArgs {
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub set: Vec<pomona::ParamOverride>,
     /// Keep 2D detections whose calibrated confidence is at least C before matching. Default:
-    /// the model's operating confidence; models without calibration keep every detection.
+    /// the model's operating confidence; a model without calibration keeps those scoring ≥ 0.
     #[arg(long, value_name = "C")]
     pub min_confidence: Option<f64>,
     /// The working volume, distances from the hub (the pivot) in metres, `NEAR,FAR`, from which
@@ -292,7 +292,7 @@ fn run_frame(
     stem: &str,
     views: (&Dataset, &Dataset),
     detector: &Detector,
-    threshold: Option<f64>,
+    keep: pomona::KeepRule,
     how: &Locating,
 ) -> Result<FrameRun> {
     let load = |dataset: &Dataset| -> Result<ColorImage> {
@@ -317,10 +317,7 @@ fn run_frame(
         let found = detector.detect(&frame).with_context(|| {
             format!("detecting in frame {stem} of {}", dataset.root().display())
         })?;
-        Ok(found
-            .into_iter()
-            .filter(|d| threshold.is_none_or(|c| d.confidence_at_least(c)))
-            .collect())
+        Ok(found.into_iter().filter(|d| keep.keeps(d)).collect())
     };
     let primary = detect(views.0, &images.0)?;
     let stereo = detect(views.1, &images.1)?;
@@ -415,7 +412,7 @@ pub fn run(args: &StereoArgs) -> Result<()> {
     .chain(args.set.iter().cloned())
     .collect();
     let detector = load_detector(pipeline, args.model.as_deref(), &overrides)?;
-    let threshold = min_confidence(&detector, args.min_confidence)?;
+    let keep = keep_rule(&detector, args.min_confidence)?;
     let d = rig.pivot_distance_m;
     let (near, far) = args.reach_m.unwrap_or((d + 0.2, d + 2.0));
     let windows = MatchingWindows::for_rig(&rig, near, far, args.margin_px)
@@ -466,8 +463,9 @@ pub fn run(args: &StereoArgs) -> Result<()> {
             .frames()
             .par_iter()
             .map(|stem| -> Result<FrameRun> {
-                let run = run_frame(stem, (&dataset, &stereo), &detector, threshold, &how)?;
-                let mut record = detector.frame_record(stem, true, &run.detections, None);
+                let run = run_frame(stem, (&dataset, &stereo), &detector, keep, &how)?;
+                let mut record =
+                    detector.frame_record(stem, true, &run.detections, pomona::KeepRule::All);
                 record.pipeline = STEREO_RECORD_PIPELINE.to_owned();
                 pomona_io::write_json(&args.out.join(format!("{stem}.json")), &record)?;
                 Ok(run)

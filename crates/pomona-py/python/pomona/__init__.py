@@ -69,7 +69,7 @@ def detect(
     ``camera.json`` (width, height, fx, fy, cx, cy, depth_unit_m); ``pipeline``: one of
     ``pipelines()``; ``model``: a model file from ``pomona train`` (default: the built-in model);
     ``min_confidence``: ``None`` keeps detections at the model's operating confidence (as
-    ``pomona detect``), ``0.0`` keeps everything.
+    ``pomona detect``; score ≥ 0 for a model without calibration), ``0.0`` keeps everything.
 
     Returns a list of dicts with the keys of the detection JSON (``center_m``, ``score``,
     ``confidence``, ``diameter_m``, ...). The detector is loaded once per (pipeline, model) and

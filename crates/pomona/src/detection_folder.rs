@@ -73,12 +73,12 @@ impl RunIdentity<'_> {
             && file.min_score == self.keep.min_score();
         (!same).then(|| {
             let show = |c: Option<f64>, s: Option<f64>| match (c, s) {
-                (Some(c), _) => format!("confidence ≥ {c}"),
-                (None, Some(s)) => format!("score ≥ {s}"),
-                (None, None) => "every detection".to_owned(),
+                (Some(c), _) => format!("minimum confidence {c}"),
+                (None, Some(s)) => format!("minimum score {s}"),
+                (None, None) => "no threshold".to_owned(),
             };
             format!(
-                "threshold {} (this run: {})",
+                "{} (this run: {})",
                 show(file.min_confidence, file.min_score),
                 show(self.keep.min_confidence(), self.keep.min_score())
             )
@@ -202,14 +202,14 @@ mod tests {
             (file("shape-fit", None, Some(0.3)), "no model id"),
             (
                 file("shape-fit", Some("00ff"), None),
-                "threshold every detection (this run: confidence ≥ 0.3)",
+                "no threshold (this run: minimum confidence 0.3)",
             ),
             (
                 FrameDetections {
                     min_score: Some(0.0),
                     ..file("shape-fit", Some("00ff"), None)
                 },
-                "threshold score ≥ 0 (this run: confidence ≥ 0.3)",
+                "minimum score 0 (this run: minimum confidence 0.3)",
             ),
         ] {
             let why = run.difference(&other).unwrap_or_default();
@@ -242,11 +242,8 @@ mod tests {
                 "pipeline `q` (this run: `p`)",
             ),
             (file("p", Some("2"), Some(0.5)), "model 2 (this run: 1"),
-            (
-                file("p", Some("1"), Some(0.25)),
-                "threshold confidence ≥ 0.25",
-            ),
-            (file("p", Some("1"), None), "threshold every detection"),
+            (file("p", Some("1"), Some(0.25)), "minimum confidence 0.25"),
+            (file("p", Some("1"), None), "no threshold"),
         ] {
             let dir = tempfile::tempdir().unwrap();
             write(dir.path(), "a.json", &file("p", Some("1"), Some(0.5)));

@@ -14,6 +14,8 @@ import pytest
 
 import pomona
 
+REPO = Path(__file__).resolve().parents[3]
+
 
 def raw_depth(dataset: pomona.Dataset, frame: str) -> np.ndarray:
     """The frame's depth as the sensor's uint16 values (as in the PNG)."""
@@ -83,6 +85,25 @@ def test_thresholds_keep_what_pomona_detect_keeps(oranges):
         assert len(d["center_m"]) == 3 and d["center_m"][2] > 0
     with pytest.raises(pomona.PomonaError, match=r"\[0, 1\]"):
         detector.detect(*args, camera=oranges.camera, min_confidence=1.5)
+
+
+def test_a_model_without_calibration_keeps_what_its_classifier_accepts(oranges, tmp_path):
+    # The built-in colour model with its calibration removed: what `pomona train` writes when
+    # the truth is incomplete (real frames).
+    model = json.loads((REPO / "crates/pomona-shapefit/models/default.json").read_text())
+    del model["calibration"]
+    path = tmp_path / "uncalibrated.json"
+    path.write_text(json.dumps(model))
+    detector = pomona.Detector("shape-fit", model=str(path))
+    assert detector.operating_confidence is None
+    frame = oranges.frames[1]
+    args = (oranges.depth(frame), oranges.color(frame))
+    everything = detector.detect(*args, camera=oranges.camera, min_confidence=0.0)
+    default = detector.detect(*args, camera=oranges.camera)
+    assert default == [d for d in everything if d["score"] >= 0.0]
+    assert any(d["score"] < 0.0 for d in everything), "some candidates are rejected"
+    with pytest.raises(pomona.PomonaError, match="no confidence calibration"):
+        detector.detect(*args, camera=oranges.camera, min_confidence=0.5)
 
 
 def test_bad_input_is_refused_with_a_message_naming_it(oranges):

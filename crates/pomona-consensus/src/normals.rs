@@ -469,22 +469,19 @@ impl WindowNormals {
 
     /// The window at a point `depth_m` away: this camera's window, or with
     /// [`WindowNormalParams::reference_depth_m`] the one scaled to that depth (its reach in
-    /// pixels capped at [`MAX_SCALED_HALF_WINDOW`]; never below the camera's window with
-    /// [`WindowNormalParams::grow_only`]).
+    /// pixels capped at [`MAX_SCALED_HALF_WINDOW`]; with [`WindowNormalParams::grow_only`] the
+    /// camera's window wherever that would be smaller, without rescaling it).
     fn window_at(&self, depth_m: f64) -> (u32, u32) {
-        match self.reference.reference_depth_m {
-            Some(z_ref) if depth_m > 0.0 => {
-                let reach =
-                    f64::from(self.reference.half_window) * self.focal_ratio * z_ref / depth_m;
-                let mut ratio =
-                    reach.min(MAX_SCALED_HALF_WINDOW) / f64::from(self.reference.half_window);
-                if self.reference.grow_only {
-                    ratio = ratio.max(self.focal_ratio);
-                }
-                self.scaled_window(ratio)
-            }
-            _ => (self.params.half_window, self.params.sample_step_px),
+        let camera = (self.params.half_window, self.params.sample_step_px);
+        let Some(z_ref) = self.reference.reference_depth_m.filter(|_| depth_m > 0.0) else {
+            return camera;
+        };
+        let half = f64::from(self.reference.half_window);
+        let ratio = (half * self.focal_ratio * z_ref / depth_m).min(MAX_SCALED_HALF_WINDOW) / half;
+        if self.reference.grow_only && ratio <= self.focal_ratio {
+            return camera;
         }
+        self.scaled_window(ratio)
     }
 
     /// The validated parameters.

@@ -64,11 +64,11 @@ impl Detector {
         frame: &RgbdFrame,
         min_confidence: Option<f64>,
     ) -> PyResult<pomona::FrameDetections> {
-        let threshold = self.inner.keep_rule_for(min_confidence).map_err(to_py)?;
+        let keep = self.inner.keep_rule_for(min_confidence).map_err(to_py)?;
         let found = py.detach(|| self.inner.detect(frame)).map_err(to_py)?;
         Ok(self
             .inner
-            .frame_record("", frame.color().is_some(), &found, threshold))
+            .frame_record("", frame.color().is_some(), &found, keep))
     }
 }
 
@@ -161,7 +161,7 @@ impl Detector {
         frames: Option<Vec<String>>,
         min_confidence: Option<f64>,
     ) -> PyResult<Bound<'py, PyList>> {
-        let threshold = self.inner.keep_rule_for(min_confidence).map_err(to_py)?;
+        let keep = self.inner.keep_rule_for(min_confidence).map_err(to_py)?;
         let (dataset, frames) = self.open_dataset(&data, frames)?;
         std::fs::create_dir_all(&out)
             .map_err(|e| to_py(format!("cannot create {}: {e}", out.display())))?;
@@ -175,12 +175,9 @@ impl Detector {
                         let started = Instant::now();
                         let found = self.inner.detect(&frame)?;
                         seconds = started.elapsed().as_secs_f64();
-                        let record = self.inner.frame_record(
-                            stem,
-                            frame.color().is_some(),
-                            &found,
-                            threshold,
-                        );
+                        let record =
+                            self.inner
+                                .frame_record(stem, frame.color().is_some(), &found, keep);
                         pomona_io::write_json(&out.join(format!("{stem}.json")), &record)?;
                         Ok(record.detections.len())
                     })();
@@ -234,9 +231,9 @@ impl Detector {
         frames: Option<Vec<String>>,
         min_confidence: Option<f64>,
     ) -> PyResult<Vec<String>> {
-        let threshold = self.inner.keep_rule_for(min_confidence).map_err(to_py)?;
+        let keep = self.inner.keep_rule_for(min_confidence).map_err(to_py)?;
         let (dataset, frames) = self.open_dataset(&data, frames)?;
-        let identity = self.inner.run_identity(dataset.has_color(), threshold);
+        let identity = self.inner.run_identity(dataset.has_color(), keep);
         let done = pomona::prepare_detection_folder(&out, &frames, &identity).map_err(to_py)?;
         Ok(done.into_iter().collect())
     }

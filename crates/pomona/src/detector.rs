@@ -137,10 +137,7 @@ impl Detector {
     /// model's operating confidence, or for a model without calibration its score reaches 0
     /// (the classifier accepts it).
     pub fn keeps(&self, detection: &Detection) -> bool {
-        match self.operating_confidence() {
-            Some(c) => detection.confidence_at_least(c),
-            None => detection.score >= 0.0,
-        }
+        self.default_keep_rule().keeps(detection)
     }
 
     /// Finds fruit in `frame`: every detection, unthresholded, in the camera frame (metres).

@@ -99,8 +99,16 @@ impl Detector {
                 ),
             }),
             (Some(c), Some(_)) => Ok(KeepRule::Confidence(c)),
-            (None, Some(op)) => Ok(KeepRule::Confidence(op)),
-            (None, None) => Ok(KeepRule::Score(0.0)),
+            (None, _) => Ok(self.default_keep_rule()),
+        }
+    }
+
+    /// The rule when none is asked for: the model's operating confidence, else (no
+    /// calibration) score ≥ 0.
+    pub(crate) fn default_keep_rule(&self) -> KeepRule {
+        match self.operating_confidence() {
+            Some(op) => KeepRule::Confidence(op),
+            None => KeepRule::Score(0.0),
         }
     }
 

@@ -120,10 +120,13 @@ pub struct SlidingBoxParams {
     /// thinning step (on the image, not at the box's own corner), so overlapping boxes of the
     /// same step read the same pixels and share their normals (the normal stage of a 1920×1080
     /// Azure Kinect frame, 917 px, takes a quarter of the time). Each box still reads every
-    /// step-th pixel of its rectangle, from at most one step further on. Cameras below it
-    /// (730 px by default: twice the Kinect v2's 365, so Kinect v2, D435 and SR4000 frames) keep
-    /// the corner start and their detections. `None` (model files written before it) never
-    /// aligns. See docs/results.md, "Symmetry boxes on a shared lattice".
+    /// step-th pixel of its rectangle, from at most one step further on. Default `None` (each
+    /// box from its own corner, on every camera): on five 40-frame synthetic Azure Kinect sets
+    /// the shared lattice cost symmetry 0.04–0.05 AP on each of three pepper sets (and gained as
+    /// much on two apple sets); the real 1080p frame takes about 80 ms without it (criterion, one
+    /// thread). `730` aligns on the Azure Kinect only (the speed setting the built-in models had
+    /// before). See docs/results.md, "Symmetry boxes on a shared lattice" and "The 1080p
+    /// sampling settings on five sets".
     #[serde(default)]
     pub align_samples_min_focal_px: Option<f64>,
 }
@@ -145,7 +148,7 @@ impl Default for SlidingBoxParams {
             max_normal_coherence: 1.0,
             max_points: 400,
             pixel_lattice: 1,
-            align_samples_min_focal_px: Some(730.0),
+            align_samples_min_focal_px: None,
         }
     }
 }

@@ -15,9 +15,9 @@
 //!
 //! Box centres sit on multiples of the stride in the camera frame, so the grid does not depend
 //! on the frame's content and results do not depend on the thread count. A box reads every
-//! `step`-th pixel of the rectangle it covers (at most about `max_points`); on high-resolution
-//! cameras (`align_samples_min_focal_px`) the samples start on multiples of the step, so that
-//! overlapping boxes read, and need normals at, the same pixels.
+//! `step`-th pixel of the rectangle it covers (at most about `max_points`); optionally, on
+//! high-resolution cameras (`align_samples_min_focal_px`, off by default), the samples start on
+//! multiples of the step, so that overlapping boxes read, and need normals at, the same pixels.
 
 use std::ops::RangeInclusive;
 

@@ -132,6 +132,11 @@ impl<'a> Stage<(&'a RgbdFrame, &'a [bool]), Vec<Vec<usize>>> for DepthProposalSt
         let in_range = self.in_range.run(frame)?;
         let mut clusters = self.regions.run((frame, in_range.as_slice()))?;
         let (fx, depth) = (frame.camera().fx, frame.depth().as_slice());
+        let width = frame.camera().width as usize;
+        let pieces = self
+            .params
+            .joined_pieces(&clusters, width, depth, fx, self.radius_range_m.1);
+        clusters.extend(pieces);
         clusters.retain(|c| {
             self.params
                 .proposes(c, color_mask, depth, fx, self.radius_range_m)

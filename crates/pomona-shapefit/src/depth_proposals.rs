@@ -173,9 +173,9 @@ impl DepthProposalParams {
 /// Nearer than both pieces by this much, metres, a pixel between them is in front of them.
 const IN_FRONT_M: f32 = 0.01;
 
-/// Whether what separates pieces `a` and `b` (cluster numbers `ab` in `owner`) on the image is
-/// in front of them: of the pixels on the segment between their centroids that belong to
-/// neither, at least half have a valid depth nearer than both pieces by [`IN_FRONT_M`] (or
+/// Whether what separates pieces `a` and `b` (cluster numbers `ia`, `ib` in `owner`) on the
+/// image is in front of them: of the pixels on the segment between their centroids that belong
+/// to neither, at least half have a valid depth nearer than both pieces by [`IN_FRONT_M`] (or
 /// there are none: the pieces touch, one surface that region growing split at a depth step).
 /// Two leaves side by side, or a leaf beside a fruit, are separated by background or by another
 /// surface at their own depth; a fruit cut by a leaf or stem is separated by that leaf.

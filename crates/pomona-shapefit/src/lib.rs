@@ -32,6 +32,7 @@ mod depth_proposals;
 mod gpcd;
 mod negative_selection;
 mod params;
+mod piece_joining;
 mod pipeline;
 mod region_growing;
 mod size_prior;
@@ -45,6 +46,7 @@ pub use depth_proposals::DepthProposalParams;
 pub use gpcd::{gpcd, GpcdParams, HueStatistics, GPCD_LEN};
 pub use negative_selection::MINING_MIN_SCORE;
 pub use params::{CoaxialMergeParams, LabelRule, ShapeFitParams};
+pub use piece_joining::PieceJoining;
 pub use pipeline::{ShapeFitDetector, ShapeFitPipeline, ShapeFitStageParams, PIPELINE_NAME};
 pub use pomona_consensus::{fit_center_fixed_radius, RadiusCalibration, MIN_CALIBRATION_SAMPLES};
 /// Re-exported from pomona-core, where the one RGB → HSV conversion lives.

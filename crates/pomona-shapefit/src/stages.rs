@@ -12,7 +12,7 @@ use rayon::prelude::*;
 
 use crate::{
     gpcd, grow_regions, Candidate, ClusterLattice, ColorLut, CurvatureCheck, DepthProposalParams,
-    GpcdParams, RegionGrowingParams, ShapeFitParams,
+    GpcdParams, PieceJoining, RegionGrowingParams, ShapeFitParams,
 };
 
 /// Colour posterior ≥ threshold and depth within range (Eq. 2, then the masked depth image).
@@ -87,6 +87,52 @@ impl<'a> Stage<(&'a RgbdFrame, &'a [bool]), Vec<Vec<usize>>> for RegionGrowingSt
     }
 }
 
+/// Pairs of clusters that may be pieces of one fruit, as one cluster each (not in the paper; see
+/// [`PieceJoining`]); the caller adds them to the clusters it joined.
+#[derive(Debug, Clone, Copy)]
+pub struct PieceJoiningStage {
+    /// The joining rule.
+    pub joining: PieceJoining,
+    /// Radius of the largest fruit any shape may fit, metres.
+    pub max_radius_m: f64,
+}
+
+impl PieceJoiningStage {
+    /// The joining of a model's depth proposals, when on: the largest radius of its sphere and
+    /// cylinder estimators.
+    pub fn of_params(p: &ShapeFitParams) -> Option<Self> {
+        p.depth_proposals.join_pieces.map(|joining| Self {
+            joining,
+            max_radius_m: p
+                .shapes
+                .sphere
+                .radius_range_m
+                .1
+                .max(p.shapes.cylinder.radius_range_m.1),
+        })
+    }
+}
+
+impl<'a> Stage<(&'a RgbdFrame, &'a [Vec<usize>]), Vec<Vec<usize>>> for PieceJoiningStage {
+    fn name(&self) -> &'static str {
+        "piece-joining"
+    }
+
+    fn run(
+        &self,
+        (frame, clusters): (&'a RgbdFrame, &'a [Vec<usize>]),
+    ) -> Result<Vec<Vec<usize>>, PipelineError> {
+        let cam = frame.camera();
+        Ok(self.joining.joined(
+            clusters,
+            cam.width as usize,
+            frame.depth().as_slice(),
+            cam.fx,
+            self.max_radius_m,
+        ))
+    }
+}
+
 /// Depth-only clusters for fruit the colour mask misses (not in the paper; see
 /// [`DepthProposalParams`]): region growing on every pixel in depth range, keeping the clusters
 /// the proposal tests pass. Its input is the colour mask, to leave what it covers to the colour
@@ -101,6 +147,8 @@ pub struct DepthProposalStage {
     /// Smallest and largest radius any shape may fit, metres: the sizes of the smallest and the
     /// largest fruit.
     pub radius_range_m: (f64, f64),
+    /// Pairs of clusters that may be pieces of one fruit, proposed as one too (when on).
+    pub joining: Option<PieceJoiningStage>,
 }
 
 impl DepthProposalStage {
@@ -116,6 +164,7 @@ impl DepthProposalStage {
             in_range: ColorMaskStage::depth_range(p.max_depth_m),
             regions: RegionGrowingStage { params: p.regions },
             radius_range_m: (sphere.0.min(cylinder.0), sphere.1.max(cylinder.1)),
+            joining: PieceJoiningStage::of_params(p),
         }
     }
 }
@@ -132,11 +181,10 @@ impl<'a> Stage<(&'a RgbdFrame, &'a [bool]), Vec<Vec<usize>>> for DepthProposalSt
         let in_range = self.in_range.run(frame)?;
         let mut clusters = self.regions.run((frame, in_range.as_slice()))?;
         let (fx, depth) = (frame.camera().fx, frame.depth().as_slice());
-        let width = frame.camera().width as usize;
-        let pieces = self
-            .params
-            .joined_pieces(&clusters, width, depth, fx, self.radius_range_m.1);
-        clusters.extend(pieces);
+        if let Some(joining) = &self.joining {
+            let pieces = joining.run((frame, clusters.as_slice()))?;
+            clusters.extend(pieces);
+        }
         clusters.retain(|c| {
             self.params
                 .proposes(c, color_mask, depth, fx, self.radius_range_m)

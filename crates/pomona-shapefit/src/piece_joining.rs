@@ -33,7 +33,8 @@ pub struct PieceJoining {
 impl PieceJoining {
     /// The unions of the pairs of `clusters` (sorted pixel indices of an image `width` pixels
     /// wide with depths `depth_m`, focal length `fx_px`) that may be pieces of one fruit no
-    /// larger than `max_radius_m` (see the module docs), each sorted.
+    /// larger than `max_radius_m` (see the module docs), each sorted. Clusters with pixels
+    /// outside the image are not of this image: then nothing is joined.
     pub fn joined(
         &self,
         clusters: &[Vec<usize>],
@@ -43,6 +44,9 @@ impl PieceJoining {
         max_radius_m: f64,
     ) -> Vec<Vec<usize>> {
         let gap_radii = self.gap_radii;
+        if clusters.iter().flatten().any(|&p| p >= depth_m.len()) {
+            return Vec::new();
+        }
         let pieces: Vec<Piece> = clusters
             .iter()
             .map(|c| Piece::of(c, width, depth_m))
@@ -228,6 +232,10 @@ mod tests {
         for &i in &clusters[1] {
             depth[i] = 1.06;
         }
+        assert!(p.joined(&clusters, width, &depth, 100.0, 0.05).is_empty());
+        // Clusters of another image (pixels beyond this one's): nothing joined, no panic.
+        let (mut clusters, depth) = two_pieces(0.9);
+        clusters[1].push(depth.len());
         assert!(p.joined(&clusters, width, &depth, 100.0, 0.05).is_empty());
         // Farther apart than the gap allows: nothing joined.
         let (clusters, depth) = two_pieces(0.9);

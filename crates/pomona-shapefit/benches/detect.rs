@@ -100,6 +100,16 @@ fn detect(c: &mut Criterion) {
     for (name, frames) in &sets {
         c.bench_function(name, |b| b.iter(|| run(detector.as_ref(), frames)));
     }
+    // The same model with the opt-in joining of pieces of one fruit among the depth proposals.
+    let mut joined = model.clone();
+    joined.stage_params["params"]["depth_proposals"]["join_pieces"] =
+        serde_json::json!({ "gap_radii": 0.5 });
+    let joined = pipeline.load(&joined).unwrap_or_else(|e| panic!("{e}"));
+    for (name, frames) in sets.iter().skip(1) {
+        c.bench_function(&format!("{name}, pieces joined"), |b| {
+            b.iter(|| run(joined.as_ref(), frames))
+        });
+    }
     if let Some((trained, frame)) = real_orchard_frame() {
         let frames = [frame];
         c.bench_function("shape-fit detect real azure-kinect 1920x1080 frame", |b| {

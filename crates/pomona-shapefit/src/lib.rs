@@ -22,7 +22,9 @@
 //! Two additions for scenes the models were not tuned on: **depth proposals**
 //! ([`DepthProposalParams`]) offer fruit-sized depth-only clusters the colour mask missed (green
 //! fruit among green leaves) to the same shape fit and classifier, and training mines **hard
-//! negatives** (`hard_negative_rounds`) among the candidates a random cap left out.
+//! negatives** (`hard_negative_rounds`) among the candidates a random cap left out. Opt-in,
+//! pairs of depth proposals that a leaf in front cut out of one fruit are proposed as one too
+//! ([`PieceJoining`]).
 
 mod candidate;
 mod cluster_lattice;

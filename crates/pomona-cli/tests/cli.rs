@@ -176,12 +176,14 @@ fn eval_scores_hand_made_detections() {
         args.extend_from_slice(extra);
         pomona(&args)
     };
-    let read_report = || -> serde_json::Value {
-        serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap()
+    // A run that must succeed: its output and the report it wrote.
+    let evaluated = |extra: &[&str]| -> (std::process::Output, serde_json::Value) {
+        let out = eval(extra);
+        assert!(out.status.success(), "{}", stderr(&out));
+        let r = serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+        (out, r)
     };
-    let out = eval(&[]);
-    assert!(out.status.success(), "{}", stderr(&out));
-    let r = read_report();
+    let (out, r) = evaluated(&[]);
     assert_eq!(r["fruits"], 2);
     assert_eq!(r["precision"], 0.5);
     assert_eq!(r["recall"], 0.5);
@@ -196,18 +198,14 @@ fn eval_scores_hand_made_detections() {
 
     // --depth-range-m: a band holding both fruit changes nothing but the report's record of it;
     // one beyond them leaves no fruit counted, and a reversed band is refused by name.
-    let out = eval(&["--depth-range-m", "0.4,0.6"]);
-    assert!(out.status.success(), "{}", stderr(&out));
-    let r = read_report();
+    let (out, r) = evaluated(&["--depth-range-m", "0.4,0.6"]);
     assert_eq!(
         (r["fruits"].as_u64(), r["precision"].as_f64()),
         (Some(2), Some(0.5))
     );
     assert_eq!(r["depth_range_m"], serde_json::json!([0.4, 0.6]));
     assert!(stdout(&out).contains("0.4–0.6 m deep"), "{}", stdout(&out));
-    let out = eval(&["--depth-range-m", "0.6,1.5"]);
-    assert!(out.status.success(), "{}", stderr(&out));
-    let r = read_report();
+    let (_, r) = evaluated(&["--depth-range-m", "0.6,1.5"]);
     assert_eq!(
         (r["fruits"].as_u64(), r["ignored"].as_u64()),
         (Some(0), Some(2))
@@ -228,14 +226,12 @@ fn eval_scores_hand_made_detections() {
         ),
     )
     .unwrap();
-    let out = eval(&["--kind", "apple"]);
-    assert!(out.status.success(), "{}", stderr(&out));
+    let (out, r) = evaluated(&["--kind", "apple"]);
     assert!(
         stderr(&out).contains("1 of other kinds left out"),
         "{}",
         stderr(&out)
     );
-    let r = read_report();
     assert_eq!(
         (r["fruits"].as_u64(), r["recall"].as_f64()),
         (Some(1), Some(1.0))

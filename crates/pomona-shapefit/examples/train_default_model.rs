@@ -25,7 +25,7 @@ use pomona_pipeline::{
     train_calibrated, CalibrationParams, ChainedFrames, FrameSource, LabelledFrame, PipelineError,
     SyntheticFrames, TrainOptions,
 };
-use pomona_shapefit::ShapeFitPipeline;
+use pomona_shapefit::{ShapeFitPipeline, ShapeFitStageParams};
 use pomona_synth::{CameraPreset, Domain};
 
 /// Frames rendered for training per domain and camera; seeds 1000–1003 are reserved for the default models
@@ -133,9 +133,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         eprintln!();
         let mut model = trained.model;
         if name == "default.json" {
-            let shapes = &mut model.stage_params["params"]["shapes"];
-            shapes["sphere_preference"] = SPHERE_PREFERENCE.into();
-            shapes["round_pair_cost_ratio"] = ROUND_PAIR_COST_RATIO.into();
+            let mut stage: ShapeFitStageParams =
+                serde_json::from_value(model.stage_params.clone())?;
+            stage.params.shapes.sphere_preference = SPHERE_PREFERENCE;
+            stage.params.shapes.round_pair_cost_ratio = Some(ROUND_PAIR_COST_RATIO);
+            model.stage_params = serde_json::to_value(&stage)?;
         }
         let out = dir.join(name);
         model.save(&out)?;

@@ -97,22 +97,6 @@ pub struct PieceJoiningStage {
     pub max_radius_m: f64,
 }
 
-impl PieceJoiningStage {
-    /// The joining of a model's depth proposals, when on: the largest radius of its sphere and
-    /// cylinder estimators.
-    pub fn of_params(p: &ShapeFitParams) -> Option<Self> {
-        p.depth_proposals.join_pieces.map(|joining| Self {
-            joining,
-            max_radius_m: p
-                .shapes
-                .sphere
-                .radius_range_m
-                .1
-                .max(p.shapes.cylinder.radius_range_m.1),
-        })
-    }
-}
-
 impl<'a> Stage<(&'a RgbdFrame, &'a [Vec<usize>]), Vec<Vec<usize>>> for PieceJoiningStage {
     fn name(&self) -> &'static str {
         "piece-joining"
@@ -159,12 +143,19 @@ impl DepthProposalStage {
             p.shapes.sphere.radius_range_m,
             p.shapes.cylinder.radius_range_m,
         );
+        let radius_range_m = (sphere.0.min(cylinder.0), sphere.1.max(cylinder.1));
         Self {
             params: p.depth_proposals,
             in_range: ColorMaskStage::depth_range(p.max_depth_m),
             regions: RegionGrowingStage { params: p.regions },
-            radius_range_m: (sphere.0.min(cylinder.0), sphere.1.max(cylinder.1)),
-            joining: PieceJoiningStage::of_params(p),
+            radius_range_m,
+            joining: p
+                .depth_proposals
+                .join_pieces
+                .map(|joining| PieceJoiningStage {
+                    joining,
+                    max_radius_m: radius_range_m.1,
+                }),
         }
     }
 }

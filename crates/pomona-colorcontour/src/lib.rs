@@ -24,9 +24,11 @@
 //! a closing of the mask ([`close_mask`]), least-squares circles of each group's contour points
 //! ([`GroupCircle`], [`refine_circle`]), merging of arcs that lie on one circle
 //! ([`merge_arcs`]), ranking overlapping circles by arc length ([`PruneRank`]) and taking them
-//! for one fruit only when their centres are close ([`clash`]), and circles from rays cast out
-//! of the mask's inscribed discs ([`ray_circles`], [`squared_distance_to_background`]) beside
-//! the edge fit's, for fruit that touch or overlap. Not built here: stereo matching (§4).
+//! for one fruit only when their centres are close ([`clash`]), circles voted for by every
+//! outline pixel along its normal ([`hough_circles`], on by default) beside the edge fit's, for
+//! outlines that leaves notch into arcs too short for its windows, and circles from rays cast
+//! out of the mask's inscribed discs ([`ray_circles`], [`squared_distance_to_background`]; opt-in)
+//! for fruit that touch or overlap. Not built here: stereo matching (§4).
 //!
 //! Tracking during the arm's approach (§3.3) is [`ApproachTracker`]: a 5×5 colour check at the
 //! expected position, a four-direction edge scan and circle fit ([`scan_four_directions`],
@@ -45,6 +47,7 @@ mod contour;
 mod contour_circles;
 mod distance_transform;
 mod edge_scan;
+mod hough_circles;
 mod hsigma;
 mod hsigma_lut;
 mod local_redetection;
@@ -73,6 +76,7 @@ pub use distance_transform::squared_distance_to_background;
 pub use edge_scan::{
     circle_from_boundaries, scan_four_directions, EdgeScanParams, ScanEnd, SCAN_DIRECTIONS,
 };
+pub use hough_circles::{hough_circles, HoughCircleParams};
 pub use hsigma::{hsigma, hsigma_integers, hsigma_of_integers};
 pub use hsigma_lut::{quantise_probability, HSigmaLut};
 pub use local_redetection::{most_consistent_circle, LocalRedetectParams, Redetect, SampledRegion};

@@ -4,7 +4,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::{EdgeFitParams, MlpParams, PruneRank, RayCircleParams};
+use crate::{EdgeFitParams, HoughCircleParams, MlpParams, PruneRank, RayCircleParams};
 
 /// Parameters of every stage.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -64,6 +64,15 @@ pub struct ColorContourParams {
     /// (docs/results.md, "Ray circles from inscribed discs").
     #[serde(default)]
     pub ray_circles: Option<RayCircleParams>,
+    /// Circles voted for by every outline pixel along its normal, added to the edge fit's (not
+    /// in the paper, see [`crate::hough_circles`]): fruit whose outline leaves notch into arcs
+    /// shorter than the edge fit's windows, or whose arc runs on into a neighbour's. On by
+    /// default with the defaults of [`HoughCircleParams`] (chosen on orchard scenes, seed 700,
+    /// and `wide` D435 oranges, seed 610; docs/results.md, "Hough circles from the outline");
+    /// `None` (what model files from before this setting mean) = off, the paper's circles only,
+    /// also `--set params.hough_circles=null`.
+    #[serde(default)]
+    pub hough_circles: Option<HoughCircleParams>,
     /// Circles need at least this support (arc spanned over circumference) to be reported.
     pub min_support: f64,
     /// Of two circles sharing more than this fraction of the smaller one's area, the weaker is
@@ -141,6 +150,7 @@ impl Default for ColorContourParams {
             mask_closing_px: 2,
             edge_fit: EdgeFitParams::default(),
             ray_circles: None,
+            hough_circles: Some(HoughCircleParams::default()),
             min_support: 0.15,
             max_overlap: 0.4,
             prune_rank: PruneRank::ArcLength,

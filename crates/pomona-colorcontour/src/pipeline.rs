@@ -11,11 +11,13 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::stages::{
-    ColorClassStage, ContourStage, EdgeFitStage, FruitStage, MaskCleaningStage, RayCircleStage,
+    ColorClassStage, ContourStage, EdgeFitStage, FruitStage, HoughCircleStage, MaskCleaningStage,
+    RayCircleStage,
 };
 use crate::{
     best_f1_threshold, quantise_probability, taught_labels, training_pixels, value_histograms,
-    ColorContourParams, ContourCircle, HSigmaLut, Mlp, RayCircleParams, SampledRegion,
+    ColorContourParams, ContourCircle, HSigmaLut, HoughCircleParams, Mlp, RayCircleParams,
+    SampledRegion,
 };
 
 /// Name of the pipeline on the command line and in model files.
@@ -251,6 +253,7 @@ pub struct ColorContourDetector {
     mask_closing_px: usize,
     edge_fit: EdgeFitStage,
     ray_circles: Option<RayCircleParams>,
+    hough_circles: Option<HoughCircleParams>,
     fruit: FruitStage,
 }
 
@@ -309,6 +312,9 @@ impl ColorContourDetector {
         if let Some((name, reason)) = p.ray_circles.as_ref().and_then(|r| r.problem()) {
             return Err(invalid(name, reason));
         }
+        if let Some((name, reason)) = p.hough_circles.as_ref().and_then(|h| h.problem()) {
+            return Err(invalid(name, reason));
+        }
         if !(p.depth_refit_tolerance_m.is_finite() && p.depth_refit_tolerance_m >= 0.0) {
             return Err(invalid(
                 "depth_refit_tolerance_m",
@@ -322,6 +328,7 @@ impl ColorContourDetector {
             mask_closing_px: p.mask_closing_px,
             edge_fit: EdgeFitStage { params: p.edge_fit },
             ray_circles: p.ray_circles,
+            hough_circles: p.hough_circles,
             fruit: FruitStage { params: p.clone() },
         })
     }
@@ -376,6 +383,14 @@ impl ColorContourDetector {
         if let Some(params) = self.ray_circles {
             let rays = RayCircleStage { params, width };
             circles.extend(run_stage(&rays, cleaned.as_slice(), timings)?);
+        }
+        if let Some(params) = self.hough_circles {
+            let hough = HoughCircleStage {
+                params,
+                width,
+                max_radius_px,
+            };
+            circles.extend(run_stage(&hough, cleaned.as_slice(), timings)?);
         }
         Ok(circles)
     }
@@ -444,12 +459,18 @@ mod tests {
     fn model_files_without_the_pruning_settings_run_the_previous_behaviour() {
         let mut json = serde_json::to_value(built_in()).unwrap();
         let params = json["params"].as_object_mut().unwrap();
-        for key in ["prune_rank", "prune_center_reach", "radius_tolerance"] {
+        for key in [
+            "prune_rank",
+            "prune_center_reach",
+            "radius_tolerance",
+            "hough_circles",
+        ] {
             assert!(params.remove(key).is_some(), "{key}");
         }
         assert!(params.remove("ray_circles").is_none_or(|v| v.is_null()));
         let old: ColorContourStageParams = serde_json::from_value(json).unwrap();
         assert_eq!(old.params.ray_circles, None);
+        assert_eq!(old.params.hough_circles, None);
         assert_eq!(old.params.prune_rank, crate::PruneRank::Score);
         assert_eq!(old.params.prune_center_reach, 0.0);
         // The paper's size test, exactly its range.
@@ -482,6 +503,8 @@ mod tests {
         assert_eq!(stage.params.radius_tolerance, defaults.radius_tolerance);
         assert_eq!(stage.params.ray_circles, defaults.ray_circles);
         assert!(stage.params.ray_circles.is_none());
+        assert_eq!(stage.params.hough_circles, defaults.hough_circles);
+        assert!(stage.params.hough_circles.is_some());
         let (lo, hi) = stage.params.accepted_radius_range_m();
         assert!((lo - 0.025 / 1.1).abs() < 1e-12 && (hi - 0.055 * 1.1).abs() < 1e-12);
         // Written before the centre refit existed: runs it with the default tolerance.
@@ -509,6 +532,12 @@ mod tests {
             }),
             ("depth_refit_tolerance_m", |p| {
                 p.depth_refit_tolerance_m = f64::INFINITY
+            }),
+            ("hough_circles.min_support", |p| {
+                p.hough_circles = Some(crate::HoughCircleParams {
+                    min_support: 1.5,
+                    ..crate::HoughCircleParams::default()
+                })
             }),
             ("ray_circles.min_inliers", |p| {
                 p.ray_circles = Some(crate::RayCircleParams {

@@ -1,16 +1,17 @@
 //! The stages of the detector, each behind [`pomona_pipeline::Stage`] so it can be timed,
 //! benchmarked or replaced alone: colour lookup → mask cleaning → contours → edge fitting (and,
-//! optionally, ray circles from the cleaned mask) → circles to fruit.
+//! from the cleaned mask, the Hough circles and, optionally, the ray circles) → circles to
+//! fruit.
 
 use pomona_core::nalgebra::Point2;
 use pomona_core::{Detection, PixelBox, RgbdFrame};
 use pomona_pipeline::{PipelineError, Stage};
 
 use crate::{
-    close_mask, contour_arcs, hysteresis_mask, merge_arcs, prune_overlapping, quantise_probability,
-    ray_circles, smooth_mask, sphere_from_depth, sphere_from_size, trace_contours,
-    ColorContourParams, Contour, ContourArc, ContourCircle, EdgeFitParams, HSigmaLut,
-    RayCircleParams, PIPELINE_NAME,
+    close_mask, contour_arcs, hough_circles, hysteresis_mask, merge_arcs, prune_overlapping,
+    quantise_probability, ray_circles, smooth_mask, sphere_from_depth, sphere_from_size,
+    trace_contours, ColorContourParams, Contour, ContourArc, ContourCircle, EdgeFitParams,
+    HSigmaLut, HoughCircleParams, RayCircleParams, PIPELINE_NAME,
 };
 
 /// Per pixel: the lookup table's value at or above the threshold (§3.1), or, with a lower
@@ -188,6 +189,34 @@ impl Stage<&[bool], Vec<ContourCircle>> for RayCircleStage {
 
     fn run(&self, mask: &[bool]) -> Result<Vec<ContourCircle>, PipelineError> {
         Ok(ray_circles(mask, self.width, &self.params))
+    }
+}
+
+/// Circles voted for by the cleaned mask's outline ([`crate::hough_circles`]; not in the
+/// paper), added to the edge fit's.
+#[derive(Debug, Clone)]
+pub struct HoughCircleStage {
+    /// Hough settings.
+    pub params: HoughCircleParams,
+    /// Image width, pixels (the mask is row-major).
+    pub width: usize,
+    /// Largest radius searched, pixels (the size test's largest circle; infinite: the
+    /// settings' own bound).
+    pub max_radius_px: f64,
+}
+
+impl Stage<&[bool], Vec<ContourCircle>> for HoughCircleStage {
+    fn name(&self) -> &'static str {
+        "hough-circles"
+    }
+
+    fn run(&self, mask: &[bool]) -> Result<Vec<ContourCircle>, PipelineError> {
+        Ok(hough_circles(
+            mask,
+            self.width,
+            self.max_radius_px,
+            &self.params,
+        ))
     }
 }
 

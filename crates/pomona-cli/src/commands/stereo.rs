@@ -67,10 +67,11 @@ pub struct StereoArgs {
     #[arg(long, value_name = "M")]
     pub model: Option<PathBuf>,
     /// Override a stage parameter of the model, KEY=VALUE (dotted keys, JSON values); repeat.
-    /// The ray circles are off here unless set (`--set 'params.ray_circles={}'`): matching
-    /// pairs the circles' image centres, and a ray circle on a piece of fruit is centred on the
-    /// piece, not the fruit, differently in the two views (the RGB-D path refits the centre to
-    /// the depth points instead); docs/results.md, "Ray circles from inscribed discs".
+    /// The ray and Hough circles are off here unless set (`--set 'params.ray_circles={}'`,
+    /// `--set 'params.hough_circles={}'`): matching pairs the circles' image centres, and a
+    /// circle on a piece of fruit is centred on the piece, not the fruit, differently in the two
+    /// views (the RGB-D path refits the centre to the depth points instead); docs/results.md,
+    /// "Ray circles from inscribed discs" and "Hough circles from the outline".
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub set: Vec<pomona::ParamOverride>,
     /// Keep 2D detections whose calibrated confidence is at least C before matching. Default:
@@ -405,12 +406,11 @@ pub fn run(args: &StereoArgs) -> Result<()> {
     let rig = read_rig(&args.data, &dataset)?;
     let registry = pomona::pipelines();
     let pipeline = pomona::find_pipeline(&registry, STEREO_PIPELINE)?;
-    let overrides: Vec<pomona::ParamOverride> = std::iter::once(pomona::ParamOverride::new(
-        "params.ray_circles",
-        serde_json::Value::Null,
-    ))
-    .chain(args.set.iter().cloned())
-    .collect();
+    let overrides: Vec<pomona::ParamOverride> = ["params.ray_circles", "params.hough_circles"]
+        .into_iter()
+        .map(|key| pomona::ParamOverride::new(key, serde_json::Value::Null))
+        .chain(args.set.iter().cloned())
+        .collect();
     let detector = load_detector(pipeline, args.model.as_deref(), &overrides)?;
     let keep = keep_rule(&detector, args.min_confidence)?;
     let d = rig.pivot_distance_m;

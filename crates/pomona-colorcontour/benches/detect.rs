@@ -11,7 +11,8 @@
 //!   failure with `POMONA_REQUIRE_DATA=1`).
 //!
 //! * `... ray circles on` / `ray circles alone`: the orchard frames with the opt-in ray circles
-//!   (`params.ray_circles`), end to end and the stage alone on their cleaned fruit masks.
+//!   (`params.ray_circles`), end to end and the stage alone on their cleaned fruit masks;
+//!   `hough circles alone`: the Hough circles (on in the built-in model) on the same masks.
 //!
 //! `cargo bench -p pomona-colorcontour --bench detect`
 
@@ -20,7 +21,7 @@
 use criterion::{criterion_group, criterion_main, Criterion};
 use pomona_colorcontour::stages::MaskCleaningStage;
 use pomona_colorcontour::{
-    ray_circles, ColorContourDetector, ColorContourPipeline, ColorContourStageParams,
+    hough_circles, ray_circles, ColorContourDetector, ColorContourPipeline, ColorContourStageParams,
 };
 use pomona_core::RgbdFrame;
 use pomona_io::Dataset;
@@ -134,6 +135,19 @@ fn detect(c: &mut Criterion) {
         b.iter(|| {
             for (mask, width) in &masks {
                 criterion::black_box(ray_circles(mask, *width, &rays));
+            }
+        })
+    });
+    // The Hough circles (on in the built-in model) alone on the same masks, up to the size
+    // test's largest circle as in the pipeline.
+    let hough = stage_params.params.hough_circles.unwrap_or_default();
+    let (_, max_radius_px) = stage_params
+        .params
+        .radius_px_range(orchard_frames[0].camera().mean_focal_px());
+    c.bench_function("hough circles alone on 3 orchard kinect-v2 masks", |b| {
+        b.iter(|| {
+            for (mask, width) in &masks {
+                criterion::black_box(hough_circles(mask, *width, max_radius_px, &hough));
             }
         })
     });

@@ -193,42 +193,36 @@ pub fn hough_circles(
         .collect()
 }
 
-/// The outline pixels and their inward normals; the mean offset of the mask pixels around each
-/// comes from three summed-area tables (count, Σx, Σy), a constant cost per pixel.
+/// The outline pixels and their inward normals (the mean offset of the mask pixels in the
+/// `2·half + 1` square around each).
 fn outline_pixels(mask: &[bool], width: usize, height: usize, half: usize) -> Vec<OutlinePixel> {
     let at = |x: usize, y: usize| mask[y * width + x];
-    // Table entry (x, y) sums the mask over [0, x) × [0, y); one row and column of zeros.
-    let stride = width + 1;
-    let mut sums = vec![[0i64; 3]; stride * (height + 1)];
-    for y in 0..height {
-        let mut row = [0i64; 3];
-        for x in 0..width {
-            if at(x, y) {
-                row[0] += 1;
-                row[1] += x as i64;
-                row[2] += y as i64;
-            }
-            let above = sums[y * stride + x + 1];
-            sums[(y + 1) * stride + x + 1] =
-                [row[0] + above[0], row[1] + above[1], row[2] + above[2]];
-        }
-    }
     let mut out = Vec::new();
     for y in 1..height.saturating_sub(1) {
+        let row = &mask[y * width..(y + 1) * width];
         for x in 1..width.saturating_sub(1) {
-            if !at(x, y) || (at(x - 1, y) && at(x + 1, y) && at(x, y - 1) && at(x, y + 1)) {
+            if !row[x] || (row[x - 1] && row[x + 1] && at(x, y - 1) && at(x, y + 1)) {
                 continue;
             }
-            let (x0, x1) = (x.saturating_sub(half), (x + half + 1).min(width));
-            let (y0, y1) = (y.saturating_sub(half), (y + half + 1).min(height));
-            let total = |k: usize| {
-                sums[y1 * stride + x1][k] - sums[y0 * stride + x1][k] - sums[y1 * stride + x0][k]
-                    + sums[y0 * stride + x0][k]
-            };
-            let count = total(0) as f64;
+            let (mut count, mut sx, mut sy) = (0i64, 0i64, 0i64);
+            for yy in y.saturating_sub(half)..(y + half + 1).min(height) {
+                let window = &mask[yy * width..(yy + 1) * width];
+                for (xx, &m) in window
+                    .iter()
+                    .enumerate()
+                    .take((x + half + 1).min(width))
+                    .skip(x.saturating_sub(half))
+                {
+                    if m {
+                        count += 1;
+                        sx += xx as i64;
+                        sy += yy as i64;
+                    }
+                }
+            }
             let sum = Vector2::new(
-                total(1) as f64 - count * x as f64,
-                total(2) as f64 - count * y as f64,
+                (sx - count * x as i64) as f64,
+                (sy - count * y as i64) as f64,
             );
             if let Some(inward) = sum.try_normalize(1e-9) {
                 out.push(OutlinePixel {
@@ -503,16 +497,7 @@ fn coverage(points: &[Point2<f64>], center: Point2<f64>, bins: usize) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn mask_of(w: usize, h: usize, inside: impl Fn(f64, f64) -> bool) -> Vec<bool> {
-        (0..w * h)
-            .map(|i| inside((i % w) as f64, (i / w) as f64))
-            .collect()
-    }
-
-    fn near(c: &ContourCircle, x: f64, y: f64, r: f64, tol: f64) -> bool {
-        (c.center_px - Point2::new(x, y)).norm() <= tol && (c.radius_px - r).abs() <= tol
-    }
+    use crate::test_shapes::{mask_of, near};
 
     #[test]
     fn a_disc_notched_by_leaves_into_short_arcs_keeps_its_circle() {

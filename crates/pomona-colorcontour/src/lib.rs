@@ -60,6 +60,8 @@ mod pixel_f1;
 mod ray_circles;
 mod spiral_search;
 pub mod stages;
+#[cfg(test)]
+mod test_shapes;
 mod tracking;
 mod training_pixels;
 

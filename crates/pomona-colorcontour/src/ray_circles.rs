@@ -247,16 +247,7 @@ fn circle_through_ends(
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn mask_of(w: usize, h: usize, inside: impl Fn(f64, f64) -> bool) -> Vec<bool> {
-        (0..w * h)
-            .map(|i| inside((i % w) as f64, (i / w) as f64))
-            .collect()
-    }
-
-    fn near(c: &ContourCircle, x: f64, y: f64, r: f64, tol: f64) -> bool {
-        (c.center_px - Point2::new(x, y)).norm() <= tol && (c.radius_px - r).abs() <= tol
-    }
+    use crate::test_shapes::{mask_of, near};
 
     #[test]
     fn three_touching_discs_in_a_row_each_get_their_circle() {

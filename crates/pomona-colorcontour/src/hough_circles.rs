@@ -136,7 +136,8 @@ struct OutlinePixel {
 }
 
 /// The Hough circles of a row-major `width`-wide fruit mask (see the module docs), radii up to
-/// `max_radius_px` (or the parameters' own bound when that is not finite).
+/// `max_radius_px` and at most the parameters' own `max_radius_px` (which alone bounds them when
+/// the caller's bound is not finite).
 pub fn hough_circles(
     mask: &[bool],
     width: usize,
@@ -163,6 +164,7 @@ pub fn hough_circles(
     // Second pass: the outline pixels whose votes land near each hypothesis (its cell and
     // `vote_reach_cells` around it, where a normal a few degrees off still lands).
     let reach = params.vote_reach_cells;
+    // `u32::MAX`: no hypothesis owns the cell (there are far fewer hypotheses than that).
     let mut owner = vec![u32::MAX; votes.len()];
     for (h, &k) in peaks.iter().enumerate().rev() {
         let (i, j) = (k % grid.cols, k / grid.cols);

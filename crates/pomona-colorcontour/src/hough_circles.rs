@@ -137,7 +137,7 @@ struct OutlinePixel {
 
 /// The Hough circles of a row-major `width`-wide fruit mask (see the module docs), radii up to
 /// `max_radius_px` and at most the parameters' own `max_radius_px` (which alone bounds them when
-/// the caller's bound is not finite).
+/// the caller's bound is not finite) and the image's diagonal.
 pub fn hough_circles(
     mask: &[bool],
     width: usize,
@@ -146,11 +146,15 @@ pub fn hough_circles(
 ) -> Vec<ContourCircle> {
     let width = width.max(1);
     let height = mask.len() / width;
+    // No circle larger than the image is worth a vote (and the radius histograms stay small
+    // whatever the settings say).
+    let diagonal = (width as f64).hypot(height as f64);
     let max_radius = if max_radius_px.is_finite() {
         max_radius_px.min(params.max_radius_px)
     } else {
         params.max_radius_px
-    };
+    }
+    .min(diagonal);
     if height == 0 || max_radius < params.min_radius_px {
         return Vec::new();
     }
@@ -549,5 +553,17 @@ mod tests {
             Some("hough_circles.min_support")
         );
         assert!(hough_circles(&[], 0, 60.0, &HoughCircleParams::default()).is_empty());
+        // A huge radius bound is cut to the image: the disc is still found, nothing explodes.
+        let disc = mask_of(80, 80, |x, y| (x - 40.0).hypot(y - 40.0) <= 15.0);
+        let huge = HoughCircleParams {
+            max_radius_px: 1e12,
+            ..HoughCircleParams::default()
+        };
+        assert!(huge.problem().is_none());
+        let circles = hough_circles(&disc, 80, f64::INFINITY, &huge);
+        assert!(
+            circles.iter().any(|c| near(c, 40.0, 40.0, 15.0, 1.0)),
+            "{circles:?}"
+        );
     }
 }

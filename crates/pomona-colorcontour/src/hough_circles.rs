@@ -202,23 +202,35 @@ pub fn hough_circles(
 /// The outline pixels and their inward normals (the mean offset of the mask pixels in the
 /// `2·half + 1` square around each).
 fn outline_pixels(mask: &[bool], width: usize, height: usize, half: usize) -> Vec<OutlinePixel> {
-    let at = |x: usize, y: usize| mask[y * width + x];
     let mut out = Vec::new();
+    if width < 3 {
+        return out;
+    }
+    // Per row, which pixels are outline (fruit with a 4-neighbour that is not), in one pass
+    // over the row and its neighbours that the compiler can vectorise.
+    let mut edge = vec![false; width - 2];
     for y in 1..height.saturating_sub(1) {
-        let row = &mask[y * width..(y + 1) * width];
-        for x in 1..width.saturating_sub(1) {
-            if !row[x] || (row[x - 1] && row[x + 1] && at(x, y - 1) && at(x, y + 1)) {
-                continue;
-            }
+        let row = |yy: usize| &mask[yy * width..(yy + 1) * width];
+        let (up, here, down) = (row(y - 1), row(y), row(y + 1));
+        for ((((e, &m), (&l, &r)), &u), &d) in edge
+            .iter_mut()
+            .zip(&here[1..width - 1])
+            .zip(here[..width - 2].iter().zip(&here[2..]))
+            .zip(&up[1..width - 1])
+            .zip(&down[1..width - 1])
+        {
+            *e = m & !(l & r & u & d);
+        }
+        for x in edge
+            .iter()
+            .enumerate()
+            .filter(|(_, &e)| e)
+            .map(|(i, _)| i + 1)
+        {
             let (mut count, mut sx, mut sy) = (0i64, 0i64, 0i64);
+            let (x0, x1) = (x.saturating_sub(half), (x + half + 1).min(width));
             for yy in y.saturating_sub(half)..(y + half + 1).min(height) {
-                let window = &mask[yy * width..(yy + 1) * width];
-                for (xx, &m) in window
-                    .iter()
-                    .enumerate()
-                    .take((x + half + 1).min(width))
-                    .skip(x.saturating_sub(half))
-                {
+                for (xx, &m) in (x0..x1).zip(&row(yy)[x0..x1]) {
                     if m {
                         count += 1;
                         sx += xx as i64;
@@ -307,19 +319,20 @@ impl VoteGrid {
 /// most votes first, at most `max_hypotheses`.
 fn peaks(votes: &[u32], grid: &VoteGrid, params: &HoughCircleParams) -> Vec<usize> {
     let (cols, rows) = (grid.cols, grid.rows);
-    // 3×3 sums, rows then columns.
+    // 3×3 sums: along each row, then each row plus its neighbours above and below.
     let mut across = vec![0u32; votes.len()];
-    for j in 0..rows {
-        let row = &votes[j * cols..(j + 1) * cols];
-        for i in 0..cols {
-            across[j * cols + i] = row[i.saturating_sub(1)..(i + 2).min(cols)].iter().sum();
+    for (out, row) in across.chunks_exact_mut(cols).zip(votes.chunks_exact(cols)) {
+        for (i, o) in out.iter_mut().enumerate() {
+            *o = row[i.saturating_sub(1)..(i + 2).min(cols)].iter().sum();
         }
     }
-    let mut summed = vec![0u32; votes.len()];
-    for j in 0..rows {
-        for jj in j.saturating_sub(1)..(j + 2).min(rows) {
-            for i in 0..cols {
-                summed[j * cols + i] += across[jj * cols + i];
+    let mut summed = across.clone();
+    for (j, out) in summed.chunks_exact_mut(cols).enumerate() {
+        for jj in [j.checked_sub(1), Some(j + 1)].into_iter().flatten() {
+            if let Some(neighbour) = across.get(jj * cols..(jj + 1) * cols) {
+                for (o, n) in out.iter_mut().zip(neighbour) {
+                    *o += n;
+                }
             }
         }
     }

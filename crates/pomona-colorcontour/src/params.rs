@@ -103,6 +103,14 @@ pub struct ColorContourParams {
     pub working_distance_m: (f64, f64),
     /// Radius assumed to place a circle without depth in 3D, metres (middle of the range).
     pub prior_radius_m: f64,
+    /// In a frame that has depth, a circle with none inside it (sky, dark cloth, background
+    /// beyond the sensor's range, a sliver of fruit in a hole beside a nearer edge) is kept
+    /// only when `prior_radius_m` places it no farther than the far end of
+    /// `working_distance_m` (not in the paper, which has no depth). Frames without any depth
+    /// (colour-only data) are not affected: there, missing depth says nothing. Absent in older
+    /// model files: off (every such circle placed by the prior, the behaviour before).
+    #[serde(default)]
+    pub depthless_within_reach: bool,
     /// Depth is read from fruit pixels within this fraction of the radius from the centre.
     pub depth_core_fraction: f64,
     /// The 3D centre is refitted to those fruit pixels' points at the measured radius (ours,
@@ -159,6 +167,7 @@ impl Default for ColorContourParams {
             radius_tolerance: 0.1,
             working_distance_m: (0.3, 2.0),
             prior_radius_m: 0.04,
+            depthless_within_reach: true,
             depth_core_fraction: 0.8,
             depth_refit_tolerance_m: ten_mm(),
         }

@@ -464,6 +464,7 @@ mod tests {
             "prune_center_reach",
             "radius_tolerance",
             "hough_circles",
+            "depthless_within_reach",
         ] {
             assert!(params.remove(key).is_some(), "{key}");
         }
@@ -471,6 +472,7 @@ mod tests {
         let old: ColorContourStageParams = serde_json::from_value(json).unwrap();
         assert_eq!(old.params.ray_circles, None);
         assert_eq!(old.params.hough_circles, None);
+        assert!(!old.params.depthless_within_reach);
         assert_eq!(old.params.prune_rank, crate::PruneRank::Score);
         assert_eq!(old.params.prune_center_reach, 0.0);
         // The paper's size test, exactly its range.
@@ -505,6 +507,7 @@ mod tests {
         assert!(stage.params.ray_circles.is_none());
         assert_eq!(stage.params.hough_circles, defaults.hough_circles);
         assert!(stage.params.hough_circles.is_some());
+        assert!(stage.params.depthless_within_reach && defaults.depthless_within_reach);
         let (lo, hi) = stage.params.accepted_radius_range_m();
         assert!((lo - 0.025 / 1.1).abs() < 1e-12 && (hi - 0.055 * 1.1).abs() < 1e-12);
         // Written before the centre refit existed: runs it with the default tolerance.

@@ -260,7 +260,9 @@ fn color_purity(fruit: &[bool], width: usize, height: usize, c: &ContourCircle) 
 ///   ([`crate::PruneRank`]), pairs tested by [`crate::clash`] with `prune_center_reach`;
 /// * 3D: [`crate::sphere_from_depth`] (centre refitted to the fruit points unless
 ///   `depth_refit_tolerance_m` is 0), or [`crate::sphere_from_size`] with `prior_radius_m`
-///   when the circle has no depth (then `diameter_m` is `None`: it was not measured).
+///   when the circle has no depth (then `diameter_m` is `None`: it was not measured); in a
+///   frame with depth such a circle must lie within the working distance
+///   (`depthless_within_reach`).
 ///
 /// `bbox_px` is the square around the circle (not clipped to the image), so the image circle is
 /// its centre and half its width.
@@ -292,6 +294,7 @@ impl<'a> Stage<(&'a RgbdFrame, &'a [bool], &'a [ContourCircle]), Vec<Detection>>
         let (w, h) = (camera.width as usize, camera.height as usize);
         let (r_lo, r_hi) = p.accepted_radius_range_m();
         let px_range = p.radius_px_range(camera.mean_focal_px());
+        let gate_depthless = p.depthless_within_reach && frame.depth().valid_count() > 0;
         let measured: Vec<Measured> = circles
             .iter()
             .filter(|c| c.support >= p.min_support)
@@ -316,6 +319,9 @@ impl<'a> Stage<(&'a RgbdFrame, &'a [bool], &'a [ContourCircle]), Vec<Detection>>
                         }
                         let s =
                             sphere_from_size(camera, c.center_px, c.radius_px, p.prior_radius_m);
+                        if gate_depthless && s.center_m.z > p.working_distance_m.1 {
+                            return None;
+                        }
                         (s.center_m, None)
                     }
                 };
@@ -351,5 +357,67 @@ impl<'a> Stage<(&'a RgbdFrame, &'a [bool], &'a [ContourCircle]), Vec<Detection>>
                 })
                 .collect(),
         )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use pomona_core::{DepthImage, PinholeCamera};
+
+    /// A 200×160 frame whose depth is 1 m everywhere except a hole of radius 12 px at
+    /// (100, 80), or no depth at all; the fruit mask is that disc.
+    fn frame_with_hole(depth_elsewhere: bool) -> (RgbdFrame, Vec<bool>) {
+        let (w, h) = (200u32, 160u32);
+        let camera = PinholeCamera::new(w, h, 300.0, 300.0, 99.5, 79.5).unwrap();
+        let in_disc = |k: usize| {
+            let (u, v) = ((k % w as usize) as f64, (k / w as usize) as f64);
+            (u - 100.0).hypot(v - 80.0) <= 12.0
+        };
+        let depth: Vec<f32> = (0..(w * h) as usize)
+            .map(|k| {
+                if depth_elsewhere && !in_disc(k) {
+                    1.0
+                } else {
+                    f32::NAN
+                }
+            })
+            .collect();
+        let fruit = (0..(w * h) as usize).map(in_disc).collect();
+        let frame =
+            RgbdFrame::new(camera, DepthImage::from_meters(w, h, depth).unwrap(), None).unwrap();
+        (frame, fruit)
+    }
+
+    #[test]
+    fn a_depthless_circle_beyond_reach_is_dropped_only_in_frames_with_depth() {
+        // The prior (40 mm) places a 5 px circle at 300 · 0.04 / 5 = 2.4 m, beyond the 2 m
+        // working distance, and an 8 px one at 1.5 m.
+        let circle = |radius_px| ContourCircle {
+            center_px: Point2::new(100.0, 80.0),
+            radius_px,
+            support: 0.9,
+        };
+        let circles = [circle(5.0)];
+        let on = FruitStage {
+            params: ColorContourParams::default(),
+        };
+        assert!(on.params.depthless_within_reach);
+        let off = FruitStage {
+            params: ColorContourParams {
+                depthless_within_reach: false,
+                ..ColorContourParams::default()
+            },
+        };
+        let (with_depth, fruit) = frame_with_hole(true);
+        let kept = |stage: &FruitStage, frame: &RgbdFrame, circles: &[ContourCircle]| {
+            stage.run((frame, fruit.as_slice(), circles)).unwrap().len()
+        };
+        assert_eq!(kept(&on, &with_depth, &circles), 0);
+        assert_eq!(kept(&off, &with_depth, &circles), 1);
+        assert_eq!(kept(&on, &with_depth, &[circle(8.0)]), 1);
+        // Colour-only data: no depth anywhere says nothing about the circle.
+        let (colour_only, _) = frame_with_hole(false);
+        assert_eq!(kept(&on, &colour_only, &circles), 1);
     }
 }

@@ -30,6 +30,7 @@
 use pomona_core::nalgebra::{Point2, Vector2};
 use serde::{Deserialize, Serialize};
 
+use crate::local_maxima::local_maxima;
 use crate::{refine_circle, ContourCircle};
 
 /// Settings of the Hough circles (a model file may leave any of them out: the default is used).
@@ -318,7 +319,7 @@ impl VoteGrid {
 /// Cells whose 3×3 vote sum is the largest within the peak window and at least `min_votes`,
 /// most votes first, at most `max_hypotheses`.
 fn peaks(votes: &[u32], grid: &VoteGrid, params: &HoughCircleParams) -> Vec<usize> {
-    let (cols, rows) = (grid.cols, grid.rows);
+    let cols = grid.cols;
     // 3×3 sums: along each row, then each row plus its neighbours above and below.
     let mut across = vec![0u32; votes.len()];
     for (out, row) in across.chunks_exact_mut(cols).zip(votes.chunks_exact(cols)) {
@@ -336,30 +337,14 @@ fn peaks(votes: &[u32], grid: &VoteGrid, params: &HoughCircleParams) -> Vec<usiz
             }
         }
     }
-    let half = params.peak_half_window_cells;
-    let mut found: Vec<(u32, usize)> = Vec::new();
-    for j in 0..rows {
-        for i in 0..cols {
-            let v = summed[j * cols + i];
-            if (v as usize) < params.min_votes.max(1) {
-                continue;
-            }
-            let is_peak = (j.saturating_sub(half)..(j + half + 1).min(rows)).all(|jj| {
-                (i.saturating_sub(half)..(i + half + 1).min(cols)).all(|ii| {
-                    let u = summed[jj * cols + ii];
-                    // Strictly above earlier cells, at least later ones: one per plateau.
-                    if (jj, ii) < (j, i) {
-                        v > u
-                    } else {
-                        v >= u
-                    }
-                })
-            });
-            if is_peak {
-                found.push((v, j * cols + i));
-            }
-        }
-    }
+    let min_votes = params.min_votes.max(1);
+    let mut found: Vec<(u32, usize)> =
+        local_maxima(&summed, cols, params.peak_half_window_cells, |v| {
+            v as usize >= min_votes
+        })
+        .into_iter()
+        .map(|k| (summed[k], k))
+        .collect();
     found.sort_by(|a, b| b.0.cmp(&a.0).then(a.1.cmp(&b.1)));
     found.truncate(params.max_hypotheses);
     found.into_iter().map(|(_, k)| k).collect()
@@ -442,7 +427,10 @@ fn circle_at(
 }
 
 /// Outline pixels bucketed in squares of [`OutlineIndex::BUCKET_PX`], for the pixels near a
-/// circle.
+/// circle. (The project's kd-tree, `pomona_consensus::KdTree::within_radius` on the plane
+/// z = 0, answers the same question; measured in its place, the stage took 2.9 ms instead of
+/// 2.3 on the criterion case `hough circles alone`, building a tree per mask and sorting each
+/// answer into a fixed order.)
 struct OutlineIndex {
     cols: usize,
     rows: usize,

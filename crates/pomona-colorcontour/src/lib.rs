@@ -50,6 +50,7 @@ mod edge_scan;
 mod hough_circles;
 mod hsigma;
 mod hsigma_lut;
+mod local_maxima;
 mod local_redetection;
 mod mask_closing;
 mod mask_hysteresis;

@@ -24,6 +24,7 @@
 use pomona_core::nalgebra::{Point2, Vector2};
 use serde::{Deserialize, Serialize};
 
+use crate::local_maxima::local_maxima;
 use crate::{fit_circle, refine_circle, squared_distance_to_background, ContourCircle};
 
 /// Settings of the ray circles (a model file may leave any of them out: the default is used).
@@ -119,31 +120,19 @@ fn inscribed_centers(
     params: &RayCircleParams,
 ) -> Vec<(Point2<f64>, f64)> {
     let min_sq = (params.min_inscribed_px * params.min_inscribed_px) as f32;
-    let half = params.peak_half_window_px;
-    let mut centers = Vec::new();
-    for y in 0..height {
-        for x in 0..width {
-            let v = squared[y * width + x];
-            if !(v >= min_sq && v.is_finite()) {
-                continue;
-            }
-            let is_peak = (y.saturating_sub(half)..(y + half + 1).min(height)).all(|yy| {
-                (x.saturating_sub(half)..(x + half + 1).min(width)).all(|xx| {
-                    let u = squared[yy * width + xx];
-                    // Strictly above earlier pixels, at least later ones: one per plateau.
-                    if (yy, xx) < (y, x) {
-                        v > u
-                    } else {
-                        v >= u
-                    }
-                })
-            });
-            if is_peak {
-                centers.push((Point2::new(x as f64, y as f64), f64::from(v.sqrt())));
-            }
-        }
-    }
-    centers
+    let width = width.max(1);
+    local_maxima(
+        &squared[..width * height],
+        width,
+        params.peak_half_window_px,
+        |v| v >= min_sq && v.is_finite(),
+    )
+    .into_iter()
+    .map(|k| {
+        let center = Point2::new((k % width) as f64, (k / width) as f64);
+        (center, f64::from(squared[k].sqrt()))
+    })
+    .collect()
 }
 
 /// Where each ray from `center` leaves the mask (`None`: it reached the image border or

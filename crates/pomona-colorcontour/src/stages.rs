@@ -294,7 +294,7 @@ impl<'a> Stage<(&'a RgbdFrame, &'a [bool], &'a [ContourCircle]), Vec<Detection>>
         let (w, h) = (camera.width as usize, camera.height as usize);
         let (r_lo, r_hi) = p.accepted_radius_range_m();
         let px_range = p.radius_px_range(camera.mean_focal_px());
-        let gate_depthless = p.depthless_within_reach && frame.depth().valid_count() > 0;
+        let gate_depthless = p.depthless_within_reach && frame.depth().has_readings();
         let measured: Vec<Measured> = circles
             .iter()
             .filter(|c| c.support >= p.min_support)

@@ -139,6 +139,11 @@ impl DepthImage {
         &self.depth_m
     }
 
+    /// Whether any pixel has a reading (stops at the first; a colour-only frame has none).
+    pub fn has_readings(&self) -> bool {
+        self.depth_m.iter().any(|d| d.is_finite())
+    }
+
     /// Number of pixels with a reading.
     pub fn valid_count(&self) -> usize {
         self.depth_m.iter().filter(|d| d.is_finite()).count()
@@ -181,6 +186,7 @@ mod tests {
     fn out_of_range_depth_becomes_no_reading() {
         let d = DepthImage::from_meters(3, 1, vec![70.0, -1.0, f32::INFINITY]).unwrap();
         assert_eq!(d.valid_count(), 1);
+        assert!(d.has_readings());
         assert_eq!(d.to_u16(0.001).unwrap(), [0, 0, 0]);
     }
 
@@ -195,5 +201,6 @@ mod tests {
         let d = DepthImage::empty(2, 2);
         assert_eq!(d.range_m(), None);
         assert_eq!(d.valid_fraction(), 0.0);
+        assert!(!d.has_readings());
     }
 }

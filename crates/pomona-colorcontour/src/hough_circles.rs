@@ -504,7 +504,7 @@ fn coverage(points: &[Point2<f64>], center: Point2<f64>, bins: usize) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::test_shapes::{mask_of, near};
+    use crate::test_shapes::{assert_each_disc_found, mask_of, mask_of_discs, near};
 
     #[test]
     fn a_disc_notched_by_leaves_into_short_arcs_keeps_its_circle() {
@@ -528,16 +528,9 @@ mod tests {
     #[test]
     fn two_overlapping_discs_each_get_their_circle() {
         let discs = [(40.0, 50.0, 18.0), (68.0, 52.0, 14.0)];
-        let mask = mask_of(110, 100, |x, y| {
-            discs.iter().any(|&(cx, cy, r)| (x - cx).hypot(y - cy) <= r)
-        });
+        let mask = mask_of_discs(110, 100, &discs);
         let circles = hough_circles(&mask, 110, 60.0, &HoughCircleParams::default());
-        for &(x, y, r) in &discs {
-            assert!(
-                circles.iter().any(|c| near(c, x, y, r, 1.0)),
-                "disc at ({x}, {y}) r {r}: {circles:?}"
-            );
-        }
+        assert_each_disc_found(&circles, &discs, 1.0);
     }
 
     #[test]

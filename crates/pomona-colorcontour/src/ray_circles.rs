@@ -236,23 +236,16 @@ fn circle_through_ends(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::test_shapes::{mask_of, near};
+    use crate::test_shapes::{assert_each_disc_found, mask_of, mask_of_discs, near};
 
     #[test]
     fn three_touching_discs_in_a_row_each_get_their_circle() {
         // A middle disc smaller than its neighbours: its outline is two short arcs between
         // notches, the case the edge fit misses.
         let discs = [(30.0, 40.0, 16.0), (56.0, 40.0, 11.0), (81.0, 40.0, 15.0)];
-        let mask = mask_of(110, 80, |x, y| {
-            discs.iter().any(|&(cx, cy, r)| (x - cx).hypot(y - cy) <= r)
-        });
+        let mask = mask_of_discs(110, 80, &discs);
         let circles = ray_circles(&mask, 110, &RayCircleParams::default());
-        for &(x, y, r) in &discs {
-            assert!(
-                circles.iter().any(|c| near(c, x, y, r, 1.5)),
-                "disc at ({x}, {y}) r {r}: {circles:?}"
-            );
-        }
+        assert_each_disc_found(&circles, &discs, 1.5);
     }
 
     #[test]

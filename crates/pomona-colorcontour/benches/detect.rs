@@ -13,6 +13,9 @@
 //! * `... ray circles on` / `ray circles alone`: the orchard frames with the opt-in ray circles
 //!   (`params.ray_circles`), end to end and the stage alone on their cleaned fruit masks;
 //!   `hough circles alone`: the Hough circles (on in the built-in model) on the same masks.
+//! * `colour table compiled`: the built-in network compiled into its lookup table (with the
+//!   intensity input: eight planes, in the rayon pool of one thread), and the same network
+//!   without its intensity weights (the paper's single plane) — the cost of loading a model.
 //!
 //! `cargo bench -p pomona-colorcontour --bench detect`
 
@@ -21,7 +24,8 @@
 use criterion::{criterion_group, criterion_main, Criterion};
 use pomona_colorcontour::stages::MaskCleaningStage;
 use pomona_colorcontour::{
-    hough_circles, ray_circles, ColorContourDetector, ColorContourPipeline, ColorContourStageParams,
+    hough_circles, ray_circles, ColorContourDetector, ColorContourPipeline,
+    ColorContourStageParams, HSigmaLut,
 };
 use pomona_core::RgbdFrame;
 use pomona_io::Dataset;
@@ -151,6 +155,22 @@ fn detect(c: &mut Criterion) {
             }
         })
     });
+    let network = stage_params.mlp.clone();
+    let plane_only = pomona_colorcontour::Mlp {
+        intensity_weights: Vec::new(),
+        ..network.clone()
+    };
+    for (name, net) in [
+        (
+            "colour table compiled, built-in network with intensity",
+            &network,
+        ),
+        ("colour table compiled, the paper's plane only", &plane_only),
+    ] {
+        c.bench_function(name, |b| {
+            b.iter(|| one.install(|| criterion::black_box(HSigmaLut::compile(net))))
+        });
+    }
     for (name, frames) in &sets {
         c.bench_function(name, |b| {
             b.iter(|| {

@@ -8,6 +8,13 @@
 //! from the blue-to-green band of the background. Both coordinates are functions of the two
 //! integers `G − B` and `2R − G − B`, which is what lets [`crate::HSigmaLut`] tabulate a classifier
 //! over the plane exactly.
+//!
+//! Not in the paper: the projection drops the third coordinate, the position along the grey axis
+//! (intensity, here the mean `(R + G + B) / 3`). A dim orange and a dark leaf, or a lit orange
+//! and a sunlit yellow-green leaf, can share a place in the plane and differ only there; one
+//! table over the plane must then trade daylight against dim or harsh light (docs/results.md,
+//! "Colour with intensity"). [`intensity_level`] quantises the mean into
+//! [`INTENSITY_LEVELS`] bands, the optional third input of [`crate::Mlp`] and of its table.
 
 /// Smallest value of `G − B` for 8-bit colour.
 pub const GB_MIN: i32 = -255;
@@ -17,6 +24,20 @@ pub const GB_COUNT: usize = 511;
 pub const SIGMA_MIN: i32 = -510;
 /// Number of distinct values of `2R − G − B` (−510..=510).
 pub const SIGMA_COUNT: usize = 1021;
+
+/// Bands of the mean intensity `(R + G + B) / 3` (each 32 wide) of the optional third input.
+pub const INTENSITY_LEVELS: usize = 8;
+
+/// The band (0..[`INTENSITY_LEVELS`]) of a colour's mean intensity.
+pub fn intensity_level([r, g, b]: [u8; 3]) -> usize {
+    let sum = usize::from(r) + usize::from(g) + usize::from(b);
+    (sum * INTENSITY_LEVELS / 768).min(INTENSITY_LEVELS - 1)
+}
+
+/// The mean intensity (0–255) a band stands for: its middle.
+pub fn intensity_of_level(level: usize) -> f64 {
+    (level as f64 + 0.5) * 256.0 / INTENSITY_LEVELS as f64
+}
 
 /// The two integers that determine a colour's place in the HΣ plane: `(G − B, 2R − G − B)`.
 pub fn hsigma_integers([r, g, b]: [u8; 3]) -> (i32, i32) {

@@ -80,7 +80,10 @@ pub use edge_scan::{
     circle_from_boundaries, scan_four_directions, EdgeScanParams, ScanEnd, SCAN_DIRECTIONS,
 };
 pub use hough_circles::{hough_circles, HoughCircleParams};
-pub use hsigma::{hsigma, hsigma_integers, hsigma_of_integers};
+pub use hsigma::{
+    hsigma, hsigma_integers, hsigma_of_integers, intensity_level, intensity_of_level,
+    INTENSITY_LEVELS,
+};
 pub use hsigma_lut::{quantise_probability, HSigmaLut};
 pub use local_redetection::{most_consistent_circle, LocalRedetectParams, Redetect, SampledRegion};
 pub use mask_closing::close_mask;

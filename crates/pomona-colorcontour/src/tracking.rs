@@ -493,6 +493,7 @@ mod tests {
     fn orange_lut() -> HSigmaLut {
         let net = Mlp {
             hidden_weights: vec![[0.0, 20.0]],
+            intensity_weights: Vec::new(),
             hidden_bias: vec![-8.0],
             output_weights: vec![10.0],
             output_bias: -5.0,

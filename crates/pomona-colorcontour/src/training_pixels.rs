@@ -25,7 +25,7 @@ use rand::seq::SliceRandom;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
-use crate::{hsigma, HSigmaSample};
+use crate::{hsigma, intensity_level, intensity_of_level, HSigmaSample};
 
 /// Per pixel of `lf`: `Some(true)` fruit, `Some(false)` background; `None` without colour.
 pub fn fruit_labels(lf: &LabelledFrame) -> Option<Vec<bool>> {
@@ -88,7 +88,8 @@ pub fn taught_labels(lf: &LabelledFrame, left_out: &[ImageCircle]) -> Option<Vec
     Some(taught)
 }
 
-/// Up to `per_class` fruit and `per_class` background samples of `lf` in the HΣ plane, drawn with
+/// Up to `per_class` fruit and `per_class` background samples of `lf` in the HΣ plane (with the
+/// middle of their intensity band), drawn with
 /// `seed` among the pixels `labels` ([`taught_labels`]) teaches; empty without colour.
 pub fn training_pixels(
     lf: &LabelledFrame,
@@ -112,7 +113,13 @@ pub fn training_pixels(
     let mut out = Vec::with_capacity(2 * per_class);
     for (indices, is_fruit) in [(&mut fruit, true), (&mut background, false)] {
         let (chosen, _) = indices.partial_shuffle(&mut rng, per_class);
-        out.extend(chosen.iter().map(|&i| (hsigma(rgb[i]), is_fruit)));
+        out.extend(chosen.iter().map(|&i| {
+            let (x, y) = hsigma(rgb[i]);
+            (
+                [x, y, intensity_of_level(intensity_level(rgb[i]))],
+                is_fruit,
+            )
+        }));
     }
     out
 }

@@ -13,7 +13,8 @@
 //! (intensity, here the mean `(R + G + B) / 3`). A dim orange and a dark leaf, or a lit orange
 //! and a sunlit yellow-green leaf, can share a place in the plane and differ only there; one
 //! table over the plane must then trade daylight against dim or harsh light (docs/results.md,
-//! "Colour with intensity"). [`intensity_level`] quantises the mean into
+//! "Colour with intensity"; `examples/colour_table_bound.rs` measures how far any table over a
+//! colour space can go). [`intensity_level`] quantises the mean into
 //! [`INTENSITY_LEVELS`] bands, the optional third input of [`crate::Mlp`] and of its table.
 
 /// Smallest value of `G − B` for 8-bit colour.

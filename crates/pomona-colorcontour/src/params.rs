@@ -9,7 +9,8 @@ use crate::{EdgeFitParams, HoughCircleParams, MlpParams, PruneRank, RayCirclePar
 /// Parameters of every stage.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ColorContourParams {
-    /// The colour perceptron's training (2-8-1, back-propagation).
+    /// The colour perceptron's training (back-propagation; 3-8-1 with the intensity input by
+    /// default, the paper's 2-8-1 with `intensity` off).
     pub mlp: MlpParams,
     /// Training pixels drawn per class per frame (seeded; the paper used hand-cut samples of
     /// fruit and of background from 800 images).

@@ -39,25 +39,25 @@ DETECT_ARGS=${DETECT_ARGS:-}
 ROWS=()
 for pipeline in "${PIPELINES[@]}"; do
   for batch in $BATCHES; do
-  for s in "${SETS[@]}"; do
-    read -r name seed args <<< "$s"
-    if [ "$batch" != 500 ]; then
-      name="$name-$batch"
-      seed=$((seed - 500 + batch))
-    fi
-    data="$OUT/data/$name"
-    if [ ! -f "$data/camera.json" ]; then
+    for s in "${SETS[@]}"; do
+      read -r name seed args <<< "$s"
+      if [ "$batch" != 500 ]; then
+        name="$name-$batch"
+        seed=$((seed - 500 + batch))
+      fi
+      data="$OUT/data/$name"
+      if [ ! -f "$data/camera.json" ]; then
+        # shellcheck disable=SC2086
+        "$POMONA" synth --out "$data" --frames 10 --seed "$seed" $args --force > /dev/null
+      fi
+      det="$OUT/det/$pipeline/$name"
+      rm -rf "$det"
       # shellcheck disable=SC2086
-      "$POMONA" synth --out "$data" --frames 10 --seed "$seed" $args --force > /dev/null
-    fi
-    det="$OUT/det/$pipeline/$name"
-    rm -rf "$det"
-    # shellcheck disable=SC2086
-    "$POMONA" detect --pipeline "$pipeline" --data "$data" --out "$det" --min-confidence 0 \
-      $DETECT_ARGS > /dev/null 2>&1 \
-      || { "$POMONA" detect --pipeline "$pipeline" --data "$data" --out "$det" $DETECT_ARGS > /dev/null; }
-    "$POMONA" eval --data "$data" --detections "$det" --json "$OUT/$pipeline-$name.json" > /dev/null
-    ROWS+=("$(python3 - "$OUT/$pipeline-$name.json" "$pipeline" "$name" <<'PY'
+      "$POMONA" detect --pipeline "$pipeline" --data "$data" --out "$det" --min-confidence 0 \
+        $DETECT_ARGS > /dev/null 2>&1 \
+        || { "$POMONA" detect --pipeline "$pipeline" --data "$data" --out "$det" $DETECT_ARGS > /dev/null; }
+      "$POMONA" eval --data "$data" --detections "$det" --json "$OUT/$pipeline-$name.json" > /dev/null
+      ROWS+=("$(python3 - "$OUT/$pipeline-$name.json" "$pipeline" "$name" <<'PY'
 import json, sys
 r = json.load(open(sys.argv[1]))
 f = lambda v: "n/a" if v is None else f"{v:.3f}"
@@ -66,8 +66,8 @@ point = f"confidence ≥ {op:.3f}" if op is not None else f"score ≥ {r['thresh
 print(f"| {sys.argv[2]} | {sys.argv[3]} | {r['fruits']} | {f(r['ap_voc11'])} | {f(r['ap'])} | "
       f"{f(r['precision'])} | {f(r['recall'])} | {point} |")
 PY
-)")
-  done
+      )")
+    done
   done
 done
 {

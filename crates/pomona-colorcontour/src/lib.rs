@@ -89,7 +89,7 @@ pub use local_redetection::{most_consistent_circle, LocalRedetectParams, Redetec
 pub use mask_closing::close_mask;
 pub use mask_hysteresis::hysteresis_mask;
 pub use mlp::{HSigmaSample, Mlp, MlpParams};
-pub use params::ColorContourParams;
+pub use params::{ColorContourParams, EXTRA_CIRCLE_SOURCE_KEYS};
 pub use pipeline::{
     ColorContourDetector, ColorContourPipeline, ColorContourStageParams, PIPELINE_NAME,
 };

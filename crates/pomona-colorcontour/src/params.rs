@@ -6,6 +6,13 @@ use serde::{Deserialize, Serialize};
 
 use crate::{EdgeFitParams, HoughCircleParams, MlpParams, PruneRank, RayCircleParams};
 
+/// The model-file keys (dotted, under `stage_params`) of the circle sources beyond seed 004's
+/// edge fit — the ray circles and the Hough circles. Setting each to `null` leaves the paper's
+/// circles from contour curvature only; `pomona stereo` does, because its matching pairs the
+/// circles' image centres and a circle on a piece of fruit is centred on the piece, differently
+/// in the two views. A new circle source adds its key here.
+pub const EXTRA_CIRCLE_SOURCE_KEYS: [&str; 2] = ["params.ray_circles", "params.hough_circles"];
+
 /// Parameters of every stage.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ColorContourParams {
@@ -193,4 +200,31 @@ fn one_px() -> usize {
 
 fn yes() -> bool {
     true
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_extra_circle_source_keys_name_optional_stage_parameters() {
+        let params = serde_json::to_value(ColorContourParams::default()).unwrap();
+        for key in EXTRA_CIRCLE_SOURCE_KEYS {
+            let field = key.strip_prefix("params.").unwrap();
+            assert!(
+                params.get(field).is_some(),
+                "{key} is not a stage parameter"
+            );
+            let with = |value: serde_json::Value| -> ColorContourParams {
+                let mut p = params.clone();
+                p[field] = value;
+                serde_json::from_value(p).unwrap()
+            };
+            assert_ne!(
+                with(serde_json::json!({})),
+                with(serde_json::Value::Null),
+                "{key}: on and off are the same parameters"
+            );
+        }
+    }
 }

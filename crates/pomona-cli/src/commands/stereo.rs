@@ -406,7 +406,7 @@ pub fn run(args: &StereoArgs) -> Result<()> {
     let rig = read_rig(&args.data, &dataset)?;
     let registry = pomona::pipelines();
     let pipeline = pomona::find_pipeline(&registry, STEREO_PIPELINE)?;
-    let overrides: Vec<pomona::ParamOverride> = ["params.ray_circles", "params.hough_circles"]
+    let overrides: Vec<pomona::ParamOverride> = pomona_colorcontour::EXTRA_CIRCLE_SOURCE_KEYS
         .into_iter()
         .map(|key| pomona::ParamOverride::new(key, serde_json::Value::Null))
         .chain(args.set.iter().cloned())

@@ -16,8 +16,8 @@
 
 use std::collections::{HashMap, HashSet};
 
-use pomona_colorcontour::{fruit_labels, hsigma_integers, intensity_level};
-use pomona_pipeline::{FrameSource, SyntheticFrames};
+use pomona_colorcontour::{for_each_labelled_pixel, hsigma_integers, intensity_level};
+use pomona_pipeline::SyntheticFrames;
 use pomona_synth::{
     CameraPreset, Domain, FruitChoice, FruitKind, LightPreset, NoiseModel, SceneSpec,
 };
@@ -95,23 +95,17 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         for (light, seed) in LIGHTS {
             let set = held_out(light, seed);
             let mut counts = Counts::new();
-            for i in 0..set.len() {
-                let lf = set.load(i)?;
-                let (Some(color), Some(labels)) = (lf.frame.color(), fruit_labels(&lf)) else {
-                    continue;
+            for_each_labelled_pixel(&set, |rgb, fruit| {
+                let (gb, sigma) = hsigma_integers(rgb);
+                let band = if with_intensity {
+                    intensity_level(rgb)
+                } else {
+                    0
                 };
-                for (rgb, &fruit) in color.pixels().zip(&labels) {
-                    let (gb, sigma) = hsigma_integers(rgb);
-                    let band = if with_intensity {
-                        intensity_level(rgb)
-                    } else {
-                        0
-                    };
-                    let k = usize::from(fruit);
-                    counts.entry((gb, sigma, band)).or_default()[k] += 1;
-                    pooled.entry((gb, sigma, band)).or_default()[k] += 1;
-                }
-            }
+                let k = usize::from(fruit);
+                counts.entry((gb, sigma, band)).or_default()[k] += 1;
+                pooled.entry((gb, sigma, band)).or_default()[k] += 1;
+            })?;
             per_light.push((light, counts));
         }
         let one_table = best_table(&pooled);

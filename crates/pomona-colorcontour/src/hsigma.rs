@@ -40,6 +40,15 @@ pub fn intensity_of_level(level: usize) -> f64 {
     (level as f64 + 0.5) * 256.0 / INTENSITY_LEVELS as f64
 }
 
+/// What the colour network sees of a colour: HΣ `X`, `Y` (Eqs. 6–7) and the middle of its
+/// intensity band — the value the lookup table's plane for that band is evaluated at, so a
+/// network trained on these inputs is tabulated exactly. A network without the intensity input
+/// ignores the third.
+pub fn network_inputs(rgb: [u8; 3]) -> [f64; 3] {
+    let (x, y) = hsigma(rgb);
+    [x, y, intensity_of_level(intensity_level(rgb))]
+}
+
 /// The two integers that determine a colour's place in the HΣ plane: `(G − B, 2R − G − B)`.
 pub fn hsigma_integers([r, g, b]: [u8; 3]) -> (i32, i32) {
     let (r, g, b) = (i32::from(r), i32::from(g), i32::from(b));

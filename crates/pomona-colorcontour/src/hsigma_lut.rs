@@ -130,9 +130,7 @@ mod tests {
         ] {
             for k in 0..20u8 {
                 let c = rgb.map(|v| v.saturating_add(k).saturating_sub(10));
-                let (x, y) = crate::hsigma(c);
-                let i = intensity_of_level(intensity_level(c));
-                samples.push(([x, y, i], fruit));
+                samples.push((crate::network_inputs(c), fruit));
             }
         }
         Mlp::train(
@@ -159,8 +157,7 @@ mod tests {
                 for &g in &values {
                     for &b in &values {
                         let rgb = [r, g, b];
-                        let (x, y) = crate::hsigma(rgb);
-                        let i = intensity_of_level(intensity_level(rgb));
+                        let [x, y, i] = crate::network_inputs(rgb);
                         let expected = quantise_probability(net.probability(x, y, i));
                         assert_eq!(lut.value(rgb), expected, "colour {rgb:?}");
                         let (gb, s) = hsigma_integers(rgb);
@@ -194,8 +191,7 @@ mod tests {
         let mut samples = Vec::new();
         for _ in 0..200 {
             for (c, fruit) in [(dim_fruit, true), (bright_leaf, false)] {
-                let (x, y) = crate::hsigma(c);
-                samples.push(([x, y, intensity_of_level(intensity_level(c))], fruit));
+                samples.push((crate::network_inputs(c), fruit));
             }
         }
         let params = MlpParams {

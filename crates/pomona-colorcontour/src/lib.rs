@@ -82,7 +82,7 @@ pub use edge_scan::{
 pub use hough_circles::{hough_circles, HoughCircleParams};
 pub use hsigma::{
     hsigma, hsigma_integers, hsigma_of_integers, intensity_level, intensity_of_level,
-    INTENSITY_LEVELS,
+    network_inputs, INTENSITY_LEVELS,
 };
 pub use hsigma_lut::{quantise_probability, HSigmaLut};
 pub use local_redetection::{most_consistent_circle, LocalRedetectParams, Redetect, SampledRegion};
@@ -93,7 +93,9 @@ pub use params::{ColorContourParams, EXTRA_CIRCLE_SOURCE_KEYS};
 pub use pipeline::{
     ColorContourDetector, ColorContourPipeline, ColorContourStageParams, PIPELINE_NAME,
 };
-pub use pixel_f1::{best_f1_threshold, pixel_counts, value_histograms, PixelCounts};
+pub use pixel_f1::{
+    best_f1_threshold, for_each_labelled_pixel, pixel_counts, value_histograms, PixelCounts,
+};
 pub use ray_circles::{ray_circles, RayCircleParams};
 pub use spiral_search::{spiral_points, SpiralParams};
 pub use tracking::{ApproachTracker, TrackEstimate, TrackParams, TrackStatus};

@@ -73,8 +73,8 @@ fn sigmoid(x: f64) -> f64 {
     1.0 / (1.0 + (-x).exp())
 }
 
-/// One labelled training pixel: HΣ `X`, `Y` and the middle of its intensity band
-/// ([`crate::intensity_of_level`]), and whether it is fruit.
+/// One labelled training pixel: its network inputs ([`crate::network_inputs`]: HΣ `X`, `Y` and
+/// the middle of its intensity band) and whether it is fruit.
 pub type HSigmaSample = ([f64; 3], bool);
 
 impl Mlp {

@@ -92,22 +92,37 @@ pub fn pixel_counts(
     threshold: u8,
 ) -> Result<PixelCounts, PipelineError> {
     let mut c = PixelCounts::default();
+    for_each_labelled_pixel(frames, |rgb, truth| {
+        let predicted = lut.value(rgb) >= threshold;
+        match (predicted, truth) {
+            (true, true) => c.true_positives += 1,
+            (true, false) => c.false_positives += 1,
+            (false, true) => c.false_negatives += 1,
+            (false, false) => {}
+        }
+    })?;
+    Ok(c)
+}
+
+/// Calls `visit(colour, is_fruit)` for every pixel of every frame of `frames` that has colour
+/// and labels ([`crate::fruit_labels`]); frames without are skipped.
+///
+/// # Errors
+/// The first frame that fails to load.
+pub fn for_each_labelled_pixel(
+    frames: &dyn FrameSource,
+    mut visit: impl FnMut([u8; 3], bool),
+) -> Result<(), PipelineError> {
     for i in 0..frames.len() {
         let lf = frames.load(i)?;
         let (Some(color), Some(labels)) = (lf.frame.color(), fruit_labels(&lf)) else {
             continue;
         };
-        for (rgb, &truth) in color.pixels().zip(&labels) {
-            let predicted = lut.value(rgb) >= threshold;
-            match (predicted, truth) {
-                (true, true) => c.true_positives += 1,
-                (true, false) => c.false_positives += 1,
-                (false, true) => c.false_negatives += 1,
-                (false, false) => {}
-            }
+        for (rgb, &fruit) in color.pixels().zip(&labels) {
+            visit(rgb, fruit);
         }
     }
-    Ok(c)
+    Ok(())
 }
 
 #[cfg(test)]

@@ -25,7 +25,7 @@ use rand::seq::SliceRandom;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
-use crate::{hsigma, intensity_level, intensity_of_level, HSigmaSample};
+use crate::{network_inputs, HSigmaSample};
 
 /// Per pixel of `lf`: `Some(true)` fruit, `Some(false)` background; `None` without colour.
 pub fn fruit_labels(lf: &LabelledFrame) -> Option<Vec<bool>> {
@@ -113,13 +113,7 @@ pub fn training_pixels(
     let mut out = Vec::with_capacity(2 * per_class);
     for (indices, is_fruit) in [(&mut fruit, true), (&mut background, false)] {
         let (chosen, _) = indices.partial_shuffle(&mut rng, per_class);
-        out.extend(chosen.iter().map(|&i| {
-            let (x, y) = hsigma(rgb[i]);
-            (
-                [x, y, intensity_of_level(intensity_level(rgb[i]))],
-                is_fruit,
-            )
-        }));
+        out.extend(chosen.iter().map(|&i| (network_inputs(rgb[i]), is_fruit)));
     }
     out
 }

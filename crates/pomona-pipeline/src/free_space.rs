@@ -15,6 +15,19 @@
 //! The lead is measured as a median over a disc of pixels around the projected centre, so a
 //! few flying pixels or a hole in the depth image do not decide it; a detection with no depth
 //! reading in its disc is admitted (no evidence against it).
+//!
+//! The median alone admits a sphere laid over a clump of leaves: most of its disc sees the
+//! leaves in front of its centre, and the gaps between them — where the camera sees the
+//! background far behind — are outvoted. So the check also bounds the **see-through share**:
+//! the fraction of the depth readings near the projected centre (within 0.3 of the fruit's
+//! image radius) that lie more than two radii behind the centre. An opaque fruit allows none
+//! there (its near side lies about a radius in front of the centre); the default allows a
+//! fifth. The inner disc and the two radii leave room for what real sensors and detectors do:
+//! a centre off the fruit's middle or a radius too large puts the background beyond the
+//! outline into a wider disc, and time-of-flight mixed pixels read a far apple's surface up to
+//! two radii behind where it is (real `ak-apples`, 1.7 m). Leaf clumps that a sphere fits
+//! (their gaps show the background far behind) exceed it (docs/results.md, "See-through
+//! share").
 
 use pomona_core::nalgebra::Point3;
 use pomona_core::{Detection, RgbdFrame};
@@ -40,6 +53,50 @@ pub struct FreeSpaceCheck {
     /// surface, as a fraction of the fruit's image radius (default 0.5: the middle of the fruit,
     /// clear of its outline, where a depth camera's edge errors lie).
     pub disc_radius_fraction: f64,
+    /// Largest accepted share of the depth readings over the inner disc
+    /// ([`Self::see_through_disc_fraction`]) that lie more than [`Self::see_through_radii`]
+    /// behind the centre (the camera looks through where the fruit should be); `None`: no
+    /// limit, the median test alone (the check as first built). In `[0, 1]`. Absent in older
+    /// model files: the default, 0.2.
+    #[serde(default = "default_max_see_through_share")]
+    pub max_see_through_share: Option<f64>,
+    /// How far behind the centre, in fruit radii, a depth reading counts as seen through the
+    /// fruit (default 2). Non-negative. Absent in older model files: the default.
+    #[serde(default = "default_see_through_radii")]
+    pub see_through_radii: f64,
+    /// Radius of the disc around the projected centre over which the see-through share is
+    /// counted, as a fraction of the fruit's image radius: smaller than the median's disc, so
+    /// that a detection whose centre or radius is off does not count the background beyond
+    /// the fruit's outline as seen through it (default 0.3). Positive. Absent in older model
+    /// files: the default.
+    #[serde(default = "default_see_through_disc_fraction")]
+    pub see_through_disc_fraction: f64,
+}
+
+/// The default of [`FreeSpaceCheck::max_see_through_share`].
+fn default_max_see_through_share() -> Option<f64> {
+    Some(0.2)
+}
+
+/// The default of [`FreeSpaceCheck::see_through_radii`].
+fn default_see_through_radii() -> f64 {
+    2.0
+}
+
+/// The default of [`FreeSpaceCheck::see_through_disc_fraction`].
+fn default_see_through_disc_fraction() -> f64 {
+    0.3
+}
+
+/// What the depth camera sees over the disc around a fruit's projected centre.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SeenSurface {
+    /// How far the median seen depth lies in front of the centre, in fruit radii.
+    pub lead_radii: f64,
+    /// Share of the depth readings over the inner disc
+    /// ([`FreeSpaceCheck::see_through_disc_fraction`]) more than
+    /// [`FreeSpaceCheck::see_through_radii`] behind the centre (0 when it has none).
+    pub see_through_share: f64,
 }
 
 impl Default for FreeSpaceCheck {
@@ -48,6 +105,9 @@ impl Default for FreeSpaceCheck {
             enabled: true,
             min_lead_radii: -1.5,
             disc_radius_fraction: 0.5,
+            max_see_through_share: default_max_see_through_share(),
+            see_through_radii: default_see_through_radii(),
+            see_through_disc_fraction: default_see_through_disc_fraction(),
         }
     }
 }
@@ -62,7 +122,9 @@ impl FreeSpaceCheck {
     }
 
     /// Which setting is unusable (its key under `free_space`), its value and why, if one is:
-    /// `min_lead_radii` must be finite and `disc_radius_fraction` finite and positive.
+    /// `min_lead_radii` must be finite, `disc_radius_fraction` finite and positive,
+    /// `max_see_through_share` in `[0, 1]`, `see_through_radii` finite and non-negative and
+    /// `see_through_disc_fraction` finite and positive.
     pub fn invalid_reason(&self) -> Option<(&'static str, f64, &'static str)> {
         if !self.min_lead_radii.is_finite() {
             Some((
@@ -74,6 +136,29 @@ impl FreeSpaceCheck {
             Some((
                 "free_space.disc_radius_fraction",
                 self.disc_radius_fraction,
+                "must be finite and > 0",
+            ))
+        } else if let Some(share) = self
+            .max_see_through_share
+            .filter(|s| !(0.0..=1.0).contains(s))
+        {
+            Some((
+                "free_space.max_see_through_share",
+                share,
+                "must be in [0, 1]",
+            ))
+        } else if !(self.see_through_radii.is_finite() && self.see_through_radii >= 0.0) {
+            Some((
+                "free_space.see_through_radii",
+                self.see_through_radii,
+                "must be finite and >= 0",
+            ))
+        } else if !(self.see_through_disc_fraction.is_finite()
+            && self.see_through_disc_fraction > 0.0)
+        {
+            Some((
+                "free_space.see_through_disc_fraction",
+                self.see_through_disc_fraction,
                 "must be finite and > 0",
             ))
         } else {
@@ -92,6 +177,18 @@ impl FreeSpaceCheck {
         center_m: &Point3<f64>,
         radius_m: f64,
     ) -> Option<f64> {
+        self.seen_surface(frame, center_m, radius_m)
+            .map(|seen| seen.lead_radii)
+    }
+
+    /// The median lead ([`Self::surface_lead_radii`]) and the see-through share
+    /// ([`SeenSurface::see_through_share`]); `None` in the same cases.
+    pub fn seen_surface(
+        &self,
+        frame: &RgbdFrame,
+        center_m: &Point3<f64>,
+        radius_m: f64,
+    ) -> Option<SeenSurface> {
         let cam = frame.camera();
         if !(radius_m > 0.0 && center_m.z > 0.0) {
             return None;
@@ -103,28 +200,45 @@ impl FreeSpaceCheck {
             i64::from(cam.width),
             i64::from(cam.height),
         );
-        let disc_px = (self.disc_radius_fraction * cam.fx * radius_m / center_m.z).max(1.0);
-        let reach = disc_px.floor() as i64;
+        let image_radius_px = cam.fx * radius_m / center_m.z;
+        let disc_px = (self.disc_radius_fraction * image_radius_px).max(1.0);
+        let inner_px = (self.see_through_disc_fraction * image_radius_px).max(1.0);
+        let reach = disc_px.max(inner_px).floor() as i64;
+        let through_m = center_m.z + self.see_through_radii * radius_m;
         let depth = frame.depth().as_slice();
         let mut seen: Vec<f32> = Vec::with_capacity(((2 * reach + 1) * (2 * reach + 1)) as usize);
+        let (mut inner, mut inner_through) = (0_usize, 0_usize);
         for v in (v0 - reach).max(0)..=(v0 + reach).min(h - 1) {
             for u in (u0 - reach).max(0)..=(u0 + reach).min(w - 1) {
-                let (du, dv) = ((u - u0) as f64, (v - v0) as f64);
-                if du * du + dv * dv > disc_px * disc_px {
+                let d = depth[(v * w + u) as usize];
+                if !d.is_finite() {
                     continue;
                 }
-                let d = depth[(v * w + u) as usize];
-                if d.is_finite() {
+                let (du, dv) = ((u - u0) as f64, (v - v0) as f64);
+                let r2 = du * du + dv * dv;
+                if r2 <= disc_px * disc_px {
                     seen.push(d);
+                }
+                if r2 <= inner_px * inner_px {
+                    inner += 1;
+                    inner_through += usize::from(f64::from(d) > through_m);
                 }
             }
         }
         if seen.is_empty() {
             return None;
         }
+        let see_through_share = if inner == 0 {
+            0.0
+        } else {
+            inner_through as f64 / inner as f64
+        };
         let mid = seen.len() / 2;
         let (_, median, _) = seen.select_nth_unstable_by(mid, f32::total_cmp);
-        Some((center_m.z - f64::from(*median)) / radius_m)
+        Some(SeenSurface {
+            lead_radii: (center_m.z - f64::from(*median)) / radius_m,
+            see_through_share,
+        })
     }
 
     /// Keeps the `items` that pass ([`Self::admits`]); `sphere` gives an item's centre and
@@ -145,12 +259,18 @@ impl FreeSpaceCheck {
 
     /// Whether a fruit of `radius_m` centred at `center_m` passes: the check is off, there is no
     /// depth to judge by, or the seen surface leads the centre by at least
-    /// [`Self::min_lead_radii`].
+    /// [`Self::min_lead_radii`] and at most [`Self::max_see_through_share`] of it is seen
+    /// through the fruit.
     pub fn admits(&self, frame: &RgbdFrame, center_m: &Point3<f64>, radius_m: f64) -> bool {
         !self.enabled
             || self
-                .surface_lead_radii(frame, center_m, radius_m)
-                .is_none_or(|lead| lead >= self.min_lead_radii)
+                .seen_surface(frame, center_m, radius_m)
+                .is_none_or(|seen| {
+                    seen.lead_radii >= self.min_lead_radii
+                        && self
+                            .max_see_through_share
+                            .is_none_or(|most| seen.see_through_share <= most)
+                })
     }
 }
 
@@ -237,6 +357,58 @@ mod tests {
         assert!(check.admits(&scene(0.7, false), &centre, 0.04));
     }
 
+    /// Leaves at 0.78 m in vertical stripes, every third pixel column a gap onto a wall at
+    /// 1.5 m: a clump a sphere at 0.8 m could be laid over.
+    fn leaves_with_gaps() -> RgbdFrame {
+        let cam = PinholeCamera::new(64, 64, 100.0, 100.0, 31.5, 31.5).unwrap();
+        let depth = (0..64 * 64)
+            .map(|i| if i % 64 % 3 == 0 { 1.5 } else { 0.78 })
+            .collect();
+        RgbdFrame::new(cam, DepthImage::from_meters(64, 64, depth).unwrap(), None).unwrap()
+    }
+
+    #[test]
+    fn a_sphere_over_leaves_with_the_background_seen_between_them_is_refused() {
+        let frame = leaves_with_gaps();
+        let centre = Point3::new(0.0, 0.0, 0.8);
+        let check = FreeSpaceCheck::default();
+        let seen = check.seen_surface(&frame, &centre, 0.04).unwrap();
+        // The leaves outvote the gaps in the median: the first check alone admits the sphere.
+        assert!((seen.lead_radii - 0.5).abs() < 1e-5, "{seen:?}");
+        assert!((0.25..0.45).contains(&seen.see_through_share), "{seen:?}");
+        assert!(!check.admits(&frame, &centre, 0.04));
+        let median_only = FreeSpaceCheck {
+            max_see_through_share: None,
+            ..check
+        };
+        assert!(median_only.admits(&frame, &centre, 0.04));
+        let lenient = FreeSpaceCheck {
+            max_see_through_share: Some(0.5),
+            ..check
+        };
+        assert!(lenient.admits(&frame, &centre, 0.04));
+        // A real ball over the same wall is seen through nowhere.
+        let ball = check
+            .seen_surface(&scene(1.5, true), &centre, 0.04)
+            .unwrap();
+        assert_eq!(ball.see_through_share, 0.0);
+    }
+
+    #[test]
+    fn model_files_without_the_see_through_keys_get_the_defaults() {
+        let old: FreeSpaceCheck = serde_json::from_str(
+            r#"{"enabled":true,"min_lead_radii":-1.5,"disc_radius_fraction":0.5}"#,
+        )
+        .unwrap();
+        assert_eq!(old, FreeSpaceCheck::default());
+        let none: FreeSpaceCheck = serde_json::from_str(
+            r#"{"enabled":true,"min_lead_radii":-1.5,"disc_radius_fraction":0.5,
+                "max_see_through_share":null}"#,
+        )
+        .unwrap();
+        assert_eq!(none.max_see_through_share, None);
+    }
+
     #[test]
     fn the_filter_drops_detections_the_camera_sees_through() {
         let frame = scene(1.0, false);
@@ -276,6 +448,12 @@ mod tests {
         };
         let reason = flat.invalid_reason().map(|r| r.0);
         assert_eq!(reason, Some("free_space.disc_radius_fraction"));
+        let share = FreeSpaceCheck {
+            max_see_through_share: Some(1.5),
+            ..FreeSpaceCheck::default()
+        };
+        let reason = share.invalid_reason().map(|r| r.0);
+        assert_eq!(reason, Some("free_space.max_see_through_share"));
     }
 
     #[test]

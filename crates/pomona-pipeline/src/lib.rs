@@ -38,7 +38,7 @@ pub use detection_evaluation::{detect_and_evaluate, DetectionEvaluation};
 pub use detector::{complete_with_defaults, Detector, Pipeline, TrainOptions};
 pub use error::PipelineError;
 pub use frame_source::{ChainedFrames, DatasetFrames, FrameSource, LabelledFrame};
-pub use free_space::{FreeSpaceCheck, FreeSpaceFilter};
+pub use free_space::{FreeSpaceCheck, FreeSpaceFilter, SeenSurface};
 pub use pomona_learn::ModelFile;
 pub use stage::{run_stage, Stage};
 #[cfg(feature = "synth")]

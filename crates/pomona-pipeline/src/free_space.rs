@@ -307,10 +307,15 @@ mod tests {
     use super::*;
     use pomona_core::{DepthImage, PinholeCamera};
 
-    /// A 64×64 camera looking at a wall at `wall_m`, with a 40 mm ball at (0, 0, 0.8) m drawn
-    /// in front of it when `ball` is set (exact ray–sphere depth).
+    /// A 64×64 camera (focal 100 px) looking at a wall at `wall_m`, with a 40 mm ball at
+    /// (0, 0, 0.8) m drawn in front of it when `ball` is set (exact ray–sphere depth).
     fn scene(wall_m: f64, ball: bool) -> RgbdFrame {
-        let cam = PinholeCamera::new(64, 64, 100.0, 100.0, 31.5, 31.5).unwrap();
+        scene_with_focal(100.0, wall_m, ball)
+    }
+
+    /// [`scene`] through a lens of `focal_px`.
+    fn scene_with_focal(focal_px: f64, wall_m: f64, ball: bool) -> RgbdFrame {
+        let cam = PinholeCamera::new(64, 64, focal_px, focal_px, 31.5, 31.5).unwrap();
         let (c, r) = (Point3::new(0.0, 0.0, 0.8), 0.04);
         let mut depth = vec![wall_m as f32; 64 * 64];
         if ball {
@@ -395,6 +400,25 @@ mod tests {
     }
 
     #[test]
+    fn an_oversized_sphere_off_the_balls_middle_counts_the_ball_not_the_wall_beside_it() {
+        // The ball is 10 px across its radius; the detection is 0.7 of its radius to the side
+        // and a quarter too large, so half its radius reaches past the outline onto the wall.
+        let frame = scene_with_focal(200.0, 1.5, true);
+        let (centre, radius) = (Point3::new(0.028, 0.0, 0.8), 0.05);
+        let check = FreeSpaceCheck::default();
+        let seen = check.seen_surface(&frame, &centre, radius).unwrap();
+        assert!(seen.see_through_share < 0.2, "{seen:?}");
+        assert!(check.admits(&frame, &centre, radius));
+        let wide = FreeSpaceCheck {
+            see_through_disc_fraction: 0.5,
+            ..check
+        };
+        let seen = wide.seen_surface(&frame, &centre, radius).unwrap();
+        assert!(seen.see_through_share > 0.2, "{seen:?}");
+        assert!(!wide.admits(&frame, &centre, radius));
+    }
+
+    #[test]
     fn model_files_without_the_see_through_keys_get_the_defaults() {
         let old: FreeSpaceCheck = serde_json::from_str(
             r#"{"enabled":true,"min_lead_radii":-1.5,"disc_radius_fraction":0.5}"#,
@@ -454,6 +478,18 @@ mod tests {
         };
         let reason = share.invalid_reason().map(|r| r.0);
         assert_eq!(reason, Some("free_space.max_see_through_share"));
+        let ahead = FreeSpaceCheck {
+            see_through_radii: -0.5,
+            ..FreeSpaceCheck::default()
+        };
+        let reason = ahead.invalid_reason().map(|r| r.0);
+        assert_eq!(reason, Some("free_space.see_through_radii"));
+        let point = FreeSpaceCheck {
+            see_through_disc_fraction: 0.0,
+            ..FreeSpaceCheck::default()
+        };
+        let reason = point.invalid_reason().map(|r| r.0);
+        assert_eq!(reason, Some("free_space.see_through_disc_fraction"));
     }
 
     #[test]

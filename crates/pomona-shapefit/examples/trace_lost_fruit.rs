@@ -11,8 +11,9 @@
 //! one screened proposal, the candidates fitted mostly on its pixels and their centre errors,
 //! the best score of a candidate within 50 mm, and whether a kept detection matches it. The
 //! stage a fruit is lost at is the first of: `mask+proposals` (no cluster holds ≥ 20 % of its
-//! pixels), `shape` (no candidate on it), `localisation` (candidates on it, none within 50 mm),
-//! `merge` (a candidate within 50 mm, no kept detection), else found. False positives (kept
+//! pixels), `shape` (no candidate on it), `checks` (candidates on it, all refused by the
+//! free-space or curvature check, as the detector runs them), `localisation` (candidates on it,
+//! none within 50 mm), `merge` (a candidate within 50 mm, no kept detection), else found. False positives (kept
 //! detections matching no counted fruit) are split into pieces of a counted fruit (most pixels
 //! on it, centre > 50 mm away), duplicates, on hidden fruit (ignored by eval), and background.
 //! Lines starting `CONTEXT` give, per kept detection, its outcome, score, the share of its
@@ -26,10 +27,10 @@ use pomona_consensus::Shape;
 use pomona_learn::BatchedClassifier;
 use pomona_pipeline::{run_stage, DatasetFrames, FrameSource, ModelFile, Pipeline, StageTimings};
 use pomona_shapefit::stages::{
-    BackProjectionStage, ClassifierStage, ColorMaskStage, DepthProposalStage, DescriptorStage,
-    ProposalScreenStage, RegionGrowingStage, ShapeStage,
+    BackProjectionStage, ClassifierStage, ColorMaskStage, CurvatureStage, DepthProposalStage,
+    DescriptorStage, FreeSpaceStage, ProposalScreenStage, RegionGrowingStage, ShapeStage,
 };
-use pomona_shapefit::{GpcdParams, ShapeFitPipeline, ShapeFitStageParams};
+use pomona_shapefit::{Candidate, GpcdParams, ShapeFitPipeline, ShapeFitStageParams};
 
 const TOL: f64 = 0.05;
 
@@ -84,6 +85,27 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let classifier = ClassifierStage {
         svm: BatchedClassifier::new(model.classifier())?,
     };
+    // The detector's checks on the shapes, as it runs them (free space, then curvature).
+    let free_space = p.free_space.enabled.then_some(FreeSpaceStage {
+        check: p.free_space,
+    });
+    let curvature = p.curvature.map(|check| CurvatureStage { check });
+    let admit = |frame: &pomona_core::RgbdFrame,
+                 shapes: Vec<Candidate>,
+                 refused: &mut Vec<Candidate>,
+                 t: &mut StageTimings|
+     -> Result<Vec<Candidate>, Box<dyn std::error::Error>> {
+        let all = shapes.clone();
+        let mut kept = shapes;
+        if let Some(check) = &free_space {
+            kept = run_stage(check, (frame, kept), t)?;
+        }
+        if let Some(check) = &curvature {
+            kept = run_stage(check, kept, t)?;
+        }
+        refused.extend(all.into_iter().filter(|c| !kept.contains(c)));
+        Ok(kept)
+    };
     let frames = DatasetFrames::new(vec![pomona_io::Dataset::open(&data)?]);
     let mut lost: HashMap<&'static str, usize> = HashMap::new();
     let mut fp_kinds: HashMap<&'static str, Vec<f64>> = HashMap::new();
@@ -101,18 +123,17 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let keep = run_stage(&mask_stage, frame, &mut t)?;
         let clusters = run_stage(&regions, (frame, keep.as_slice()), &mut t)?;
         let cloud = run_stage(&BackProjectionStage, frame, &mut t)?;
-        let mut cands = run_stage(&shapes, (frame, &cloud, clusters.as_slice()), &mut t)?;
+        let mut refused = Vec::new();
+        let colour_shapes = run_stage(&shapes, (frame, &cloud, clusters.as_slice()), &mut t)?;
+        let mut cands = admit(frame, colour_shapes, &mut refused, &mut t)?;
         let first_proposal = cands.len();
         // Proposals before and after the screen.
         let in_range = ColorMaskStage::depth_range(p.max_depth_m).run_frame(frame)?;
         let all_depth = run_stage(&regions, (frame, in_range.as_slice()), &mut t)?;
         let proposed = run_stage(&proposals, (frame, keep.as_slice()), &mut t)?;
         let screened = run_stage(&screen, (frame, &cloud, proposed.as_slice()), &mut t)?;
-        cands.extend(run_stage(
-            &shapes,
-            (frame, &cloud, screened.as_slice()),
-            &mut t,
-        )?);
+        let proposal_shapes = run_stage(&shapes, (frame, &cloud, screened.as_slice()), &mut t)?;
+        cands.extend(admit(frame, proposal_shapes, &mut refused, &mut t)?);
         // Which cluster each candidate was fitted in (colour clusters, then screened proposals).
         let mut cluster_of = vec![usize::MAX; ids.len()];
         let mut proposal_of = vec![usize::MAX; ids.len()];
@@ -251,8 +272,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 .filter(|d| (d.center_m - tc).norm() <= TOL)
                 .map(|d| d.score)
                 .fold(f64::NEG_INFINITY, f64::max);
+            let refused_on_it = refused.iter().filter(|c| owner(&c.pixels).0 == id).count();
             let stage = if on_it.is_empty() && near.is_empty() {
-                if colour_cl.max(scr_cl) < 0.2 {
+                if refused_on_it > 0 {
+                    "checks"
+                } else if colour_cl.max(scr_cl) < 0.2 {
                     "mask+proposals"
                 } else {
                     "shape"

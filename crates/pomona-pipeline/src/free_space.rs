@@ -460,36 +460,47 @@ mod tests {
     #[test]
     fn unusable_settings_are_named() {
         assert_eq!(FreeSpaceCheck::default().invalid_reason(), None);
-        let nan = FreeSpaceCheck {
-            min_lead_radii: f64::NAN,
-            ..FreeSpaceCheck::default()
-        };
-        let reason = nan.invalid_reason().map(|r| r.0);
-        assert_eq!(reason, Some("free_space.min_lead_radii"));
-        let flat = FreeSpaceCheck {
-            disc_radius_fraction: 0.0,
-            ..FreeSpaceCheck::default()
-        };
-        let reason = flat.invalid_reason().map(|r| r.0);
-        assert_eq!(reason, Some("free_space.disc_radius_fraction"));
-        let share = FreeSpaceCheck {
-            max_see_through_share: Some(1.5),
-            ..FreeSpaceCheck::default()
-        };
-        let reason = share.invalid_reason().map(|r| r.0);
-        assert_eq!(reason, Some("free_space.max_see_through_share"));
-        let ahead = FreeSpaceCheck {
-            see_through_radii: -0.5,
-            ..FreeSpaceCheck::default()
-        };
-        let reason = ahead.invalid_reason().map(|r| r.0);
-        assert_eq!(reason, Some("free_space.see_through_radii"));
-        let point = FreeSpaceCheck {
-            see_through_disc_fraction: 0.0,
-            ..FreeSpaceCheck::default()
-        };
-        let reason = point.invalid_reason().map(|r| r.0);
-        assert_eq!(reason, Some("free_space.see_through_disc_fraction"));
+        let d = FreeSpaceCheck::default();
+        let cases = [
+            (
+                FreeSpaceCheck {
+                    min_lead_radii: f64::NAN,
+                    ..d
+                },
+                "free_space.min_lead_radii",
+            ),
+            (
+                FreeSpaceCheck {
+                    disc_radius_fraction: 0.0,
+                    ..d
+                },
+                "free_space.disc_radius_fraction",
+            ),
+            (
+                FreeSpaceCheck {
+                    max_see_through_share: Some(1.5),
+                    ..d
+                },
+                "free_space.max_see_through_share",
+            ),
+            (
+                FreeSpaceCheck {
+                    see_through_radii: -0.5,
+                    ..d
+                },
+                "free_space.see_through_radii",
+            ),
+            (
+                FreeSpaceCheck {
+                    see_through_disc_fraction: 0.0,
+                    ..d
+                },
+                "free_space.see_through_disc_fraction",
+            ),
+        ];
+        for (check, key) in cases {
+            assert_eq!(check.invalid_reason().map(|r| r.0), Some(key));
+        }
     }
 
     #[test]

@@ -148,12 +148,8 @@ impl Mlp {
             for &i in &order {
                 let ([x, y, intensity], fruit) = samples[i];
                 let (x, y) = (x * INPUT_SCALE, y * INPUT_SCALE);
-                // Zero for the paper's network, whose intensity weights stay empty.
-                let t = if params.intensity {
-                    intensity * INPUT_SCALE
-                } else {
-                    0.0
-                };
+                // The paper's network has no intensity weights: `t` then reaches nothing.
+                let t = intensity * INPUT_SCALE;
                 let mut sum = net.output_bias;
                 for (k, out) in hidden_out.iter_mut().enumerate() {
                     let w = net.hidden_weights[k];

@@ -91,7 +91,8 @@ fn default_see_through_disc_fraction() -> f64 {
 /// What the depth camera sees over the disc around a fruit's projected centre.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SeenSurface {
-    /// How far the median seen depth lies in front of the centre, in fruit radii.
+    /// How far the seen surface lies in front of the centre, in fruit radii:
+    /// `(z_centre − median depth) / radius`.
     pub lead_radii: f64,
     /// Share of the depth readings over the inner disc
     /// ([`FreeSpaceCheck::see_through_disc_fraction`]) more than
@@ -166,23 +167,12 @@ impl FreeSpaceCheck {
         }
     }
 
-    /// How far, in radii of a fruit of `radius_m` centred at `center_m` (camera frame), the
-    /// seen surface lies in front of the centre: `(z_centre − median depth) / radius`, the
-    /// median over the disc of [`Self::disc_radius_fraction`] × the fruit's image radius
-    /// (at least one pixel) around the projected centre. `None` when the centre does not
-    /// project into the image, the radius is not positive, or no pixel of the disc has depth.
-    pub fn surface_lead_radii(
-        &self,
-        frame: &RgbdFrame,
-        center_m: &Point3<f64>,
-        radius_m: f64,
-    ) -> Option<f64> {
-        self.seen_surface(frame, center_m, radius_m)
-            .map(|seen| seen.lead_radii)
-    }
-
-    /// The median lead ([`Self::surface_lead_radii`]) and the see-through share
-    /// ([`SeenSurface::see_through_share`]); `None` in the same cases.
+    /// What the camera sees over a fruit of `radius_m` centred at `center_m` (camera frame): the
+    /// lead ([`SeenSurface::lead_radii`], the median over the disc of
+    /// [`Self::disc_radius_fraction`] × the fruit's image radius, at least one pixel, around the
+    /// projected centre) and the see-through share ([`SeenSurface::see_through_share`]). `None`
+    /// when the centre does not project into the image, the radius is not positive, or no pixel
+    /// of the disc has depth.
     pub fn seen_surface(
         &self,
         frame: &RgbdFrame,
@@ -340,7 +330,8 @@ mod tests {
         let frame = scene(1.5, true);
         let check = FreeSpaceCheck::default();
         let lead = check
-            .surface_lead_radii(&frame, &Point3::new(0.0, 0.0, 0.8), 0.04)
+            .seen_surface(&frame, &Point3::new(0.0, 0.0, 0.8), 0.04)
+            .map(|seen| seen.lead_radii)
             .unwrap();
         assert!((0.85..=1.0).contains(&lead), "lead {lead}");
         assert!(check.admits(&frame, &Point3::new(0.0, 0.0, 0.8), 0.04));
@@ -352,7 +343,10 @@ mod tests {
         let frame = scene(1.0, false);
         let check = FreeSpaceCheck::default();
         let centre = Point3::new(0.0, 0.0, 0.8);
-        let lead = check.surface_lead_radii(&frame, &centre, 0.04).unwrap();
+        let lead = check
+            .seen_surface(&frame, &centre, 0.04)
+            .map(|seen| seen.lead_radii)
+            .unwrap();
         assert!((lead + 5.0).abs() < 1e-6, "lead {lead}");
         // Within the tolerance behind the centre: admitted.
         assert!(check.admits(&scene(0.85, false), &centre, 0.04));
@@ -510,11 +504,11 @@ mod tests {
         let frame = RgbdFrame::new(cam, depth, None).unwrap();
         let check = FreeSpaceCheck::default();
         let centre = Point3::new(0.0, 0.0, 0.8);
-        assert_eq!(check.surface_lead_radii(&frame, &centre, 0.04), None);
+        assert_eq!(check.seen_surface(&frame, &centre, 0.04), None);
         assert!(check.admits(&frame, &centre, 0.04));
         let wall = scene(1.0, false);
         let beside = Point3::new(2.0, 0.0, 0.8);
-        assert_eq!(check.surface_lead_radii(&wall, &beside, 0.04), None);
-        assert_eq!(check.surface_lead_radii(&wall, &centre, 0.0), None);
+        assert_eq!(check.seen_surface(&wall, &beside, 0.04), None);
+        assert_eq!(check.seen_surface(&wall, &centre, 0.0), None);
     }
 }

@@ -13,36 +13,42 @@
 
 use pomona_core::nalgebra::Point2;
 
-/// The 5-tap binomial kernel (σ ≈ 1 px), the 1D factor of the 5×5 Gaussian.
-const KERNEL: [f32; 5] = [1.0 / 16.0, 4.0 / 16.0, 6.0 / 16.0, 4.0 / 16.0, 1.0 / 16.0];
+/// The 5-tap binomial kernel (σ ≈ 1 px), the 1D factor of the 5×5 Gaussian, in sixteenths.
+const KERNEL: [u16; 5] = [1, 4, 6, 4, 1];
 
 /// The 5×5 Gaussian of a 0/1 mask thresholded at one half (borders replicate the edge pixel).
+///
+/// On a 0/1 mask the filter is exact in integers: a row pass gives sixteenths (0–16), the
+/// column pass 256ths, and "above one half" is a sum above 128.
 pub fn smooth_mask(mask: &[bool], width: usize, height: usize) -> Vec<bool> {
     if width == 0 || height == 0 || mask.len() != width * height {
         return mask.to_vec();
     }
     let clamp = |i: isize, n: usize| i.clamp(0, n as isize - 1) as usize;
-    let mut rows = vec![0f32; mask.len()];
-    for y in 0..height {
-        let row = &mask[y * width..(y + 1) * width];
-        for x in 0..width {
-            let mut s = 0.0;
-            for (k, w) in KERNEL.iter().enumerate() {
-                if row[clamp(x as isize + k as isize - 2, width)] {
-                    s += w;
-                }
+    let mut rows = vec![0u16; mask.len()];
+    for (row, out) in mask.chunks_exact(width).zip(rows.chunks_exact_mut(width)) {
+        let tap = |x: usize, k: usize| KERNEL[k] * u16::from(row[x]);
+        // The two pixels at either end replicate the edge; the rest read their window directly.
+        for x in (0..width.min(2)).chain(width.saturating_sub(2).max(2)..width) {
+            out[x] = (0..5)
+                .map(|k| tap(clamp(x as isize + k as isize - 2, width), k))
+                .sum();
+        }
+        if width > 4 {
+            for (x, o) in out.iter_mut().enumerate().take(width - 2).skip(2) {
+                *o = tap(x - 2, 0) + tap(x - 1, 1) + tap(x, 2) + tap(x + 1, 3) + tap(x + 2, 4);
             }
-            rows[y * width + x] = s;
         }
     }
     let mut out = vec![false; mask.len()];
-    for y in 0..height {
-        for x in 0..width {
-            let mut s = 0.0;
-            for (k, w) in KERNEL.iter().enumerate() {
-                s += w * rows[clamp(y as isize + k as isize - 2, height) * width + x];
-            }
-            out[y * width + x] = s > 0.5;
+    for (y, out_row) in out.chunks_exact_mut(width).enumerate() {
+        let near: [&[u16]; 5] = std::array::from_fn(|k| {
+            let yy = clamp(y as isize + k as isize - 2, height);
+            &rows[yy * width..(yy + 1) * width]
+        });
+        for (x, o) in out_row.iter_mut().enumerate() {
+            let s = near[0][x] + 4 * near[1][x] + 6 * near[2][x] + 4 * near[3][x] + near[4][x];
+            *o = s > 128;
         }
     }
     out
@@ -207,6 +213,51 @@ fn follow_border(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_integer_gaussian_is_the_5x5_gaussian_thresholded_at_one_half() {
+        // The filter as written down: 5×5 binomial weights over the replicated-border image,
+        // in floating point, on random masks of every small size and a few larger ones.
+        let mut state = 0x2545_f491_4f6c_dd1d_u64;
+        let mut next = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            state
+        };
+        let w1 = [1.0, 4.0, 6.0, 4.0, 1.0].map(|w: f64| w / 16.0);
+        for (width, height) in (1..8)
+            .flat_map(|w| (1..8).map(move |h| (w, h)))
+            .chain([(31, 9)])
+        {
+            let density = next() % 100;
+            let mask: Vec<bool> = (0..width * height)
+                .map(|_| next() % 100 < density)
+                .collect();
+            let at = |x: isize, y: isize| {
+                let (x, y) = (
+                    x.clamp(0, width as isize - 1),
+                    y.clamp(0, height as isize - 1),
+                );
+                f64::from(u8::from(mask[y as usize * width + x as usize]))
+            };
+            let expected: Vec<bool> = (0..width * height)
+                .map(|i| {
+                    let (x, y) = ((i % width) as isize, (i / width) as isize);
+                    let s: f64 = (0..5)
+                        .flat_map(|j| (0..5).map(move |k| (j, k)))
+                        .map(|(j, k)| w1[j] * w1[k] * at(x + k as isize - 2, y + j as isize - 2))
+                        .sum();
+                    s > 0.5
+                })
+                .collect();
+            assert_eq!(
+                smooth_mask(&mask, width, height),
+                expected,
+                "{width}×{height}"
+            );
+        }
+    }
 
     fn disc(w: usize, h: usize, cx: f64, cy: f64, r: f64) -> Vec<bool> {
         (0..w * h)

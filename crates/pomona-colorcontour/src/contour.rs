@@ -213,18 +213,15 @@ fn follow_border(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use rand::{RngCore, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
 
     #[test]
     fn the_integer_gaussian_is_the_5x5_gaussian_thresholded_at_one_half() {
         // The filter as written down: 5×5 binomial weights over the replicated-border image,
         // in floating point, on random masks of every small size and a few larger ones.
-        let mut state = 0x2545_f491_4f6c_dd1d_u64;
-        let mut next = move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            state
-        };
+        let mut rng = ChaCha8Rng::seed_from_u64(1);
+        let mut next = move || rng.next_u64();
         let w1 = [1.0, 4.0, 6.0, 4.0, 1.0].map(|w: f64| w / 16.0);
         for (width, height) in (1..8)
             .flat_map(|w| (1..8).map(move |h| (w, h)))

@@ -182,6 +182,8 @@ impl DisjointSets {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use rand::{RngCore, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
     use std::collections::VecDeque;
 
     /// The growth pixel by pixel, as the module docs state it (the implementation before the
@@ -239,13 +241,8 @@ mod tests {
     fn the_runs_reach_what_the_pixel_by_pixel_growth_reaches() {
         // Random images of three levels (none, weak, strong) in blobs and speckle, of many
         // shapes, against the pixel-by-pixel definition.
-        let mut state = 0x9e37_79b9_7f4a_7c15_u64;
-        let mut next = move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            state
-        };
+        let mut rng = ChaCha8Rng::seed_from_u64(1);
+        let mut next = move || rng.next_u64();
         for case in 0..400 {
             let (width, height) = (1 + (next() % 23) as usize, 1 + (next() % 17) as usize);
             let (p_strong, p_weak) = (next() % 60, next() % 60);

@@ -13,6 +13,8 @@
 
 use pomona_core::nalgebra::Point2;
 
+use crate::mask_runs::Runs;
+
 /// The 5-tap binomial kernel (σ ≈ 1 px), the 1D factor of the 5×5 Gaussian, in sixteenths.
 const KERNEL: [u16; 5] = [1, 4, 6, 4, 1];
 
@@ -131,39 +133,24 @@ pub fn trace_contours(
             mask[y as usize * width + x as usize]
         }
     };
-    let mut label = vec![false; mask.len()];
-    let mut stack = Vec::new();
+    // The components through their runs; a component's root is its first run, whose first
+    // pixel is the component's first in raster order, with background (or the image edge) to
+    // its west — where the border following starts.
+    let runs = Runs::where_(mask, width, |m| m);
+    let mut regions = runs.regions();
+    let mut area = vec![0usize; runs.runs.len()];
+    for (k, run) in runs.runs.iter().enumerate() {
+        area[regions.find(k)] += run.len();
+    }
     let mut out = Vec::new();
-    for start in 0..mask.len() {
-        if !mask[start] || label[start] {
+    for (k, run) in runs.runs.iter().enumerate() {
+        if regions.find(k) != k || area[k] < min_area_px.max(1) {
             continue;
         }
-        // Flood the component (to count it and never start inside it again).
-        let mut area = 0usize;
-        label[start] = true;
-        stack.push(start);
-        while let Some(i) = stack.pop() {
-            area += 1;
-            let (x, y) = ((i % width) as isize, (i / width) as isize);
-            for (dx, dy) in NEIGHBOURS {
-                let (nx, ny) = (x + dx, y + dy);
-                if at(nx, ny) {
-                    let j = ny as usize * width + nx as usize;
-                    if !label[j] {
-                        label[j] = true;
-                        stack.push(j);
-                    }
-                }
-            }
-        }
-        if area < min_area_px.max(1) {
-            continue;
-        }
-        // The first pixel in raster order has background (or the image edge) to its west.
-        let s = ((start % width) as isize, (start / width) as isize);
+        let s = (run.x0 as isize, run.y as isize);
         out.push(Contour {
-            points: follow_border(s, &at, 4 * area + 8),
-            area_px: area,
+            points: follow_border(s, &at, 4 * area[k] + 8),
+            area_px: area[k],
         });
     }
     out
@@ -263,6 +250,51 @@ mod tests {
                 x * x + y * y <= r * r
             })
             .collect()
+    }
+
+    #[test]
+    fn components_are_found_as_a_flood_fill_finds_them() {
+        // Every 8-connected component of random masks, in the raster order of its first pixel,
+        // with its area, and its border starting at that pixel.
+        let mut rng = ChaCha8Rng::seed_from_u64(5);
+        for _ in 0..200 {
+            let (w, h) = (
+                1 + (rng.next_u64() % 25) as usize,
+                1 + (rng.next_u64() % 25) as usize,
+            );
+            let density = rng.next_u64() % 100;
+            let mask: Vec<bool> = (0..w * h).map(|_| rng.next_u64() % 100 < density).collect();
+            let mut seen = vec![false; w * h];
+            let mut expected = Vec::new();
+            for start in 0..w * h {
+                if !mask[start] || seen[start] {
+                    continue;
+                }
+                let (mut area, mut stack) = (0, vec![start]);
+                seen[start] = true;
+                while let Some(i) = stack.pop() {
+                    area += 1;
+                    let (x, y) = ((i % w) as isize, (i / w) as isize);
+                    for (dx, dy) in NEIGHBOURS {
+                        let (nx, ny) = (x + dx, y + dy);
+                        if nx >= 0 && ny >= 0 && (nx as usize) < w && (ny as usize) < h {
+                            let j = ny as usize * w + nx as usize;
+                            if mask[j] && !seen[j] {
+                                seen[j] = true;
+                                stack.push(j);
+                            }
+                        }
+                    }
+                }
+                let first = Point2::new((start % w) as f64, (start / w) as f64);
+                expected.push((area, first));
+            }
+            let found: Vec<(usize, Point2<f64>)> = trace_contours(&mask, w, h, 1)
+                .iter()
+                .map(|c| (c.area_px, c.points[0]))
+                .collect();
+            assert_eq!(found, expected, "{w}×{h}");
+        }
     }
 
     #[test]

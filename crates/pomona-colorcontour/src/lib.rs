@@ -54,6 +54,7 @@ mod local_maxima;
 mod local_redetection;
 mod mask_closing;
 mod mask_hysteresis;
+mod mask_runs;
 mod mlp;
 mod params;
 mod pipeline;

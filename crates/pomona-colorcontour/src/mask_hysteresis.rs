@@ -12,6 +12,8 @@
 //! fruit-sized blob. With the low threshold equal to the high one this is the plain threshold
 //! (the paper's).
 
+use crate::mask_runs::{touching, Runs};
+
 /// The mask of `values` (row-major, `width` × `height`) with hysteresis thresholds `high` and
 /// `low`, grown from confident regions of at least `min_seed_px` pixels (see the module docs).
 /// A `low` at or above `high`, or a length that is not `width · height`, gives the plain
@@ -65,118 +67,6 @@ pub fn hysteresis_mask(
         }
     }
     mask
-}
-
-/// A run of pixels `x0..x1` of row `y`.
-#[derive(Debug, Clone, Copy)]
-struct Run {
-    y: usize,
-    x0: usize,
-    x1: usize,
-}
-
-impl Run {
-    fn len(&self) -> usize {
-        self.x1 - self.x0
-    }
-}
-
-/// The runs of the pixels passing a test, row by row.
-struct Runs {
-    runs: Vec<Run>,
-    /// Row `y`'s runs are `runs[row_starts[y]..row_starts[y + 1]]`.
-    row_starts: Vec<usize>,
-}
-
-impl Runs {
-    fn where_(values: &[u8], width: usize, test: impl Fn(u8) -> bool) -> Self {
-        let mut runs = Vec::new();
-        let mut row_starts = vec![0];
-        for (y, row) in values.chunks_exact(width).enumerate() {
-            let mut x = 0;
-            while x < width {
-                if test(row[x]) {
-                    let x0 = x;
-                    while x < width && test(row[x]) {
-                        x += 1;
-                    }
-                    runs.push(Run { y, x0, x1: x });
-                } else {
-                    x += 1;
-                }
-            }
-            row_starts.push(runs.len());
-        }
-        Self { runs, row_starts }
-    }
-
-    fn rows(&self) -> usize {
-        self.row_starts.len() - 1
-    }
-
-    /// Row `y`'s runs with their indices.
-    fn row(&self, y: usize) -> (usize, &[Run]) {
-        let (a, b) = (self.row_starts[y], self.row_starts[y + 1]);
-        (a, &self.runs[a..b])
-    }
-
-    /// The 8-connected regions: runs of consecutive rows that touch are one region.
-    fn regions(&self) -> DisjointSets {
-        let mut sets = DisjointSets::new(self.runs.len());
-        for y in 1..self.rows() {
-            touching(self.row(y - 1), self.row(y), |a, b| sets.union(a, b));
-        }
-        sets
-    }
-}
-
-/// Calls `f(index in a, index in b)` for every pair of runs of `a` and `b` (each sorted by
-/// `x0`, of one row) that touch 8-connectedly when their rows are adjacent or the same: they
-/// overlap or meet at a corner (and, in one row, two runs of different kinds meet end to end).
-fn touching(
-    (first_a, a): (usize, &[Run]),
-    (first_b, b): (usize, &[Run]),
-    mut f: impl FnMut(usize, usize),
-) {
-    let (mut i, mut j) = (0, 0);
-    while i < a.len() && j < b.len() {
-        if a[i].x0 <= b[j].x1 && b[j].x0 <= a[i].x1 {
-            f(first_a + i, first_b + j);
-        }
-        if a[i].x1 < b[j].x1 {
-            i += 1;
-        } else {
-            j += 1;
-        }
-    }
-}
-
-/// Union–find over run indices (path halving, union by index).
-struct DisjointSets {
-    parent: Vec<usize>,
-}
-
-impl DisjointSets {
-    fn new(n: usize) -> Self {
-        Self {
-            parent: (0..n).collect(),
-        }
-    }
-
-    fn find(&mut self, mut i: usize) -> usize {
-        while self.parent[i] != i {
-            self.parent[i] = self.parent[self.parent[i]];
-            i = self.parent[i];
-        }
-        i
-    }
-
-    fn union(&mut self, a: usize, b: usize) {
-        let (ra, rb) = (self.find(a), self.find(b));
-        if ra != rb {
-            self.parent[ra.max(rb)] = ra.min(rb);
-        }
-    }
 }
 
 #[cfg(test)]

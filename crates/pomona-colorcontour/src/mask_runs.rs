@@ -1,0 +1,118 @@
+//! Runs of mask pixels along rows and the 8-connected regions they form, for the mask stages
+//! that label regions (the colour hysteresis, [`crate::hysteresis_mask`]; the contour stage,
+//! [`crate::trace_contours`]). A region is labelled through its runs — a union–find over runs
+//! that touch in consecutive rows — rather than pixel by pixel, so the cost grows with the
+//! number of runs, not of pixels.
+
+/// A run of pixels `x0..x1` of row `y`.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Run {
+    pub y: usize,
+    pub x0: usize,
+    pub x1: usize,
+}
+
+impl Run {
+    pub fn len(&self) -> usize {
+        self.x1 - self.x0
+    }
+}
+
+/// The runs of the pixels passing a test, row by row.
+pub(crate) struct Runs {
+    pub runs: Vec<Run>,
+    /// Row `y`'s runs are `runs[row_starts[y]..row_starts[y + 1]]`.
+    row_starts: Vec<usize>,
+}
+
+impl Runs {
+    pub fn where_<T: Copy>(values: &[T], width: usize, test: impl Fn(T) -> bool) -> Self {
+        let mut runs = Vec::new();
+        let mut row_starts = vec![0];
+        for (y, row) in values.chunks_exact(width).enumerate() {
+            let mut x = 0;
+            while x < width {
+                if test(row[x]) {
+                    let x0 = x;
+                    while x < width && test(row[x]) {
+                        x += 1;
+                    }
+                    runs.push(Run { y, x0, x1: x });
+                } else {
+                    x += 1;
+                }
+            }
+            row_starts.push(runs.len());
+        }
+        Self { runs, row_starts }
+    }
+
+    pub fn rows(&self) -> usize {
+        self.row_starts.len() - 1
+    }
+
+    /// Row `y`'s runs with their indices.
+    pub fn row(&self, y: usize) -> (usize, &[Run]) {
+        let (a, b) = (self.row_starts[y], self.row_starts[y + 1]);
+        (a, &self.runs[a..b])
+    }
+
+    /// The 8-connected regions: runs of consecutive rows that touch are one region.
+    pub fn regions(&self) -> DisjointSets {
+        let mut sets = DisjointSets::new(self.runs.len());
+        for y in 1..self.rows() {
+            touching(self.row(y - 1), self.row(y), |a, b| sets.union(a, b));
+        }
+        sets
+    }
+}
+
+/// Calls `f(index in a, index in b)` for every pair of runs of `a` and `b` (each sorted by
+/// `x0`, of one row) that touch 8-connectedly when their rows are adjacent or the same: they
+/// overlap or meet at a corner (and, in one row, two runs of different kinds meet end to end).
+pub(crate) fn touching(
+    (first_a, a): (usize, &[Run]),
+    (first_b, b): (usize, &[Run]),
+    mut f: impl FnMut(usize, usize),
+) {
+    let (mut i, mut j) = (0, 0);
+    while i < a.len() && j < b.len() {
+        if a[i].x0 <= b[j].x1 && b[j].x0 <= a[i].x1 {
+            f(first_a + i, first_b + j);
+        }
+        if a[i].x1 < b[j].x1 {
+            i += 1;
+        } else {
+            j += 1;
+        }
+    }
+}
+
+/// Union–find over run indices (path halving; a set's root is its smallest index, so the root
+/// of a region is its first run in raster order).
+pub(crate) struct DisjointSets {
+    parent: Vec<usize>,
+}
+
+impl DisjointSets {
+    pub fn new(n: usize) -> Self {
+        Self {
+            parent: (0..n).collect(),
+        }
+    }
+
+    pub fn find(&mut self, mut i: usize) -> usize {
+        while self.parent[i] != i {
+            self.parent[i] = self.parent[self.parent[i]];
+            i = self.parent[i];
+        }
+        i
+    }
+
+    pub fn union(&mut self, a: usize, b: usize) {
+        let (ra, rb) = (self.find(a), self.find(b));
+        if ra != rb {
+            self.parent[ra.max(rb)] = ra.min(rb);
+        }
+    }
+}

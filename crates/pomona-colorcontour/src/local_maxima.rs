@@ -21,16 +21,16 @@ pub(crate) fn local_maxima<T: PartialOrd + Copy>(
             if !candidate(v) {
                 continue;
             }
-            let is_peak = (y.saturating_sub(half)..(y + half + 1).min(height)).all(|yy| {
-                (x.saturating_sub(half)..(x + half + 1).min(width)).all(|xx| {
-                    let u = values[yy * width + xx];
-                    if (yy, xx) < (y, x) {
-                        v > u
-                    } else {
-                        v >= u
-                    }
-                })
-            });
+            // The window's rows above and its row left of the cell come before it in raster
+            // order (strictly below `v`), the rest after it (at most `v`).
+            let (x0, x1) = (x.saturating_sub(half), (x + half + 1).min(width));
+            let row = |yy: usize| &values[yy * width + x0..yy * width + x1];
+            let below = |u: &T| v > *u;
+            let at_most = |u: &T| v >= *u;
+            let is_peak = (y.saturating_sub(half)..y).all(|yy| row(yy).iter().all(below))
+                && row(y)[..x - x0].iter().all(below)
+                && row(y)[x - x0..].iter().all(at_most)
+                && (y + 1..(y + half + 1).min(height)).all(|yy| row(yy).iter().all(at_most));
             if is_peak {
                 found.push(y * width + x);
             }
@@ -42,6 +42,43 @@ pub(crate) fn local_maxima<T: PartialOrd + Copy>(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    #[test]
+    fn peaks_follow_the_raster_order_rule_on_random_grids() {
+        // Few distinct values, so plateaus and ties are everywhere.
+        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        for _ in 0..300 {
+            let (w, h, half) = (
+                rng.gen_range(1..15),
+                rng.gen_range(1..15),
+                rng.gen_range(0..4),
+            );
+            let grid: Vec<u32> = (0..w * h).map(|_| rng.gen_range(0..4)).collect();
+            let expected: Vec<usize> = (0..w * h)
+                .filter(|&i| {
+                    let (x, y) = (i % w, i / w);
+                    grid[i] > 0
+                        && (0..w * h).all(|j| {
+                            let (xx, yy) = (j % w, j / w);
+                            let inside = xx.abs_diff(x) <= half && yy.abs_diff(y) <= half;
+                            !inside
+                                || if j < i {
+                                    grid[i] > grid[j]
+                                } else {
+                                    grid[i] >= grid[j]
+                                }
+                        })
+                })
+                .collect();
+            assert_eq!(
+                local_maxima(&grid, w, half, |v| v > 0),
+                expected,
+                "{w}×{h}, half {half}"
+            );
+        }
+    }
 
     #[test]
     fn a_plateau_gives_its_first_cell_and_the_candidate_test_applies() {

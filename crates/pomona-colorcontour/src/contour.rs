@@ -125,7 +125,7 @@ pub fn trace_contours(
     height: usize,
     min_area_px: usize,
 ) -> Vec<Contour> {
-    if mask.len() != width * height {
+    if width == 0 || mask.len() != width * height {
         return Vec::new();
     }
     let at = |x: isize, y: isize| {
@@ -136,7 +136,7 @@ pub fn trace_contours(
     // The components through their runs; a component's root is its first run, whose first
     // pixel is the component's first in raster order, with background (or the image edge) to
     // its west — where the border following starts.
-    let runs = Runs::where_(mask, width, |m| m);
+    let runs = Runs::passing(mask, width, |m| m);
     let mut regions = runs.regions();
     let mut area = vec![0usize; runs.runs.len()];
     for (k, run) in runs.runs.iter().enumerate() {
@@ -295,6 +295,8 @@ mod tests {
                 .collect();
             assert_eq!(found, expected, "{w}×{h}");
         }
+        // An empty image of no width has no components (and does not panic).
+        assert!(trace_contours(&[], 0, 4, 1).is_empty());
     }
 
     #[test]

@@ -35,8 +35,8 @@ pub fn hysteresis_mask(
     if low >= high || width == 0 || values.len() != width * height {
         return mask;
     }
-    let strong = Runs::where_(values, width, |v| v >= high);
-    let weak = Runs::where_(values, width, |v| v >= low && v < high);
+    let strong = Runs::passing(values, width, |v| v >= high);
+    let weak = Runs::passing(values, width, |v| v >= low && v < high);
     let mut strong_sets = strong.regions();
     let mut size = vec![0usize; strong.runs.len()];
     for (k, run) in strong.runs.iter().enumerate() {

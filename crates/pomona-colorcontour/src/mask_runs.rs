@@ -13,6 +13,7 @@ pub(crate) struct Run {
 }
 
 impl Run {
+    /// Pixels in the run.
     pub fn len(&self) -> usize {
         self.x1 - self.x0
     }
@@ -26,9 +27,14 @@ pub(crate) struct Runs {
 }
 
 impl Runs {
-    pub fn where_<T: Copy>(values: &[T], width: usize, test: impl Fn(T) -> bool) -> Self {
+    /// The maximal runs of the pixels of `values` (row-major, `width` wide) that pass `test`,
+    /// in raster order; none for a width of 0.
+    pub fn passing<T: Copy>(values: &[T], width: usize, test: impl Fn(T) -> bool) -> Self {
         let mut runs = Vec::new();
         let mut row_starts = vec![0];
+        if width == 0 {
+            return Self { runs, row_starts };
+        }
         for (y, row) in values.chunks_exact(width).enumerate() {
             let mut x = 0;
             while x < width {
@@ -47,6 +53,7 @@ impl Runs {
         Self { runs, row_starts }
     }
 
+    /// Rows of the image.
     pub fn rows(&self) -> usize {
         self.row_starts.len() - 1
     }
@@ -95,12 +102,14 @@ pub(crate) struct DisjointSets {
 }
 
 impl DisjointSets {
+    /// `n` sets of one run each.
     pub fn new(n: usize) -> Self {
         Self {
             parent: (0..n).collect(),
         }
     }
 
+    /// The root of `i`'s set.
     pub fn find(&mut self, mut i: usize) -> usize {
         while self.parent[i] != i {
             self.parent[i] = self.parent[self.parent[i]];
@@ -109,6 +118,7 @@ impl DisjointSets {
         i
     }
 
+    /// Joins the sets of `a` and `b`.
     pub fn union(&mut self, a: usize, b: usize) {
         let (ra, rb) = (self.find(a), self.find(b));
         if ra != rb {

@@ -166,17 +166,18 @@ impl<'a> ArcTable<'a> {
 /// pieces. `orientation` is the sign of the contour's signed area.
 fn window_estimate(t: &ArcTable, i: usize, len: usize, orientation: f64) -> Option<Estimate> {
     let (p, q) = (t.point(i), t.point(i + len));
-    let a = t.arc(i, len);
     let chord = q - p;
     let c = chord.norm();
-    let theta = arc_half_angle(c / a)?;
-    let r = a / (2.0 * theta);
     let m = t.point(i + len / 2);
     let bulge = chord.perp(&(m - p));
-    // Convex (bulging outwards) pieces turn against the contour's orientation.
+    // Convex (bulging outwards) pieces turn against the contour's orientation. Tested before
+    // Eq. 8 is solved: about half the windows of a real orchard mask fail here.
     if bulge * orientation >= 0.0 || c == 0.0 {
         return None;
     }
+    let a = t.arc(i, len);
+    let theta = arc_half_angle(c / a)?;
+    let r = a / (2.0 * theta);
     // Unit normal of the chord towards the bulge; the centre is on the other side.
     let mut normal = Vector2::new(-chord.y, chord.x) / c;
     if normal.dot(&(m - p)) < 0.0 {

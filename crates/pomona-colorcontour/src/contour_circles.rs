@@ -317,14 +317,7 @@ const MAX_FIT_TO_MEAN_RADIUS: f64 = 1.5;
 fn arc_of_group(group: &[Estimate], table: &ArcTable, mode: GroupCircle) -> Option<ContourArc> {
     let (mean_center, mean_radius) = weighted_mean(group)?;
     // Arc covered: the union of the windows' steps (step i joins point i to point i + 1).
-    let n = table.points.len();
-    let mut covered = vec![false; n];
-    for e in group {
-        for k in 0..e.len {
-            covered[(e.start + k) % n] = true;
-        }
-    }
-    let step_indices: Vec<usize> = (0..n).filter(|&i| covered[i]).collect();
+    let step_indices = steps_covered(group.iter().map(|e| (e.start, e.len)), table.points.len());
     let (center_px, radius_px) = match mode {
         GroupCircle::WeightedMean => (mean_center, mean_radius),
         GroupCircle::LeastSquares => {
@@ -347,6 +340,31 @@ fn arc_of_group(group: &[Estimate], table: &ArcTable, mode: GroupCircle) -> Opti
         },
         step_indices,
     })
+}
+
+/// The steps (step `i` joins point `i` to `i + 1`) that windows `(start, len)` of a closed
+/// contour of `n` points cover, in order, each once: each window is a span of steps (two where
+/// it wraps past the contour's end), and their union is read off the sorted spans — no pass
+/// over the whole contour per group of windows.
+fn steps_covered(windows: impl Iterator<Item = (usize, usize)>, n: usize) -> Vec<usize> {
+    let mut spans: Vec<(usize, usize)> = Vec::new();
+    for (start, len) in windows {
+        let end = start + len.min(n);
+        if end <= n {
+            spans.push((start, end));
+        } else {
+            spans.push((start, n));
+            spans.push((0, end - n));
+        }
+    }
+    spans.sort_unstable();
+    let mut steps = Vec::new();
+    let mut next = 0;
+    for (lo, hi) in spans {
+        steps.extend(lo.max(next)..hi);
+        next = next.max(hi);
+    }
+    steps
 }
 
 /// The contour points at either end of the steps `steps` (sorted, distinct), each once.
@@ -380,6 +398,7 @@ pub(crate) fn step_support(points: &[Point2<f64>], steps: &[usize], radius: f64)
 mod tests {
     use super::*;
     use crate::{smooth_mask, trace_contours};
+    use rand::{Rng, SeedableRng};
 
     /// A disc of radius `r` at `(cx, cy)` with the pixels for which `hidden` holds removed.
     fn partial_disc(
@@ -431,6 +450,44 @@ mod tests {
             assert!((c.radius_px - r).abs() < 0.12 * r, "r {r}: {}", c.radius_px);
             assert!(c.support > 0.8, "support {}", c.support);
         }
+    }
+
+    #[test]
+    fn covered_steps_are_the_union_of_the_windows_wrapping_past_the_end() {
+        // Against marking every step of every window in an array of the contour's steps.
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(9);
+        for _ in 0..300 {
+            let n = rng.gen_range(1..60);
+            let windows: Vec<(usize, usize)> = (0..rng.gen_range(0..8))
+                .map(|_| (rng.gen_range(0..n), rng.gen_range(1..=n)))
+                .collect();
+            let mut covered = vec![false; n];
+            for &(start, len) in &windows {
+                for k in 0..len {
+                    covered[(start + k) % n] = true;
+                }
+            }
+            let expected: Vec<usize> = (0..n).filter(|&i| covered[i]).collect();
+            assert_eq!(
+                steps_covered(windows.iter().copied(), n),
+                expected,
+                "{windows:?} of {n}"
+            );
+        }
+    }
+
+    #[test]
+    fn a_whole_disc_is_one_arc_over_every_step_across_the_contour_start() {
+        // Its windows near the contour's end wrap past point 0, and the group joins across it:
+        // the arc's steps are every step of the contour, once each, in order.
+        let (w, h) = (120, 100);
+        let params = EdgeFitParams::default();
+        let mask = smooth_mask(&partial_disc(w, h, (60.3, 49.6, 25.0), |_, _| false), w, h);
+        let contour = trace_contours(&mask, w, h, 20)[0].smoothed(params.smoothing_half_window);
+        let arcs = contour_arcs(&contour, &params);
+        let all: Vec<usize> = (0..contour.points.len()).collect();
+        assert_eq!(arcs.len(), 1);
+        assert_eq!(arcs[0].step_indices, all);
     }
 
     #[test]

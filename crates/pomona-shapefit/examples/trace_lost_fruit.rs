@@ -27,8 +27,8 @@ use pomona_consensus::Shape;
 use pomona_learn::BatchedClassifier;
 use pomona_pipeline::{run_stage, DatasetFrames, FrameSource, ModelFile, Pipeline, StageTimings};
 use pomona_shapefit::stages::{
-    BackProjectionStage, ClassifierStage, ColorMaskStage, CurvatureStage, DepthProposalStage,
-    DescriptorStage, FreeSpaceStage, ProposalScreenStage, RegionGrowingStage, ShapeStage,
+    BackProjectionStage, ClassifierStage, ColorMaskStage, DepthProposalStage, DescriptorStage,
+    ProposalScreenStage, RegionGrowingStage, ShapeChecks, ShapeStage,
 };
 use pomona_shapefit::{Candidate, GpcdParams, ShapeFitPipeline, ShapeFitStageParams};
 
@@ -85,24 +85,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let classifier = ClassifierStage {
         svm: BatchedClassifier::new(model.classifier())?,
     };
-    // The detector's checks on the shapes, as it runs them (free space, then curvature).
-    let free_space = p.free_space.enabled.then_some(FreeSpaceStage {
-        check: p.free_space,
-    });
-    let curvature = p.curvature.map(|check| CurvatureStage { check });
+    // The detector's checks on the shapes, as it runs them.
+    let checks = ShapeChecks::of_params(p)?;
     let admit = |frame: &pomona_core::RgbdFrame,
                  shapes: Vec<Candidate>,
                  refused: &mut Vec<Candidate>,
                  t: &mut StageTimings|
      -> Result<Vec<Candidate>, Box<dyn std::error::Error>> {
         let all = shapes.clone();
-        let mut kept = shapes;
-        if let Some(check) = &free_space {
-            kept = run_stage(check, (frame, kept), t)?;
-        }
-        if let Some(check) = &curvature {
-            kept = run_stage(check, kept, t)?;
-        }
+        let kept = checks.admitted(frame, shapes, t)?;
         refused.extend(all.into_iter().filter(|c| !kept.contains(c)));
         Ok(kept)
     };

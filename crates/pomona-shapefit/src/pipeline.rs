@@ -18,9 +18,8 @@ use serde::{Deserialize, Serialize};
 use crate::curvature_check::rms;
 use crate::negative_selection::{cap_negatives, hardest_negatives};
 use crate::stages::{
-    pixel_colors, BackProjectionStage, ClassifierStage, ColorMaskStage, CurvatureStage,
-    DepthProposalStage, DescriptorStage, FreeSpaceStage, ProposalScreenStage, RegionGrowingStage,
-    ShapeStage,
+    pixel_colors, BackProjectionStage, ClassifierStage, ColorMaskStage, DepthProposalStage,
+    DescriptorStage, ProposalScreenStage, RegionGrowingStage, ShapeChecks, ShapeStage,
 };
 use crate::{
     Candidate, CoaxialMergeParams, ColorBayes, ColorHistograms, ColorLut, GpcdParams, LabelRule,
@@ -328,8 +327,7 @@ impl ShapeFitPipeline {
                 max_depth_m: p.max_depth_m as f32,
             },
             regions: RegionGrowingStage { params: p.regions },
-            free_space: None,
-            curvature: None,
+            checks: ShapeChecks::default(),
             shapes: ShapeStage {
                 normals,
                 shapes: p.shapes,
@@ -353,11 +351,9 @@ struct Stages {
     screen: Option<ProposalScreenStage>,
     regions: RegionGrowingStage,
     shapes: ShapeStage,
-    /// The free-space check of the shapes (a loaded detector's, when switched on; training
-    /// sees every shape, as in the paper).
-    free_space: Option<FreeSpaceStage>,
-    /// The curvature check of the shapes (a loaded detector's, when switched on).
-    curvature: Option<CurvatureStage>,
+    /// The checks of the shapes (a loaded detector's; training sees every shape, as in the
+    /// paper).
+    checks: ShapeChecks,
     descriptor: DescriptorStage,
 }
 
@@ -383,7 +379,7 @@ impl Stages {
         let clusters = run_stage(&self.regions, (frame, keep.as_slice()), t)?;
         let cloud = run_stage(&BackProjectionStage, frame, t)?;
         let shapes = run_stage(&self.shapes, (frame, &cloud, clusters.as_slice()), t)?;
-        let mut candidates = self.admitted(frame, shapes, t)?;
+        let mut candidates = self.checks.admitted(frame, shapes, t)?;
         let first_proposal = candidates.len();
         if let Some(proposals) = proposals {
             let mut clusters = run_stage(proposals, (frame, keep.as_slice()), t)?;
@@ -391,7 +387,7 @@ impl Stages {
                 clusters = run_stage(screen, (frame, &cloud, clusters.as_slice()), t)?;
             }
             let shapes = run_stage(&self.shapes, (frame, &cloud, clusters.as_slice()), t)?;
-            candidates.extend(self.admitted(frame, shapes, t)?);
+            candidates.extend(self.checks.admitted(frame, shapes, t)?);
         }
         let features = run_stage(&self.descriptor, (frame, &cloud, candidates.as_slice()), t)?;
         Ok(CandidateSet {
@@ -399,23 +395,6 @@ impl Stages {
             features,
             first_proposal,
         })
-    }
-
-    /// `shapes` less those the free-space and curvature checks refuse, when they are on.
-    fn admitted(
-        &self,
-        frame: &RgbdFrame,
-        shapes: Vec<Candidate>,
-        t: &mut StageTimings,
-    ) -> Result<Vec<Candidate>, PipelineError> {
-        let shapes = match &self.free_space {
-            Some(check) => run_stage(check, (frame, shapes), t)?,
-            None => shapes,
-        };
-        match &self.curvature {
-            Some(check) => run_stage(check, shapes, t),
-            None => Ok(shapes),
-        }
     }
 }
 
@@ -513,16 +492,7 @@ impl Pipeline for ShapeFitPipeline {
                 min_score,
             });
         }
-        if p.free_space.enabled {
-            usable(p.free_space.invalid_reason())?;
-            stages.free_space = Some(FreeSpaceStage {
-                check: p.free_space,
-            });
-        }
-        if let Some(check) = p.curvature {
-            usable(check.invalid_reason())?;
-            stages.curvature = Some(CurvatureStage { check });
-        }
+        stages.checks = ShapeChecks::of_params(p)?;
         Ok(Box::new(ShapeFitDetector {
             stages,
             classifier: ClassifierStage { svm },
@@ -531,17 +501,6 @@ impl Pipeline for ShapeFitPipeline {
             calibration: stage_params.params.radius_calibration,
             sphere_range_m: stage_params.params.shapes.sphere.radius_range_m,
         }))
-    }
-}
-
-/// A detection check's `invalid_reason` — `(name, value, reason)` under `params.` — as an error.
-fn usable(invalid: Option<(&str, f64, &str)>) -> Result<(), PipelineError> {
-    match invalid {
-        Some((name, value, reason)) => Err(PipelineError::InvalidParameter {
-            name: format!("params.{name}"),
-            reason: format!("{value} {reason}"),
-        }),
-        None => Ok(()),
     }
 }
 

@@ -7,7 +7,7 @@ use pomona_consensus::nalgebra::Point3;
 use pomona_consensus::{OrientedPoint, RepeatLimits, ShapeExtractionParams, WindowNormals};
 use pomona_core::{ColorImage, PointCloud, RgbdFrame};
 use pomona_learn::BatchedClassifier;
-use pomona_pipeline::{FreeSpaceCheck, PipelineError, Stage};
+use pomona_pipeline::{run_stage, FreeSpaceCheck, PipelineError, Stage, StageTimings};
 use rayon::prelude::*;
 
 use crate::{
@@ -399,6 +399,70 @@ impl Stage<Vec<Candidate>, Vec<Candidate>> for CurvatureStage {
     fn run(&self, mut candidates: Vec<Candidate>) -> Result<Vec<Candidate>, PipelineError> {
         candidates.retain(|c| self.check.admits(&c.shape, &c.points));
         Ok(candidates)
+    }
+}
+
+/// The checks a loaded detector runs on the shapes before the descriptor, in its order: the
+/// free space, then the curvature. One place for which checks a model's parameters switch on,
+/// so that what inspects the detector's candidates (the `trace_lost_fruit` example) runs exactly
+/// the detector's checks. Training runs none ([`ShapeChecks::default`]).
+#[derive(Default)]
+pub struct ShapeChecks {
+    /// The free-space check, when switched on.
+    pub free_space: Option<FreeSpaceStage>,
+    /// The curvature check, when the model has one.
+    pub curvature: Option<CurvatureStage>,
+}
+
+impl ShapeChecks {
+    /// The checks `params` switch on.
+    ///
+    /// # Errors
+    /// [`PipelineError::InvalidParameter`] naming the unusable setting of a check that is on.
+    pub fn of_params(params: &ShapeFitParams) -> Result<Self, PipelineError> {
+        let mut checks = Self::default();
+        if params.free_space.enabled {
+            usable(params.free_space.invalid_reason())?;
+            checks.free_space = Some(FreeSpaceStage {
+                check: params.free_space,
+            });
+        }
+        if let Some(check) = params.curvature {
+            usable(check.invalid_reason())?;
+            checks.curvature = Some(CurvatureStage { check });
+        }
+        Ok(checks)
+    }
+
+    /// `shapes` less those the checks refuse.
+    ///
+    /// # Errors
+    /// Those of the stages (none at present).
+    pub fn admitted(
+        &self,
+        frame: &RgbdFrame,
+        shapes: Vec<Candidate>,
+        t: &mut StageTimings,
+    ) -> Result<Vec<Candidate>, PipelineError> {
+        let shapes = match &self.free_space {
+            Some(check) => run_stage(check, (frame, shapes), t)?,
+            None => shapes,
+        };
+        match &self.curvature {
+            Some(check) => run_stage(check, shapes, t),
+            None => Ok(shapes),
+        }
+    }
+}
+
+/// A detection check's `invalid_reason` — `(name, value, reason)` under `params.` — as an error.
+fn usable(invalid: Option<(&str, f64, &str)>) -> Result<(), PipelineError> {
+    match invalid {
+        Some((name, value, reason)) => Err(PipelineError::InvalidParameter {
+            name: format!("params.{name}"),
+            reason: format!("{value} {reason}"),
+        }),
+        None => Ok(()),
     }
 }
 

@@ -320,21 +320,27 @@ impl VoteGrid {
 /// most votes first, at most `max_hypotheses`.
 fn peaks(votes: &[u32], grid: &VoteGrid, params: &HoughCircleParams) -> Vec<usize> {
     let cols = grid.cols;
-    // 3×3 sums: along each row, then each row plus its neighbours above and below.
-    let mut across = vec![0u32; votes.len()];
+    // 3×3 sums: each row plus its neighbours along the row, then each row plus the rows above
+    // and below, one shifted slice at a time (the slices stop at the grid's edges).
+    let mut across = votes.to_vec();
     for (out, row) in across.chunks_exact_mut(cols).zip(votes.chunks_exact(cols)) {
-        for (i, o) in out.iter_mut().enumerate() {
-            *o = row[i.saturating_sub(1)..(i + 2).min(cols)].iter().sum();
+        if cols > 1 {
+            for (o, &r) in out[..cols - 1].iter_mut().zip(&row[1..]) {
+                *o += r;
+            }
+            for (o, &r) in out[1..].iter_mut().zip(&row[..cols - 1]) {
+                *o += r;
+            }
         }
     }
     let mut summed = across.clone();
-    for (j, out) in summed.chunks_exact_mut(cols).enumerate() {
-        for jj in [j.checked_sub(1), Some(j + 1)].into_iter().flatten() {
-            if let Some(neighbour) = across.get(jj * cols..(jj + 1) * cols) {
-                for (o, n) in out.iter_mut().zip(neighbour) {
-                    *o += n;
-                }
-            }
+    let n = across.len();
+    if n > cols {
+        for (o, &r) in summed[..n - cols].iter_mut().zip(&across[cols..]) {
+            *o += r;
+        }
+        for (o, &r) in summed[cols..].iter_mut().zip(&across[..n - cols]) {
+            *o += r;
         }
     }
     let min_votes = params.min_votes.max(1);

@@ -6,6 +6,11 @@
 /// `candidate` and hold the largest value within `half` cells in x and y. A cell must be
 /// strictly above the cells before it in raster order and at least the ones after it, so a
 /// plateau gives its first cell only.
+///
+/// The window's largest value is taken first for every cell, separably (along rows, then down
+/// columns, one shifted slice at a time so that the compiler can vectorise it); only the cells
+/// that reach it — few on a vote grid where nearly every cell passes `candidate` — are then
+/// compared with their window one by one for the raster-order rule.
 pub(crate) fn local_maxima<T: PartialOrd + Copy>(
     values: &[T],
     width: usize,
@@ -14,11 +19,14 @@ pub(crate) fn local_maxima<T: PartialOrd + Copy>(
 ) -> Vec<usize> {
     let width = width.max(1);
     let height = values.len() / width;
+    let values = &values[..width * height];
+    let window_max = window_max(values, width, half);
     let mut found = Vec::new();
     for y in 0..height {
         for x in 0..width {
             let v = values[y * width + x];
-            if !candidate(v) {
+            // `v` is at least every value of its window only if it is at least their largest.
+            if !candidate(v) || !(v >= window_max[y * width + x]) {
                 continue;
             }
             // The window's rows above and its row left of the cell come before it in raster
@@ -37,6 +45,49 @@ pub(crate) fn local_maxima<T: PartialOrd + Copy>(
         }
     }
     found
+}
+
+/// The larger of two values (the first when they do not compare).
+fn larger<T: PartialOrd + Copy>(a: T, b: T) -> T {
+    if b > a {
+        b
+    } else {
+        a
+    }
+}
+
+/// For every cell of `values` (row-major, `width` wide, whole rows), a value of its window of
+/// `half` cells in x and y that no other value of the window exceeds.
+fn window_max<T: PartialOrd + Copy>(values: &[T], width: usize, half: usize) -> Vec<T> {
+    // Along rows: each cell takes the cells up to `half` to its right and to its left, one
+    // shift at a time (the slices stop at the row's ends).
+    let mut across = values.to_vec();
+    for (out, row) in across
+        .chunks_exact_mut(width)
+        .zip(values.chunks_exact(width))
+    {
+        for shift in 1..=half.min(width - 1) {
+            for (o, &r) in out[..width - shift].iter_mut().zip(&row[shift..]) {
+                *o = larger(*o, r);
+            }
+            for (o, &r) in out[shift..].iter_mut().zip(&row[..width - shift]) {
+                *o = larger(*o, r);
+            }
+        }
+    }
+    // Down columns: each row takes the rows up to `half` below and above it.
+    let mut window = across.clone();
+    let n = values.len();
+    for shift in 1..=half.min((n / width).saturating_sub(1)) {
+        let offset = shift * width;
+        for (o, &r) in window[..n - offset].iter_mut().zip(&across[offset..]) {
+            *o = larger(*o, r);
+        }
+        for (o, &r) in window[offset..].iter_mut().zip(&across[..n - offset]) {
+            *o = larger(*o, r);
+        }
+    }
+    window
 }
 
 #[cfg(test)]
@@ -77,6 +128,30 @@ mod tests {
                 expected,
                 "{w}×{h}, half {half}"
             );
+        }
+    }
+
+    #[test]
+    fn the_window_maximum_is_the_largest_value_of_each_window() {
+        let mut rng = ChaCha8Rng::seed_from_u64(12);
+        for _ in 0..300 {
+            let (w, h, half): (usize, usize, usize) = (
+                rng.gen_range(1..15),
+                rng.gen_range(1..15),
+                rng.gen_range(0..5),
+            );
+            let grid: Vec<u32> = (0..w * h).map(|_| rng.gen_range(0..50)).collect();
+            let expected: Vec<u32> = (0..w * h)
+                .map(|i| {
+                    let (x, y) = (i % w, i / w);
+                    (0..w * h)
+                        .filter(|&j| (j % w).abs_diff(x) <= half && (j / w).abs_diff(y) <= half)
+                        .map(|j| grid[j])
+                        .max()
+                        .unwrap_or(0)
+                })
+                .collect();
+            assert_eq!(window_max(&grid, w, half), expected, "{w}×{h}, half {half}");
         }
     }
 

@@ -2,6 +2,8 @@
 //! ray circles ([`crate::ray_circles`], on the distance transform) and the centre hypotheses of
 //! the Hough circles ([`crate::hough_circles`], on the vote sums) are both found this way.
 
+use std::cmp::Ordering;
+
 /// Indices, in raster order, of the cells of `values` (row-major, `width` wide) that pass
 /// `candidate` and hold the largest value within `half` cells in x and y. A cell must be
 /// strictly above the cells before it in raster order and at least the ones after it, so a
@@ -26,7 +28,10 @@ pub(crate) fn local_maxima<T: PartialOrd + Copy>(
         for x in 0..width {
             let v = values[y * width + x];
             // `v` is at least every value of its window only if it is at least their largest.
-            if !candidate(v) || !(v >= window_max[y * width + x]) {
+            let reaches = v
+                .partial_cmp(&window_max[y * width + x])
+                .is_some_and(Ordering::is_ge);
+            if !candidate(v) || !reaches {
                 continue;
             }
             // The window's rows above and its row left of the cell come before it in raster

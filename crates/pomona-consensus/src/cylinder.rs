@@ -26,6 +26,7 @@ use nalgebra::{Matrix2, Point3, SMatrix, SVector, Unit, Vector2, Vector3};
 use serde::{Deserialize, Serialize};
 
 use crate::consensus::check_positive;
+use crate::radial_prior::RadialPrior;
 use crate::{ConsensusError, Estimator, Model, Positioned};
 
 /// An infinite circular cylinder (optionally with the span its inliers cover), metres.
@@ -301,31 +302,10 @@ impl CylinderEstimatorParams {
     /// angle is not in `(0, π/2]` or the gap is not finite and positive.
     pub fn check(self) -> Result<CylinderEstimator, ConsensusError> {
         check_positive("extent_max_gap_m", self.extent_max_gap_m)?;
-        let (lo, hi) = self.radius_range_m;
-        if !(lo.is_finite() && lo >= 0.0 && hi > lo) {
-            return Err(ConsensusError::InvalidParameter {
-                name: "radius_range_m",
-                value: lo,
-                reason: "must satisfy 0 <= min < max with min finite",
-            });
-        }
-        let min_normal_cos = match self.max_normal_deviation_rad {
-            Some(a) => {
-                check_positive("max_normal_deviation_rad", a)?;
-                if a > std::f64::consts::FRAC_PI_2 {
-                    return Err(ConsensusError::InvalidParameter {
-                        name: "max_normal_deviation_rad",
-                        value: a,
-                        reason: "must not exceed pi/2",
-                    });
-                }
-                Some(a.cos())
-            }
-            None => None,
-        };
+        let prior = RadialPrior::check(self.radius_range_m, self.max_normal_deviation_rad)?;
         Ok(CylinderEstimator {
             params: self,
-            min_normal_cos,
+            prior,
         })
     }
 }
@@ -335,7 +315,7 @@ impl CylinderEstimatorParams {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct CylinderEstimator {
     params: CylinderEstimatorParams,
-    min_normal_cos: Option<f64>,
+    prior: RadialPrior,
 }
 
 impl CylinderEstimator {
@@ -370,19 +350,12 @@ impl<D: Positioned> Estimator<D> for CylinderEstimator {
     }
 
     fn is_model_valid(&self, model: &Cylinder) -> bool {
-        let (lo, hi) = self.params.radius_range_m;
-        model.is_finite() && model.radius_m >= lo && model.radius_m <= hi
+        self.prior.admits(model.is_finite(), model.radius_m)
     }
 
     fn residual(&self, model: &Cylinder, datum: &D) -> f64 {
         let radial = model.radial_vector(&datum.position());
-        let n = radial.norm();
-        if let (Some(min_cos), Some(normal)) = (self.min_normal_cos, datum.normal()) {
-            if n > 0.0 && (normal.dot(&radial) / n).abs() < min_cos {
-                return f64::INFINITY;
-            }
-        }
-        (n - model.radius_m).abs()
+        self.prior.residual(&radial, datum.normal(), model.radius_m)
     }
 
     fn refine(&self, model: &Cylinder, data: &[D], inliers: &[usize]) -> Option<Cylinder> {

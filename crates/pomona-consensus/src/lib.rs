@@ -54,6 +54,7 @@ mod msac;
 pub mod normals;
 mod oriented_point;
 mod plane;
+mod radial_prior;
 mod radius_calibration;
 mod ransac;
 mod sampler;

@@ -15,7 +15,7 @@ use crate::damped_step::damped_step;
 use nalgebra::{Matrix3, Matrix4, Point3, Vector3, Vector4};
 use serde::{Deserialize, Serialize};
 
-use crate::consensus::check_positive;
+use crate::radial_prior::RadialPrior;
 use crate::{ConsensusError, Estimator, Model, Positioned};
 
 /// A sphere, metres.
@@ -195,31 +195,10 @@ impl SphereEstimatorParams {
     /// [`ConsensusError::InvalidParameter`] when the radius range is not `0 ≤ min < max` or the
     /// angle is not in `(0, π/2]`.
     pub fn check(self) -> Result<SphereEstimator, ConsensusError> {
-        let (lo, hi) = self.radius_range_m;
-        if !(lo.is_finite() && lo >= 0.0 && hi > lo) {
-            return Err(ConsensusError::InvalidParameter {
-                name: "radius_range_m",
-                value: lo,
-                reason: "must satisfy 0 <= min < max with min finite",
-            });
-        }
-        let min_normal_cos = match self.max_normal_deviation_rad {
-            Some(a) => {
-                check_positive("max_normal_deviation_rad", a)?;
-                if a > std::f64::consts::FRAC_PI_2 {
-                    return Err(ConsensusError::InvalidParameter {
-                        name: "max_normal_deviation_rad",
-                        value: a,
-                        reason: "must not exceed pi/2",
-                    });
-                }
-                Some(a.cos())
-            }
-            None => None,
-        };
+        let prior = RadialPrior::check(self.radius_range_m, self.max_normal_deviation_rad)?;
         Ok(SphereEstimator {
             params: self,
-            min_normal_cos,
+            prior,
         })
     }
 }
@@ -229,7 +208,7 @@ impl SphereEstimatorParams {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SphereEstimator {
     params: SphereEstimatorParams,
-    min_normal_cos: Option<f64>,
+    prior: RadialPrior,
 }
 
 impl SphereEstimator {
@@ -260,20 +239,12 @@ impl<D: Positioned> Estimator<D> for SphereEstimator {
     }
 
     fn is_model_valid(&self, model: &Sphere) -> bool {
-        let (lo, hi) = self.params.radius_range_m;
-        model.is_finite() && model.radius_m >= lo && model.radius_m <= hi
+        self.prior.admits(model.is_finite(), model.radius_m)
     }
 
     fn residual(&self, model: &Sphere, datum: &D) -> f64 {
-        let p = datum.position();
-        let d = p - model.center;
-        let n = d.norm();
-        if let (Some(min_cos), Some(normal)) = (self.min_normal_cos, datum.normal()) {
-            if n > 0.0 && (normal.dot(&d) / n).abs() < min_cos {
-                return f64::INFINITY;
-            }
-        }
-        (n - model.radius_m).abs()
+        let radial = datum.position() - model.center;
+        self.prior.residual(&radial, datum.normal(), model.radius_m)
     }
 
     fn refine(&self, model: &Sphere, data: &[D], inliers: &[usize]) -> Option<Sphere> {

@@ -187,6 +187,9 @@ fn the_row_gate_keeps_consistent_pairs_and_bad_matching_parameters_are_refused()
             "--match-elsewhere-radii=-1",
             "better_elsewhere.min_distance_radii",
         ),
+        // The refinement's sweep spacing: positive and no wider than the sweep.
+        ("--refine-step-px=0", "step_px"),
+        ("--refine-step-px=7", "step_px"),
     ] {
         let bad = stereo(&ds, &det, &[flag]);
         assert!(!bad.status.success(), "{flag}");

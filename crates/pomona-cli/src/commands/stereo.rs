@@ -100,6 +100,10 @@ pub struct StereoArgs {
     /// prediction along the epipolar line, pixels.
     #[arg(long, value_name = "PX", default_value_t = DisparityRefinement::default().search_px)]
     pub refine_search_px: f64,
+    /// Refinement: spacing of the searched positions along the epipolar line, pixels (a
+    /// parabola through the best three places the peak between them).
+    #[arg(long, value_name = "PX", default_value_t = DisparityRefinement::default().step_px)]
+    pub refine_step_px: f64,
     /// Refinement: lowest normalised cross-correlation accepted; below it the circle centres
     /// are kept.
     #[arg(long, value_name = "NCC", default_value_t = DisparityRefinement::default().min_ncc)]
@@ -424,6 +428,7 @@ pub fn run(args: &StereoArgs) -> Result<()> {
             let r = DisparityRefinement {
                 patch_scale: args.refine_patch_scale,
                 search_px: args.refine_search_px,
+                step_px: args.refine_step_px,
                 min_ncc: args.refine_min_ncc,
                 fruit_chroma_radius: args.refine_fruit_chroma.0,
                 whole_patch_min_ncc: args.refine_whole_patch_min_ncc.0,

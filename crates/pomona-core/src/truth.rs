@@ -33,8 +33,8 @@ pub struct FruitTruth {
     /// Centre of the whole fruit body in the camera frame, metres.
     #[serde(default)]
     pub center_m: Option<Point3<f64>>,
-    /// Largest equatorial diameter, metres.
-    #[serde(default)]
+    /// Largest equatorial diameter, metres (positive; a file with another value is refused).
+    #[serde(default, deserialize_with = "checked::diameter_m")]
     pub diameter_m: Option<f64>,
     /// Unit symmetry axis in the camera frame (its reflection-symmetry planes contain it).
     #[serde(default, with = "unit_axis")]
@@ -46,11 +46,15 @@ pub struct FruitTruth {
     /// parts included), when annotated in 2D or written by `pomona synth`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub center_px: Option<Point2<f64>>,
-    /// Radius of that circle, pixels.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    /// Radius of that circle, pixels (positive).
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        deserialize_with = "checked::radius_px"
+    )]
     pub radius_px: Option<f64>,
     /// Visible pixels divided by the pixels the fruit would cover alone, in `[0, 1]`.
-    #[serde(default)]
+    #[serde(default, deserialize_with = "checked::visibility")]
     pub visibility: Option<f64>,
     /// Keys not part of the format, kept verbatim.
     #[serde(flatten)]
@@ -92,6 +96,44 @@ impl FruitTruth {
             self.center_m.zip(self.diameter_m),
             self.bbox_px.as_ref(),
         )
+    }
+}
+
+/// Reading optional numbers that only make sense in a range, so that a hand-written annotation
+/// with a negative diameter or a visibility of 2 is refused with the field's name instead of
+/// quietly changing what is scored.
+mod checked {
+    use serde::{de::Error, Deserialize, Deserializer};
+
+    /// `diameter_m`: finite and greater than 0.
+    pub fn diameter_m<'de, D: Deserializer<'de>>(d: D) -> Result<Option<f64>, D::Error> {
+        positive(d, "diameter_m")
+    }
+
+    /// `radius_px`: finite and greater than 0.
+    pub fn radius_px<'de, D: Deserializer<'de>>(d: D) -> Result<Option<f64>, D::Error> {
+        positive(d, "radius_px")
+    }
+
+    /// `visibility`: in `[0, 1]`.
+    pub fn visibility<'de, D: Deserializer<'de>>(d: D) -> Result<Option<f64>, D::Error> {
+        let v = Option::<f64>::deserialize(d)?;
+        match v {
+            Some(x) if !(0.0..=1.0).contains(&x) => Err(D::Error::custom(format!(
+                "visibility must lie in [0, 1], got {x}"
+            ))),
+            _ => Ok(v),
+        }
+    }
+
+    fn positive<'de, D: Deserializer<'de>>(d: D, name: &str) -> Result<Option<f64>, D::Error> {
+        let v = Option::<f64>::deserialize(d)?;
+        match v {
+            Some(x) if !(x.is_finite() && x > 0.0) => Err(D::Error::custom(format!(
+                "{name} must be a positive number, got {x}"
+            ))),
+            _ => Ok(v),
+        }
     }
 }
 
@@ -183,6 +225,38 @@ mod tests {
         assert_eq!(read.axis, Some(axis));
         // Renormalising it moves its last digits, so without the tolerance this test fails.
         assert_ne!(v / v.norm(), v);
+    }
+
+    #[test]
+    fn sizes_and_visibility_out_of_range_are_refused_by_name() {
+        let fruit = |fields: &str| {
+            serde_json::from_str::<FruitTruth>(&format!(r#"{{"id": "a", "kind": "x", {fields}}}"#))
+        };
+        for (fields, said) in [
+            (
+                r#""diameter_m": -0.07"#,
+                "diameter_m must be a positive number",
+            ),
+            (r#""diameter_m": 0"#, "diameter_m"),
+            (r#""radius_px": -3"#, "radius_px must be a positive number"),
+            (r#""visibility": 1.5"#, "visibility"),
+            (r#""visibility": -0.1"#, "visibility"),
+        ] {
+            let err = fruit(fields).expect_err(fields).to_string();
+            assert!(err.contains(said), "{fields}: {err}");
+        }
+        // The ends of the ranges and absent or null fields read.
+        let ok = fruit(r#""diameter_m": 0.07, "radius_px": 12.5, "visibility": 1"#).unwrap();
+        assert_eq!(
+            (ok.diameter_m, ok.radius_px, ok.visibility),
+            (Some(0.07), Some(12.5), Some(1.0))
+        );
+        assert_eq!(
+            fruit(r#""visibility": 0, "diameter_m": null"#)
+                .unwrap()
+                .visibility,
+            Some(0.0)
+        );
     }
 
     #[test]

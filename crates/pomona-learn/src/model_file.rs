@@ -179,6 +179,9 @@ impl ModelFile {
             source,
         };
         model.svm.validate().map_err(invalid)?;
+        if let Some(c) = &model.calibration {
+            c.validate().map_err(invalid)?;
+        }
         if let Some(s) = &model.scaler {
             s.validate().map_err(invalid)?;
             if s.n_features() != model.svm.n_features {

@@ -64,6 +64,29 @@ pub struct ScoreCalibration {
 }
 
 impl ScoreCalibration {
+    /// Checks what a model file could carry wrong: a sigmoid that is not finite or does not
+    /// rise with the score (`a < 0`, as every fit is), or an operating confidence outside
+    /// `[0, 1]` (which would keep every detection or none).
+    ///
+    /// # Errors
+    /// [`LearnError::InconsistentModel`] saying which.
+    pub fn validate(&self) -> Result<(), LearnError> {
+        let PlattSigmoid { a, b } = self.sigmoid;
+        if !(a.is_finite() && b.is_finite() && a < 0.0) {
+            return Err(LearnError::InconsistentModel(format!(
+                "calibration sigmoid a = {a}, b = {b}: both must be finite and a negative (the \
+                 confidence rises with the score)"
+            )));
+        }
+        if !(0.0..=1.0).contains(&self.operating_confidence) {
+            return Err(LearnError::InconsistentModel(format!(
+                "calibration operating_confidence {} must lie in [0, 1]",
+                self.operating_confidence
+            )));
+        }
+        Ok(())
+    }
+
     /// Confidence in `[0, 1]` of a detection with raw `score`; non-decreasing in `score`.
     pub fn confidence(&self, score: f64) -> f64 {
         self.sigmoid.probability(score)
@@ -128,7 +151,7 @@ impl ScoreCalibration {
         if sigmoid.a >= 0.0 {
             return bad(format!(
                 "held-out scores do not rank true detections above false ones (sigmoid slope \
-                 {:.3} ≥ 0 over {} detections)",
+                 {:.3} ≤ 0 over {} detections)",
                 -sigmoid.a,
                 scores.len()
             ));

@@ -142,3 +142,49 @@ fn inconsistent_model_is_rejected() {
         Err(ModelFileError::Invalid { .. })
     ));
 }
+
+/// A calibration a model file cannot honestly carry — an operating confidence outside [0, 1]
+/// (keeping every detection or none) or a sigmoid that falls with the score — is refused with
+/// the file's name; a fitted one loads.
+#[test]
+fn impossible_calibration_is_rejected_by_name() {
+    use pomona_learn::{OperatingPoint, ScoreCalibration};
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("model.json");
+    let scores = [-2.0, -1.0, -0.5, 0.2, 0.8, 1.5, 2.5, -0.2];
+    let is_true = [false, false, true, false, true, true, true, false];
+    let fitted = ScoreCalibration::fit(&scores, &is_true, 5, OperatingPoint::MaxF1).unwrap();
+    let mut file = ModelFile::new("p", serde_json::json!({}), &trained());
+    file.calibration = Some(fitted);
+    file.save(&path).unwrap();
+    assert_eq!(
+        ModelFile::load(&path, "p").unwrap().calibration,
+        Some(fitted)
+    );
+    for (broken, said) in [
+        (
+            ScoreCalibration {
+                operating_confidence: 3.0,
+                ..fitted
+            },
+            "operating_confidence",
+        ),
+        (
+            ScoreCalibration {
+                sigmoid: pomona_learn::PlattSigmoid {
+                    a: -fitted.sigmoid.a,
+                    ..fitted.sigmoid
+                },
+                ..fitted
+            },
+            "sigmoid",
+        ),
+    ] {
+        file.calibration = Some(broken);
+        std::fs::write(&path, serde_json::to_string(&file).unwrap()).unwrap();
+        let err = ModelFile::load(&path, "p").unwrap_err();
+        assert!(matches!(err, ModelFileError::Invalid { .. }), "{err}");
+        let text = err.to_string();
+        assert!(text.contains(said) && text.contains("model.json"), "{text}");
+    }
+}

@@ -65,8 +65,12 @@ pub struct Detection {
     pub fit_rms_m: Option<f64>,
     /// Calibrated confidence in `[0, 1]` that this is a fruit, when the model carries a score
     /// calibration (fitted on held-out frames; non-decreasing in `score`). Comparable across
-    /// pipelines and models, unlike `score`.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    /// pipelines and models, unlike `score`. A file with another value is refused.
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        deserialize_with = "crate::range_checked::confidence"
+    )]
     pub confidence: Option<f64>,
 }
 
@@ -224,6 +228,24 @@ impl From<FrameDetectionsFile> for FrameDetections {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_confidence_outside_zero_to_one_is_refused_by_name() {
+        let read = |c: &str| {
+            serde_json::from_str::<Detection>(&format!(
+                r#"{{"center_m": [0, 0, 1], "score": 1, "confidence": {c}}}"#
+            ))
+        };
+        for bad in ["1.5", "-0.01"] {
+            let err = read(bad).expect_err(bad).to_string();
+            assert!(
+                err.contains("confidence must lie in [0, 1]"),
+                "{bad}: {err}"
+            );
+        }
+        assert_eq!(read("1").unwrap().confidence, Some(1.0));
+        assert_eq!(read("null").unwrap().confidence, None);
+    }
 
     #[test]
     fn round_trips_through_json() {

@@ -29,6 +29,7 @@ mod image_circle;
 mod instance_mask;
 mod pixel_box;
 mod radial_distortion;
+mod range_checked;
 mod truth;
 mod voxel_grid;
 

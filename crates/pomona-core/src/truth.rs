@@ -34,7 +34,7 @@ pub struct FruitTruth {
     #[serde(default)]
     pub center_m: Option<Point3<f64>>,
     /// Largest equatorial diameter, metres (positive; a file with another value is refused).
-    #[serde(default, deserialize_with = "checked::diameter_m")]
+    #[serde(default, deserialize_with = "crate::range_checked::diameter_m")]
     pub diameter_m: Option<f64>,
     /// Unit symmetry axis in the camera frame (its reflection-symmetry planes contain it).
     #[serde(default, with = "unit_axis")]
@@ -50,11 +50,11 @@ pub struct FruitTruth {
     #[serde(
         default,
         skip_serializing_if = "Option::is_none",
-        deserialize_with = "checked::radius_px"
+        deserialize_with = "crate::range_checked::radius_px"
     )]
     pub radius_px: Option<f64>,
     /// Visible pixels divided by the pixels the fruit would cover alone, in `[0, 1]`.
-    #[serde(default, deserialize_with = "checked::visibility")]
+    #[serde(default, deserialize_with = "crate::range_checked::visibility")]
     pub visibility: Option<f64>,
     /// Keys not part of the format, kept verbatim.
     #[serde(flatten)]
@@ -96,44 +96,6 @@ impl FruitTruth {
             self.center_m.zip(self.diameter_m),
             self.bbox_px.as_ref(),
         )
-    }
-}
-
-/// Reading optional numbers that only make sense in a range, so that a hand-written annotation
-/// with a negative diameter or a visibility of 2 is refused with the field's name instead of
-/// quietly changing what is scored.
-mod checked {
-    use serde::{de::Error, Deserialize, Deserializer};
-
-    /// `diameter_m`: finite and greater than 0.
-    pub fn diameter_m<'de, D: Deserializer<'de>>(d: D) -> Result<Option<f64>, D::Error> {
-        positive(d, "diameter_m")
-    }
-
-    /// `radius_px`: finite and greater than 0.
-    pub fn radius_px<'de, D: Deserializer<'de>>(d: D) -> Result<Option<f64>, D::Error> {
-        positive(d, "radius_px")
-    }
-
-    /// `visibility`: in `[0, 1]`.
-    pub fn visibility<'de, D: Deserializer<'de>>(d: D) -> Result<Option<f64>, D::Error> {
-        let v = Option::<f64>::deserialize(d)?;
-        match v {
-            Some(x) if !(0.0..=1.0).contains(&x) => Err(D::Error::custom(format!(
-                "visibility must lie in [0, 1], got {x}"
-            ))),
-            _ => Ok(v),
-        }
-    }
-
-    fn positive<'de, D: Deserializer<'de>>(d: D, name: &str) -> Result<Option<f64>, D::Error> {
-        let v = Option::<f64>::deserialize(d)?;
-        match v {
-            Some(x) if !(x.is_finite() && x > 0.0) => Err(D::Error::custom(format!(
-                "{name} must be a positive number, got {x}"
-            ))),
-            _ => Ok(v),
-        }
     }
 }
 

@@ -101,6 +101,51 @@ fn approach_sequences_are_tracked_to_the_target() {
         assert!(stderr(&out).contains(says), "{set}: {}", stderr(&out));
     }
 
+    // A sequence whose target is not in its truth is not tracked, and says so with the id; the
+    // summary of no tracked frame reads 0, not -0.
+    let only = dir.path().join("only");
+    std::fs::create_dir(&only).unwrap();
+    let seq = only.join("seq-0000");
+    std::fs::create_dir(&seq).unwrap();
+    for entry in std::fs::read_dir(data.join("seq-0000")).unwrap() {
+        let entry = entry.unwrap();
+        let to = seq.join(entry.file_name());
+        if entry.file_type().unwrap().is_dir() {
+            std::fs::create_dir(&to).unwrap();
+            for f in std::fs::read_dir(entry.path()).unwrap() {
+                let f = f.unwrap();
+                std::fs::copy(f.path(), to.join(f.file_name())).unwrap();
+            }
+        } else {
+            std::fs::copy(entry.path(), to).unwrap();
+        }
+    }
+    let record = seq.join("approach.json");
+    let mut approach: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&record).unwrap()).unwrap();
+    approach["target_id"] = "no-such-fruit".into();
+    std::fs::write(&record, approach.to_string()).unwrap();
+    let out = pomona(&[
+        "track",
+        "--data",
+        only.to_str().unwrap(),
+        "--out",
+        tracks_s,
+        "--init",
+        "truth",
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("seq-0000: not tracked") && stderr(&out).contains("no-such-fruit"),
+        "{}",
+        stderr(&out)
+    );
+    assert!(
+        stdout(&out).contains("0 of 1") && !stdout(&out).contains("-0.0"),
+        "{}",
+        stdout(&out)
+    );
+
     // Tracking a folder without sequences is an error naming it.
     let empty = dir.path().join("empty");
     std::fs::create_dir(&empty).unwrap();

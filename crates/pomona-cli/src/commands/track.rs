@@ -269,7 +269,11 @@ fn track_sequence(
         return Ok(track);
     };
     let Some((target_c, target_r)) = target_in(first)? else {
-        track.failure = Some("the target is not visible in the first frame".into());
+        track.failure = Some(format!(
+            "the target (id `{}`) is not in the first frame's truth: not visible there, or not a \
+             fruit of this sequence",
+            record.target_id
+        ));
         return Ok(track);
     };
     let start = match args.init {
@@ -345,6 +349,9 @@ pub fn run(args: &TrackArgs) -> Result<TrackReport> {
         let track = track_sequence(dir, args, params, (&table, &stage.params), &detector)
             .with_context(|| format!("tracking {}", dir.display()))?;
         write_json(&args.out.join(format!("{}.json", track.sequence)), &track)?;
+        if let Some(reason) = &track.failure {
+            eprintln!("{}: not tracked: {reason}", dir.display());
+        }
         for f in &track.frames {
             times.push(f.ms);
             searched += usize::from(f.status == TrackStatus::Searched);
@@ -365,7 +372,8 @@ pub fn run(args: &TrackArgs) -> Result<TrackReport> {
         sequences: per_sequence.len(),
         succeeded,
         success_rate: succeeded as f64 / per_sequence.len().max(1) as f64,
-        ms_per_frame: times.iter().sum::<f64>() / times.len().max(1) as f64,
+        // A fold from +0 (an empty `sum` of floats is −0, printed "-0.0000").
+        ms_per_frame: times.iter().fold(0.0, |a, b| a + b) / times.len().max(1) as f64,
         ms_per_frame_median: median,
         ms_per_frame_max: times.iter().copied().fold(0.0, f64::max),
         frames: times.len(),

@@ -75,6 +75,7 @@ impl ArmModelFile {
     pub fn validate(&self) -> Result<(), ArmError> {
         self.magnitudes.validate()?;
         self.rig.validate()?;
+        self.magnitudes.validate_lens(&self.rig.camera)?;
         self.limits.validate()?;
         self.network.validate()?;
         if self.network.hidden != self.training.hidden {

@@ -16,7 +16,7 @@
 //! lens's and are taken as given.
 
 use nalgebra::{Rotation3, Vector3};
-use pomona_core::RadialDistortion;
+use pomona_core::{PinholeCamera, RadialDistortion};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
@@ -101,6 +101,30 @@ impl CalibrationMagnitudes {
         }
         Ok(())
     }
+
+    /// Checks that the lens distortion can be undone over the whole image of `camera` (the
+    /// arm's camera without it): a lens whose model folds back inside the image would put
+    /// targets at impossible pixels, and every later step would fail far from the cause.
+    ///
+    /// # Errors
+    /// [`ArmError::InvalidParameter`] naming `k1`.
+    pub fn validate_lens(&self, camera: &PinholeCamera) -> Result<(), ArmError> {
+        let distortion = RadialDistortion {
+            k1: self.k1,
+            k2: self.k2,
+        };
+        PinholeCamera {
+            distortion: Some(distortion),
+            ..*camera
+        }
+        .validate()
+        .map_err(|_| ArmError::InvalidParameter {
+            name: "k1",
+            value: self.k1,
+            reason: "with this k2, the lens distortion cannot be inverted over the camera's image \
+                     (it folds back before the corners)",
+        })
+    }
 }
 
 /// One robot's actual calibration errors (drawn from [`CalibrationMagnitudes`] and a seed).
@@ -176,6 +200,24 @@ impl CalibrationErrors {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_lens_that_folds_back_inside_the_image_is_refused_by_name() {
+        let camera = crate::ArmRig::default().camera;
+        assert!(CalibrationMagnitudes::default()
+            .validate_lens(&camera)
+            .is_ok());
+        assert!(CalibrationMagnitudes::none().validate_lens(&camera).is_ok());
+        let folded = CalibrationMagnitudes {
+            k1: -3.0,
+            ..CalibrationMagnitudes::default()
+        };
+        let err = folded.validate_lens(&camera).unwrap_err().to_string();
+        assert!(
+            err.contains("k1") && err.contains("cannot be inverted"),
+            "{err}"
+        );
+    }
 
     #[test]
     fn draws_are_seeded_signed_and_within_half_to_full_size() {

@@ -104,6 +104,18 @@ impl PinholeCamera {
         }
         if let Some(d) = &self.distortion {
             d.validate()?;
+            // Every pixel must back-project: the inversion has to hold out to the corners.
+            let (w, h) = (f64::from(self.width - 1), f64::from(self.height - 1));
+            for (u, v) in [(0.0, 0.0), (w, 0.0), (0.0, h), (w, h)] {
+                let q = Vector2::new((u - self.cx) / self.fx, (v - self.cy) / self.fy);
+                if !d.inverts(q) {
+                    return Err(CoreError::DistortionNotInvertible {
+                        k1: d.k1,
+                        k2: d.k2,
+                        radius: q.norm(),
+                    });
+                }
+            }
         }
         Ok(())
     }
@@ -268,6 +280,27 @@ mod tests {
         assert!(PinholeCamera::new(1, 1, -1.0, 1.0, 0.0, 0.0).is_err());
         assert!(PinholeCamera::new(1, 1, 1.0, f64::INFINITY, 0.0, 0.0).is_err());
         assert!(PinholeCamera::new(1, 1, 1.0, 1.0, f64::NAN, 0.0).is_err());
+    }
+
+    #[test]
+    fn a_distortion_that_folds_back_inside_the_image_is_refused() {
+        // Strong barrel: ρ (1 − ρ²) turns back at ρ = 0.58, inside the Kinect v2's corners (0.9).
+        let folded = kinect().with_distortion(Some(RadialDistortion { k1: -1.0, k2: 0.0 }));
+        let err = folded.expect_err("folds back").to_string();
+        assert!(err.contains("cannot be inverted over the image"), "{err}");
+        // A strong pincushion makes the inversion diverge at the corners.
+        assert!(kinect()
+            .with_distortion(Some(RadialDistortion { k1: 3.0, k2: 2.0 }))
+            .is_err());
+        // Real lenses' coefficients (and those `pomona synth --distortion` and the arm draw) pass.
+        for (k1, k2) in [(-0.2, 0.05), (-0.1, 0.02), (0.1, -0.02), (-0.35, 0.12)] {
+            assert!(
+                kinect()
+                    .with_distortion(Some(RadialDistortion { k1, k2 }))
+                    .is_ok(),
+                "{k1} {k2}"
+            );
+        }
     }
 
     #[test]

@@ -11,6 +11,21 @@ pub enum CoreError {
         /// The offending value.
         value: f64,
     },
+    /// The lens distortion cannot be undone over the whole image: the radial map folds back (or
+    /// the inversion does not converge) before the farthest image corner.
+    #[error(
+        "camera distortion k1 = {k1}, k2 = {k2} cannot be inverted over the image (it folds back \
+         or does not converge by the normalised radius {radius:.3} of the farthest corner); \
+         a real lens's coefficients keep it invertible there"
+    )]
+    DistortionNotInvertible {
+        /// Second-order coefficient.
+        k1: f64,
+        /// Fourth-order coefficient.
+        k2: f64,
+        /// Normalised (distorted) radius of the image corner where it fails.
+        radius: f64,
+    },
     /// A buffer's length does not match the declared image or cloud size.
     #[error("{what}: expected {expected} elements for {width}x{height}, got {actual}")]
     SizeMismatch {

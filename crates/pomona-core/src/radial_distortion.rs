@@ -37,6 +37,25 @@ impl RadialDistortion {
         Ok(())
     }
 
+    /// Whether [`RadialDistortion::undistort`] undoes the distortion at the distorted point `q`
+    /// and everywhere nearer the centre: the radial map `ρ ↦ ρ (1 + k1 ρ² + k2 ρ⁴)` rises all the
+    /// way out to the undistorted point (it does not fold back), and distorting that point gives
+    /// `q` again.
+    pub fn inverts(&self, q: Vector2<f64>) -> bool {
+        let p = self.undistort(q);
+        // The map's slope is g(x) = 1 + 3 k1 x + 5 k2 x² in x = ρ²: a parabola, lowest over
+        // [0, |p|²] at an end or at its vertex.
+        let slope = |x: f64| 1.0 + 3.0 * self.k1 * x + 5.0 * self.k2 * x * x;
+        let end = p.norm_squared();
+        let vertex = -3.0 * self.k1 / (10.0 * self.k2);
+        let lowest = [0.0, end, vertex]
+            .into_iter()
+            .filter(|x| (0.0..=end).contains(x))
+            .map(slope)
+            .fold(f64::INFINITY, f64::min);
+        lowest > 0.0 && (self.distort(p) - q).norm() <= 1e-9 * q.norm().max(1.0)
+    }
+
     fn factor(&self, r_sq: f64) -> f64 {
         1.0 + self.k1 * r_sq + self.k2 * r_sq * r_sq
     }

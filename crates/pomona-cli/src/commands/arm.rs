@@ -160,6 +160,9 @@ pub fn train(args: &ArmTrainArgs) -> Result<()> {
         ..ArmRig::default()
     };
     rig.validate().context("invalid rig")?;
+    magnitudes
+        .validate_lens(&rig.camera)
+        .context("invalid calibration error sizes")?;
     let sim = ArmSimulation {
         rig,
         limits: ArmLimits::default(),

@@ -131,6 +131,124 @@ pub struct ShapeFitParams {
     pub curvature: Option<CurvatureCheck>,
 }
 
+impl ShapeFitParams {
+    /// Why these parameters cannot run, as (the setting's name under `params.`, what is wrong),
+    /// or `None`. Checked before training and whenever a model becomes a detector, so that a
+    /// `--set` or a hand-edited model file with, say, a negative depth limit or a posterior
+    /// threshold of 2 is refused by name instead of quietly finding nothing.
+    pub fn problem(&self) -> Option<(&'static str, String)> {
+        let positive = |name: &'static str, v: f64| {
+            (!(v.is_finite() && v > 0.0)).then(|| (name, format!("{v} must be finite and > 0")))
+        };
+        let at_least = |name: &'static str, v: usize, min: usize| {
+            (v < min).then(|| (name, format!("{v} must be at least {min}")))
+        };
+        let fraction = |name: &'static str, v: f64| {
+            (!(0.0..=1.0).contains(&v)).then(|| (name, format!("{v} must lie in [0, 1]")))
+        };
+        let c = &self.color;
+        let regions = &self.regions;
+        let proposals = &self.depth_proposals;
+        at_least("color.bins", c.bins, 2)
+            .or_else(|| positive("color.parzen_sigma_bins", c.parzen_sigma_bins))
+            .or_else(|| {
+                (!(c.threshold > 0.0 && c.threshold < 1.0)).then(|| {
+                    (
+                        "color.threshold",
+                        format!(
+                            "{} must lie in (0, 1) (a posterior probability)",
+                            c.threshold
+                        ),
+                    )
+                })
+            })
+            .or_else(|| {
+                (!(1..=8).contains(&c.lut_bits)).then(|| {
+                    (
+                        "color.lut_bits",
+                        format!("{} must lie in 1..=8", c.lut_bits),
+                    )
+                })
+            })
+            .or_else(|| positive("max_depth_m", self.max_depth_m))
+            .or_else(|| positive("regions.max_step_m", regions.max_step_m))
+            .or_else(|| positive("regions.reference_focal_px", regions.reference_focal_px))
+            .or_else(|| {
+                regions.min_fruit_area.and_then(|a| {
+                    positive("regions.min_fruit_area.radius_m", a.radius_m).or_else(|| {
+                        (!(a.fraction > 0.0 && a.fraction <= 1.0)).then(|| {
+                            (
+                                "regions.min_fruit_area.fraction",
+                                format!("{} must lie in (0, 1]", a.fraction),
+                            )
+                        })
+                    })
+                })
+            })
+            .or_else(|| {
+                self.cluster_lattice
+                    .reference_focal_px
+                    .and_then(|f| positive("cluster_lattice.reference_focal_px", f))
+            })
+            .or_else(|| self.shapes.check().err().map(|e| ("shapes", e.to_string())))
+            .or_else(|| at_least("gpcd.max_points", self.gpcd.max_points, 2))
+            .or_else(|| positive("gpcd.d2_max_m", self.gpcd.d2_max_m))
+            .or_else(|| positive("positive_tolerance_m", self.positive_tolerance_m))
+            .or_else(|| {
+                positive(
+                    "max_negatives_per_positive",
+                    self.max_negatives_per_positive,
+                )
+            })
+            .or_else(|| {
+                (!(self.hard_negatives_per_positive.is_finite()
+                    && self.hard_negatives_per_positive >= 0.0))
+                    .then(|| {
+                        (
+                            "hard_negatives_per_positive",
+                            format!(
+                                "{} must be finite and >= 0",
+                                self.hard_negatives_per_positive
+                            ),
+                        )
+                    })
+            })
+            .or_else(|| {
+                (!self.merge_radius_m.is_finite()).then(|| {
+                    (
+                        "merge_radius_m",
+                        format!(
+                            "{} must be finite (0 or less: no merging)",
+                            self.merge_radius_m
+                        ),
+                    )
+                })
+            })
+            .or_else(|| {
+                fraction(
+                    "depth_proposals.max_color_coverage",
+                    proposals.max_color_coverage,
+                )
+            })
+            .or_else(|| {
+                (!(proposals.min_fruit_discs.is_finite()
+                    && proposals.min_fruit_discs >= 0.0
+                    && proposals.max_fruit_discs >= proposals.min_fruit_discs
+                    && proposals.max_fruit_discs.is_finite()))
+                .then(|| {
+                    (
+                        "depth_proposals.min_fruit_discs",
+                        format!(
+                            "{} and max_fruit_discs {} must be finite with 0 <= min <= max",
+                            proposals.min_fruit_discs, proposals.max_fruit_discs
+                        ),
+                    )
+                })
+            })
+            .or_else(|| at_least("depth_proposals.screen_points", proposals.screen_points, 2))
+    }
+}
+
 impl Default for ShapeFitParams {
     fn default() -> Self {
         Self {
@@ -427,5 +545,27 @@ mod tests {
         let old: ShapeFitParams = serde_json::from_value(json).unwrap();
         with.curvature = None;
         assert_eq!(old, with);
+    }
+
+    #[test]
+    fn settings_that_cannot_run_are_named() {
+        assert_eq!(ShapeFitParams::default().problem(), None);
+        let named = |edit: fn(&mut ShapeFitParams)| {
+            let mut p = ShapeFitParams::default();
+            edit(&mut p);
+            p.problem().map(|(name, _)| name)
+        };
+        assert_eq!(named(|p| p.max_depth_m = -1.0), Some("max_depth_m"));
+        assert_eq!(named(|p| p.color.threshold = 2.0), Some("color.threshold"));
+        assert_eq!(named(|p| p.color.lut_bits = 30), Some("color.lut_bits"));
+        assert_eq!(named(|p| p.gpcd.max_points = 0), Some("gpcd.max_points"));
+        assert_eq!(named(|p| p.gpcd.d2_max_m = f64::NAN), Some("gpcd.d2_max_m"));
+        assert_eq!(named(|p| p.shapes.sphere_preference = -3.0), Some("shapes"));
+        assert_eq!(
+            named(|p| p.depth_proposals.max_fruit_discs = 0.1),
+            Some("depth_proposals.min_fruit_discs")
+        );
+        // Merging off (0 or less) is a setting, not an error.
+        assert_eq!(named(|p| p.merge_radius_m = -1.0), None);
     }
 }

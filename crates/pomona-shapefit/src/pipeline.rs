@@ -305,6 +305,7 @@ impl ShapeFitPipeline {
         use_color: bool,
     ) -> Result<Stages, PipelineError> {
         let p = &stage.params;
+        usable_params(p)?;
         let normals = p
             .normals
             .check()
@@ -445,6 +446,7 @@ impl Pipeline for ShapeFitPipeline {
         if frames.is_empty() {
             return Err(not_enough("no frames with truth".into()));
         }
+        usable_params(&self.params)?;
         let use_color = frames.load(0)?.frame.color().is_some();
         let (color_model, prior) = self.colour_and_size_prior(frames, use_color)?;
         let mut params = self.params.clone();
@@ -724,6 +726,17 @@ fn detection(c: &Candidate, shape: &Shape, score: f64, camera: &PinholeCamera) -
         support_points: Some(c.points.len()),
         fit_rms_m: fit_rms_m(shape, &c.points),
         confidence: None,
+    }
+}
+
+/// [`ShapeFitParams::problem`] as an error naming the setting.
+fn usable_params(p: &ShapeFitParams) -> Result<(), PipelineError> {
+    match p.problem() {
+        Some((name, reason)) => Err(PipelineError::InvalidParameter {
+            name: format!("params.{name}"),
+            reason,
+        }),
+        None => Ok(()),
     }
 }
 

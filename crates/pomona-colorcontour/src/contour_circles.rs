@@ -73,6 +73,29 @@ pub enum GroupCircle {
     LeastSquares,
 }
 
+impl EdgeFitParams {
+    /// Why the settings cannot run, as (name, reason), or `None` (`merge_max_rms` is checked
+    /// with the detector's other settings).
+    pub fn problem(&self) -> Option<(&'static str, &'static str)> {
+        if !(self.arc_per_radius.is_finite() && self.arc_per_radius > 0.0) {
+            return Some(("edge_fit.arc_per_radius", "must be finite and positive"));
+        }
+        if !(self.arc_tolerance.is_finite() && self.arc_tolerance >= 0.0) {
+            return Some(("edge_fit.arc_tolerance", "must be finite and 0 or more"));
+        }
+        if !(self.jump_fraction.is_finite() && self.jump_fraction > 0.0) {
+            return Some(("edge_fit.jump_fraction", "must be finite and positive"));
+        }
+        if self.min_window < 2 {
+            return Some(("edge_fit.min_window", "must be at least 2 contour points"));
+        }
+        if self.min_estimates == 0 {
+            return Some(("edge_fit.min_estimates", "must be at least 1"));
+        }
+        None
+    }
+}
+
 impl Default for EdgeFitParams {
     fn default() -> Self {
         Self {
@@ -397,6 +420,31 @@ pub(crate) fn step_support(points: &[Point2<f64>], steps: &[usize], radius: f64)
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn edge_fit_settings_that_cannot_run_are_named() {
+        assert_eq!(EdgeFitParams::default().problem(), None);
+        let bad = |p: EdgeFitParams| p.problem().map(|(name, _)| name);
+        let d = EdgeFitParams::default();
+        assert_eq!(
+            bad(EdgeFitParams {
+                arc_per_radius: -1.0,
+                ..d
+            }),
+            Some("edge_fit.arc_per_radius")
+        );
+        assert_eq!(
+            bad(EdgeFitParams {
+                jump_fraction: f64::NAN,
+                ..d
+            }),
+            Some("edge_fit.jump_fraction")
+        );
+        assert_eq!(
+            bad(EdgeFitParams { min_window: 1, ..d }),
+            Some("edge_fit.min_window")
+        );
+    }
     use crate::{smooth_mask, trace_contours};
     use rand::{Rng, SeedableRng};
 

@@ -286,6 +286,9 @@ impl ColorContourDetector {
         if !(0.0..=1.0).contains(&p.color_grow_fraction) {
             return Err(invalid("color_grow_fraction", "must lie in [0, 1]"));
         }
+        if let Some((name, reason)) = p.edge_fit.problem() {
+            return Err(invalid(name, reason));
+        }
         if p.edge_fit.merge_max_rms.is_nan() || p.edge_fit.merge_max_rms < 0.0 {
             return Err(invalid(
                 "edge_fit.merge_max_rms",

@@ -823,6 +823,14 @@ fn demo_runs_pipelines_with_a_builtin_model() {
     assert_eq!(report.pipelines.len(), 1);
     assert!(report.without_builtin_model.is_empty());
     assert_eq!(report.pipelines[0].report.frames, 2);
+    // The fruit found per kind add up to the evaluation's true positives and scored fruit.
+    let by_kind = &report.pipelines[0].found_by_kind;
+    assert!(!by_kind.is_empty());
+    let (found, fruits) = by_kind
+        .values()
+        .fold((0, 0), |(a, b), k| (a + k.found, b + k.fruits));
+    assert_eq!(fruits, report.pipelines[0].report.fruits);
+    assert_eq!(found, report.pipelines[0].report.true_positives);
     for f in ["000000", "000001"] {
         assert!(out.join(format!("blob/overlay/{f}.png")).exists());
         assert!(out.join(format!("overlay/{f}.png")).exists());

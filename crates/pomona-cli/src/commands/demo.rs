@@ -16,12 +16,15 @@
 //! With no pipeline that has a built-in model it still renders the data and truth overlays, and
 //! says so.
 
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{bail, Context, Result};
 use pomona_core::{Detection, FrameDetections, PinholeCamera};
-use pomona_eval::{evaluate, write_pr_plot, EvalConfig, EvalReport, FrameInput};
+use pomona_eval::{
+    evaluate, match_frame, write_pr_plot, EvalConfig, EvalReport, FrameInput, TruthStatus,
+};
 use pomona_io::Dataset;
 use pomona_pipeline::Pipeline;
 use pomona_synth::{
@@ -64,6 +67,19 @@ pub struct DemoPipeline {
     pub detect_ms_per_frame: Option<f64>,
     /// The evaluation.
     pub report: EvalReport,
+    /// Per fruit kind in the truth: the scored fruit of that kind and how many were found at the
+    /// operating point (the built-in models were trained on different fruit: color-contour's on
+    /// oranges only).
+    pub found_by_kind: BTreeMap<String, KindFound>,
+}
+
+/// Fruit of one kind scored and found.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct KindFound {
+    /// Scored fruit of the kind (visible enough; the others are ignored).
+    pub fruits: usize,
+    /// Of those, found at the operating point.
+    pub found: usize,
 }
 
 /// `report.json` of a demo.
@@ -280,8 +296,16 @@ fn run_pipeline(demo: &DemoData, pipeline: &dyn Pipeline, out: &Path) -> Result<
         let marked = config.operating_score(&inputs);
         write_pr_plot(&out.join(name).join("pr.png"), curve, &title, marked)?;
     }
+    let found_by_kind = found_by_kind(&inputs, &demo.camera, &config);
     println!("\n### `{name}` (built-in model)\n");
     print!("{}", report.to_markdown());
+    let by_kind: Vec<String> = found_by_kind
+        .iter()
+        .map(|(kind, k)| format!("{kind} {} of {}", k.found, k.fruits))
+        .collect();
+    if !by_kind.is_empty() {
+        println!("found by kind: {}", by_kind.join(", "));
+    }
     if let Some(ms) = totals.ms_per_frame() {
         println!("detection: {ms:.1} ms/frame");
     }
@@ -290,7 +314,36 @@ fn run_pipeline(demo: &DemoData, pipeline: &dyn Pipeline, out: &Path) -> Result<
         detections: totals.detections,
         detect_ms_per_frame: totals.ms_per_frame(),
         report,
+        found_by_kind,
     })
+}
+
+/// Per kind of fruit in the truth, the scored fruit and those found at `config`'s operating
+/// point, from the evaluation's own matching (a fruit is found when a detection kept at the
+/// operating point took it).
+fn found_by_kind(
+    inputs: &[FrameInput],
+    camera: &PinholeCamera,
+    config: &EvalConfig,
+) -> BTreeMap<String, KindFound> {
+    let mut by_kind: BTreeMap<String, KindFound> = BTreeMap::new();
+    for input in inputs {
+        let matched = match_frame(&input.truth, &input.detections, camera, config);
+        for (fruit, status) in input.truth.fruits.iter().zip(&matched.truth) {
+            let found = match status {
+                TruthStatus::Ignored => continue,
+                TruthStatus::Missed => false,
+                TruthStatus::Found { by } => config.keeps(&input.detections[*by]),
+            };
+            let entry = by_kind.entry(fruit.kind.clone()).or_insert(KindFound {
+                fruits: 0,
+                found: 0,
+            });
+            entry.fruits += 1;
+            entry.found += usize::from(found);
+        }
+    }
+    by_kind
 }
 
 /// Runs `pomona demo` with the registered pipelines.

@@ -16,6 +16,11 @@ use pomona_recording::Recording;
 use crate::detection_run::check_inputs;
 use crate::robot_recording::RecordingArgs;
 
+/// The median depth, metres, a crop scene's first frame may have without a warning that the
+/// depth unit looks wrong: nearer than a camera on a harvesting arm or farther than any
+/// depth camera's useful range is a unit off by a factor of ten or more.
+pub const PLAUSIBLE_MEDIAN_DEPTH_M: (f64, f64) = (0.1, 15.0);
+
 /// The frames a detection run reads.
 #[derive(Debug)]
 pub enum DetectInput {
@@ -103,6 +108,43 @@ impl DetectInput {
             Some(d) => check_inputs(pipeline, d),
             None => Ok(()),
         }
+    }
+
+    /// A warning when the first frame's depth is implausible for a crop scene — its median
+    /// reading nearer than [`PLAUSIBLE_MEDIAN_DEPTH_M`]`.0` or farther than `.1` — as a wrong
+    /// `depth_unit_m` in `camera.json` gives (millimetres read as tenths of a millimetre put the
+    /// fruit ten times nearer): every detector would then quietly find nothing. `None` for a
+    /// recording (its unit comes from the sensor), a dataset without depth or frames, or
+    /// plausible depth.
+    pub fn depth_unit_warning(&self) -> Option<String> {
+        let Self::Dataset(d) = self else { return None };
+        if !d.has_depth() {
+            return None;
+        }
+        let first = d.frames().first()?;
+        let frame = d.load_frame(first).ok()?;
+        let mut readings: Vec<f32> = frame
+            .depth()
+            .as_slice()
+            .iter()
+            .copied()
+            .filter(|v| v.is_finite())
+            .collect();
+        if readings.is_empty() {
+            return None;
+        }
+        let middle = readings.len() / 2;
+        let median = f64::from(*readings.select_nth_unstable_by(middle, f32::total_cmp).1);
+        let (near, far) = PLAUSIBLE_MEDIAN_DEPTH_M;
+        (!(near..=far).contains(&median)).then(|| {
+            format!(
+                "the median depth of frame {first} of {} is {median:.3} m with camera.json's \
+                 depth_unit_m {}: check the unit (metres per depth-PNG step, 0.001 for \
+                 millimetres)",
+                d.root().display(),
+                d.depth_unit_m()
+            )
+        })
     }
 
     fn index_of(&self, stems: &[String], stem: &str) -> Result<usize> {

@@ -847,6 +847,32 @@ fn shape_fit_detect(data: &Path, out: &Path, extra: &[&str]) -> Output {
     run::detect("shape-fit", data, out, extra)
 }
 
+/// A depth unit ten times too large (the depth PNGs read as ten times farther) gets a warning
+/// naming the unit; the right unit gets none.
+#[test]
+fn an_implausible_depth_unit_is_warned_about() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = dir.path().join("data");
+    synth_dataset(&data, 1, 19);
+    let out = shape_fit_detect(&data, &dir.path().join("right"), &[]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(!stderr(&out).contains("depth_unit_m"), "{}", stderr(&out));
+    let path = data.join("camera.json");
+    let mut camera: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    let unit = camera["depth_unit_m"].as_f64().unwrap();
+    camera["depth_unit_m"] = (unit * 100.0).into();
+    std::fs::write(&path, camera.to_string()).unwrap();
+    let out = shape_fit_detect(&data, &dir.path().join("wrong"), &[]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("warning: the median depth of frame 000000")
+            && stderr(&out).contains("depth_unit_m"),
+        "{}",
+        stderr(&out)
+    );
+}
+
 #[test]
 fn built_in_shape_fit_detects_with_and_without_colour() {
     let dir = tempfile::tempdir().unwrap();

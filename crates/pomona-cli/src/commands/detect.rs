@@ -164,6 +164,9 @@ pub fn run_with(pipelines: &[Box<dyn Pipeline>], args: &DetectArgs) -> Result<De
         );
     }
     input.check(pipeline)?;
+    if let Some(warning) = input.depth_unit_warning() {
+        eprintln!("warning: {warning}");
+    }
     let detector = load_detector(pipeline, args.model.as_deref(), &args.set)?;
     let keep = keep_rule(&detector, args.min_confidence)?;
     let model = detector.model_for_color(input.has_color()).clone();

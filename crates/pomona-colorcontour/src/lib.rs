@@ -66,6 +66,7 @@ pub mod stages;
 mod test_shapes;
 mod tracking;
 mod training_pixels;
+mod window_reduce;
 
 pub use arc_half_angle::{arc_half_angle, arc_radius};
 pub use circle_in_space::{sphere_from_depth, sphere_from_size, SphereFromCircle};

@@ -4,13 +4,15 @@
 
 use std::cmp::Ordering;
 
+use crate::window_reduce::window_reduce;
+
 /// Indices, in raster order, of the cells of `values` (row-major, `width` wide) that pass
 /// `candidate` and hold the largest value within `half` cells in x and y. A cell must be
 /// strictly above the cells before it in raster order and at least the ones after it, so a
 /// plateau gives its first cell only.
 ///
-/// The window's largest value is taken first for every cell, separably (along rows, then down
-/// columns, one shifted slice at a time so that the compiler can vectorise it); only the cells
+/// The window's largest value is taken first for every cell, separably
+/// ([`window_reduce`]); only the cells
 /// that reach it — few on a vote grid where nearly every cell passes `candidate` — are then
 /// compared with their window one by one for the raster-order rule.
 pub(crate) fn local_maxima<T: PartialOrd + Copy>(
@@ -64,35 +66,7 @@ fn larger<T: PartialOrd + Copy>(a: T, b: T) -> T {
 /// For every cell of `values` (row-major, `width` wide, whole rows), a value of its window of
 /// `half` cells in x and y that no other value of the window exceeds.
 fn window_max<T: PartialOrd + Copy>(values: &[T], width: usize, half: usize) -> Vec<T> {
-    // Along rows: each cell takes the cells up to `half` to its right and to its left, one
-    // shift at a time (the slices stop at the row's ends).
-    let mut across = values.to_vec();
-    for (out, row) in across
-        .chunks_exact_mut(width)
-        .zip(values.chunks_exact(width))
-    {
-        for shift in 1..=half.min(width - 1) {
-            for (o, &r) in out[..width - shift].iter_mut().zip(&row[shift..]) {
-                *o = larger(*o, r);
-            }
-            for (o, &r) in out[shift..].iter_mut().zip(&row[..width - shift]) {
-                *o = larger(*o, r);
-            }
-        }
-    }
-    // Down columns: each row takes the rows up to `half` below and above it.
-    let mut window = across.clone();
-    let n = values.len();
-    for shift in 1..=half.min((n / width).saturating_sub(1)) {
-        let offset = shift * width;
-        for (o, &r) in window[..n - offset].iter_mut().zip(&across[offset..]) {
-            *o = larger(*o, r);
-        }
-        for (o, &r) in window[offset..].iter_mut().zip(&across[..n - offset]) {
-            *o = larger(*o, r);
-        }
-    }
-    window
+    window_reduce(values, width, half, larger)
 }
 
 #[cfg(test)]

@@ -5,13 +5,14 @@
 //! one outline. Closing bridges gaps narrower than `2r + 1` pixels without moving the outer
 //! outline (what closing adds lies inside the concavities it fills). Off (`r = 0`) by default.
 //!
-//! Both passes are separable: along rows, then along columns, each pixel combines the pixels
-//! `1..=r` either side of it that lie inside the image (any of them set for the dilation, all of
-//! them for the erosion), one shifted slice at a time so that the compiler can vectorise it. The
-//! cost grows with `r`; closings are a few pixels wide (2 in the built-in model). Pixels outside
-//! the image are ignored by either pass (a fruit cut by the image border keeps its border pixels).
+//! Both passes are separable window reductions ([`crate::window_reduce`]: any pixel of the
+//! window set for the dilation, all of them for the erosion). Their cost grows with `r`;
+//! closings are a few pixels wide (2 in the built-in model). Pixels outside the image are
+//! ignored by either pass (a fruit cut by the image border keeps its border pixels).
 
 use std::borrow::Cow;
+
+use crate::window_reduce::window_reduce;
 
 /// The mask closed by a `(2 radius_px + 1)²` square; `mask` itself, not a copy, for
 /// `radius_px == 0` (the paper's path) or a mask whose length is not `width · height`.
@@ -19,43 +20,8 @@ pub fn close_mask(mask: &[bool], width: usize, height: usize, radius_px: usize) 
     if radius_px == 0 || width == 0 || height == 0 || mask.len() != width * height {
         return Cow::Borrowed(mask);
     }
-    let dilated = pass(mask, width, height, radius_px, |a, b| a | b);
-    Cow::Owned(pass(&dilated, width, height, radius_px, |a, b| a & b))
-}
-
-/// One separable square pass: along rows, then along columns, every pixel is combined by
-/// `op` with each pixel up to `radius` away from it inside the image.
-fn pass(
-    mask: &[bool],
-    width: usize,
-    height: usize,
-    radius: usize,
-    op: impl Fn(bool, bool) -> bool + Copy,
-) -> Vec<bool> {
-    let mut rows = mask.to_vec();
-    for (row, out) in mask.chunks_exact(width).zip(rows.chunks_exact_mut(width)) {
-        for d in 1..=radius.min(width - 1) {
-            for (o, &m) in out[..width - d].iter_mut().zip(&row[d..]) {
-                *o = op(*o, m);
-            }
-            for (o, &m) in out[d..].iter_mut().zip(&row[..width - d]) {
-                *o = op(*o, m);
-            }
-        }
-    }
-    let mut out = rows.clone();
-    for d in 1..=radius.min(height - 1) {
-        for y in 0..height - d {
-            let (lo, hi) = (y * width, (y + d) * width);
-            for (o, &m) in out[lo..lo + width].iter_mut().zip(&rows[hi..hi + width]) {
-                *o = op(*o, m);
-            }
-            for (o, &m) in out[hi..hi + width].iter_mut().zip(&rows[lo..lo + width]) {
-                *o = op(*o, m);
-            }
-        }
-    }
-    out
+    let dilated = window_reduce(mask, width, radius_px, |a, b| a | b);
+    Cow::Owned(window_reduce(&dilated, width, radius_px, |a, b| a & b))
 }
 
 #[cfg(test)]

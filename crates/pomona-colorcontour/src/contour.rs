@@ -138,10 +138,7 @@ pub fn trace_contours(
     // its west — where the border following starts.
     let runs = Runs::passing(mask, width, |m| m);
     let mut regions = runs.regions();
-    let mut area = vec![0usize; runs.runs.len()];
-    for (k, run) in runs.runs.iter().enumerate() {
-        area[regions.find(k)] += run.len();
-    }
+    let area = runs.region_areas(&mut regions);
     let mut out = Vec::new();
     for (k, run) in runs.runs.iter().enumerate() {
         if regions.find(k) != k || area[k] < min_area_px.max(1) {

@@ -38,10 +38,7 @@ pub fn hysteresis_mask(
     let strong = Runs::passing(values, width, |v| v >= high);
     let weak = Runs::passing(values, width, |v| v >= low && v < high);
     let mut strong_sets = strong.regions();
-    let mut size = vec![0usize; strong.runs.len()];
-    for (k, run) in strong.runs.iter().enumerate() {
-        size[strong_sets.find(k)] += run.len();
-    }
+    let size = strong.region_areas(&mut strong_sets);
     let seeds: Vec<bool> = (0..strong.runs.len())
         .map(|k| size[strong_sets.find(k)] >= min_seed_px)
         .collect();

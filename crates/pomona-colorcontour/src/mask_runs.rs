@@ -64,6 +64,16 @@ impl Runs {
         (a, &self.runs[a..b])
     }
 
+    /// Pixels in each region of `sets` (this image's [`Runs::regions`]), indexed by the
+    /// region's root run (0 for runs that are not roots).
+    pub fn region_areas(&self, sets: &mut DisjointSets) -> Vec<usize> {
+        let mut area = vec![0usize; self.runs.len()];
+        for (k, run) in self.runs.iter().enumerate() {
+            area[sets.find(k)] += run.len();
+        }
+        area
+    }
+
     /// The 8-connected regions: runs of consecutive rows that touch are one region.
     pub fn regions(&self) -> DisjointSets {
         let mut sets = DisjointSets::new(self.runs.len());

@@ -133,7 +133,8 @@ pub struct ShapeFitParams {
 
 impl ShapeFitParams {
     /// Why these parameters cannot run, as (the setting's name under `params.`, what is wrong),
-    /// or `None`. Checked before training and whenever a model becomes a detector, so that a
+    /// or `None` — the detection checks' own settings included when they are on. Checked before
+    /// training and whenever a model becomes a detector, so that a
     /// `--set` or a hand-edited model file with, say, a negative depth limit or a posterior
     /// threshold of 2 is refused by name instead of quietly finding nothing.
     pub fn problem(&self) -> Option<(&'static str, String)> {
@@ -246,6 +247,17 @@ impl ShapeFitParams {
                 })
             })
             .or_else(|| at_least("depth_proposals.screen_points", proposals.screen_points, 2))
+            .or_else(|| {
+                // The detection checks, when on.
+                let free_space = self
+                    .free_space
+                    .enabled
+                    .then(|| self.free_space.invalid_reason())
+                    .flatten();
+                free_space
+                    .or_else(|| self.curvature.and_then(|c| c.invalid_reason()))
+                    .map(|(name, value, reason)| (name, format!("{value} {reason}")))
+            })
     }
 }
 

@@ -18,7 +18,7 @@ use serde::{Deserialize, Serialize};
 use crate::curvature_check::rms;
 use crate::negative_selection::{cap_negatives, hardest_negatives};
 use crate::stages::{
-    pixel_colors, BackProjectionStage, ClassifierStage, ColorMaskStage, DepthProposalStage,
+    pixel_colors, usable, BackProjectionStage, ClassifierStage, ColorMaskStage, DepthProposalStage,
     DescriptorStage, ProposalScreenStage, RegionGrowingStage, ShapeChecks, ShapeStage,
 };
 use crate::{
@@ -305,7 +305,7 @@ impl ShapeFitPipeline {
         use_color: bool,
     ) -> Result<Stages, PipelineError> {
         let p = &stage.params;
-        usable_params(p)?;
+        usable(p.problem())?;
         let normals = p
             .normals
             .check()
@@ -446,7 +446,7 @@ impl Pipeline for ShapeFitPipeline {
         if frames.is_empty() {
             return Err(not_enough("no frames with truth".into()));
         }
-        usable_params(&self.params)?;
+        usable(self.params.problem())?;
         let use_color = frames.load(0)?.frame.color().is_some();
         let (color_model, prior) = self.colour_and_size_prior(frames, use_color)?;
         let mut params = self.params.clone();
@@ -726,17 +726,6 @@ fn detection(c: &Candidate, shape: &Shape, score: f64, camera: &PinholeCamera) -
         support_points: Some(c.points.len()),
         fit_rms_m: fit_rms_m(shape, &c.points),
         confidence: None,
-    }
-}
-
-/// [`ShapeFitParams::problem`] as an error naming the setting.
-fn usable_params(p: &ShapeFitParams) -> Result<(), PipelineError> {
-    match p.problem() {
-        Some((name, reason)) => Err(PipelineError::InvalidParameter {
-            name: format!("params.{name}"),
-            reason,
-        }),
-        None => Ok(()),
     }
 }
 

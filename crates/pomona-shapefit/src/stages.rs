@@ -418,20 +418,16 @@ impl ShapeChecks {
     /// The checks `params` switch on.
     ///
     /// # Errors
-    /// [`PipelineError::InvalidParameter`] naming the unusable setting of a check that is on.
+    /// [`PipelineError::InvalidParameter`] naming a setting that cannot run
+    /// ([`ShapeFitParams::problem`], the checks' own included).
     pub fn of_params(params: &ShapeFitParams) -> Result<Self, PipelineError> {
-        let mut checks = Self::default();
-        if params.free_space.enabled {
-            usable(params.free_space.invalid_reason())?;
-            checks.free_space = Some(FreeSpaceStage {
+        usable(params.problem())?;
+        Ok(Self {
+            free_space: params.free_space.enabled.then_some(FreeSpaceStage {
                 check: params.free_space,
-            });
-        }
-        if let Some(check) = params.curvature {
-            usable(check.invalid_reason())?;
-            checks.curvature = Some(CurvatureStage { check });
-        }
-        Ok(checks)
+            }),
+            curvature: params.curvature.map(|check| CurvatureStage { check }),
+        })
     }
 
     /// `shapes` less those the checks refuse.
@@ -455,12 +451,13 @@ impl ShapeChecks {
     }
 }
 
-/// A detection check's `invalid_reason` — `(name, value, reason)` under `params.` — as an error.
-fn usable(invalid: Option<(&str, f64, &str)>) -> Result<(), PipelineError> {
-    match invalid {
-        Some((name, value, reason)) => Err(PipelineError::InvalidParameter {
+/// [`ShapeFitParams::problem`] — `(name under params., what is wrong)` — as an error naming
+/// the setting.
+pub(crate) fn usable(problem: Option<(&str, String)>) -> Result<(), PipelineError> {
+    match problem {
+        Some((name, reason)) => Err(PipelineError::InvalidParameter {
             name: format!("params.{name}"),
-            reason: format!("{value} {reason}"),
+            reason,
         }),
         None => Ok(()),
     }

@@ -122,9 +122,9 @@ impl DetectInput {
             return None;
         }
         let first = d.frames().first()?;
-        let frame = d.load_frame(first).ok()?;
-        let mut readings: Vec<f32> = frame
-            .depth()
+        // The depth image alone: decoding the colour image would only cost time.
+        let depth = d.load_depth(first).ok()?;
+        let mut readings: Vec<f32> = depth
             .as_slice()
             .iter()
             .copied()

@@ -47,25 +47,69 @@ pub fn refine_circle(
     start: (Point2<f64>, f64),
     iterations: usize,
 ) -> Option<(Point2<f64>, f64)> {
+    refine_circle_with_cost(points, start, iterations).map(|(circle, _)| circle)
+}
+
+/// As [`refine_circle`], with the sum of squared distances of `points` from the circle
+/// returned (what [`rms_distance`] would compute again for it).
+pub(crate) fn refine_circle_with_cost(
+    points: &[Point2<f64>],
+    start: (Point2<f64>, f64),
+    iterations: usize,
+) -> Option<((Point2<f64>, f64), f64)> {
     let (mut center, mut radius) = start;
     if points.len() < 3 || !(radius.is_finite() && radius > 0.0) || !center.x.is_finite() {
         return None;
     }
-    let mut cost = squared_distances(points, center, radius);
+    // One pass over the points per step: the sum that decides whether a step is taken and the
+    // normal equations of the next step are read off the same distances.
+    let mut here = GaussNewtonPass::at(points, center, radius);
     for _ in 0..iterations {
-        // Residual d_i = |p_i − c| − r; its gradient in (cx, cy, r) is (−u_x, −u_y, −1) with u
-        // the unit vector from c to p_i.
+        let Some([dx, dy, dr]) = solve3(here.a, here.b) else {
+            break;
+        };
+        let (c2, r2) = (center + Vector2::new(dx, dy), radius + dr);
+        if !(r2.is_finite() && r2 > 0.0) {
+            break;
+        }
+        let there = GaussNewtonPass::at(points, c2, r2);
+        if there.cost >= here.cost {
+            break;
+        }
+        let converged = dx.abs().max(dy.abs()).max(dr.abs()) < 1e-6 * radius.max(1.0);
+        (center, radius, here) = (c2, r2, there);
+        if converged {
+            break;
+        }
+    }
+    Some(((center, radius), here.cost))
+}
+
+/// The points' sum of squared distances from a circle and the normal equations `a · step = b`
+/// of a Gauss–Newton step from it.
+struct GaussNewtonPass {
+    a: [[f64; 3]; 3],
+    b: [f64; 3],
+    cost: f64,
+}
+
+impl GaussNewtonPass {
+    fn at(points: &[Point2<f64>], center: Point2<f64>, radius: f64) -> Self {
         let mut a = [[0.0f64; 3]; 3];
         let mut b = [0.0f64; 3];
+        let mut cost = 0.0;
         for p in points {
             let v: Vector2<f64> = p - center;
             let dist = v.norm();
+            let residual = dist - radius;
+            cost += residual.powi(2);
             if dist <= f64::EPSILON {
                 continue;
             }
+            // Residual d_i = |p_i − c| − r; its gradient in (cx, cy, r) is (−u_x, −u_y, −1)
+            // with u the unit vector from c to p_i.
             let u = v / dist;
             let row = [-u.x, -u.y, -1.0];
-            let residual = dist - radius;
             for i in 0..3 {
                 for j in 0..3 {
                     a[i][j] += row[i] * row[j];
@@ -73,24 +117,8 @@ pub fn refine_circle(
                 b[i] -= row[i] * residual;
             }
         }
-        let Some([dx, dy, dr]) = solve3(a, b) else {
-            break;
-        };
-        let (c2, r2) = (center + Vector2::new(dx, dy), radius + dr);
-        if !(r2.is_finite() && r2 > 0.0) {
-            break;
-        }
-        let cost2 = squared_distances(points, c2, r2);
-        if cost2 >= cost {
-            break;
-        }
-        let converged = dx.abs().max(dy.abs()).max(dr.abs()) < 1e-6 * radius.max(1.0);
-        (center, radius, cost) = (c2, r2, cost2);
-        if converged {
-            break;
-        }
+        Self { a, b, cost }
     }
-    Some((center, radius))
 }
 
 /// Root-mean-square distance of `points` from the circle; 0 for no points.

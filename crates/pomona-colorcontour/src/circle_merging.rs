@@ -25,9 +25,9 @@
 
 use pomona_core::nalgebra::Point2;
 
-use crate::circle_least_squares::solve3;
+use crate::circle_least_squares::{refine_circle_with_cost, solve3};
 use crate::contour_circles::{step_points, step_support};
-use crate::{fit_circle, refine_circle, rms_distance, Contour, ContourArc, ContourCircle};
+use crate::{fit_circle, Contour, ContourArc, ContourCircle};
 
 /// Gauss–Newton steps of the geometric refinement of a merged circle.
 const REFINE_ITERATIONS: usize = 10;
@@ -194,12 +194,13 @@ fn pair_fit(
         .iter()
         .flat_map(|(c, steps)| step_points(&contours[*c].points, steps))
         .collect();
-    let (center_px, radius_px) =
-        fit_circle(&points).and_then(|start| refine_circle(&points, start, REFINE_ITERATIONS))?;
+    let ((center_px, radius_px), cost) = fit_circle(&points)
+        .and_then(|start| refine_circle_with_cost(&points, start, REFINE_ITERATIONS))?;
     if radius_px > max_radius_px {
         return None;
     }
-    let quality = rms_distance(&points, center_px, radius_px) / radius_px;
+    // The root-mean-square distance (as `rms_distance`) over the radius.
+    let quality = (cost / points.len() as f64).sqrt() / radius_px;
     if quality.is_nan() || quality > max_rms {
         return None;
     }

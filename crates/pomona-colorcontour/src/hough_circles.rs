@@ -202,16 +202,31 @@ pub fn hough_circles(
 
 /// The outline pixels and their inward normals (the mean offset of the mask pixels in the
 /// `2·half + 1` square around each).
+///
+/// The square's sums are read off per-column sums over its rows (mask pixels and their rows),
+/// which slide down the image one row at a time: a window of 2·half + 1 columns per outline
+/// pixel instead of its (2·half + 1)² pixels.
 fn outline_pixels(mask: &[bool], width: usize, height: usize, half: usize) -> Vec<OutlinePixel> {
     let mut out = Vec::new();
     if width < 3 {
         return out;
     }
+    let row = |yy: usize| &mask[yy * width..(yy + 1) * width];
+    // Over rows `rows` of the window: per column, the mask pixels and the sum of their rows.
+    let (mut count, mut row_sum) = (vec![0i64; width], vec![0i64; width]);
+    let mut rows = 0..0;
+    let slide = |yy: usize, sign: i64, count: &mut [i64], row_sum: &mut [i64]| {
+        let weight = sign * yy as i64;
+        for ((c, s), &m) in count.iter_mut().zip(row_sum.iter_mut()).zip(row(yy)) {
+            let m = i64::from(m);
+            *c += sign * m;
+            *s += weight * m;
+        }
+    };
     // Per row, which pixels are outline (fruit with a 4-neighbour that is not), in one pass
     // over the row and its neighbours that the compiler can vectorise.
     let mut edge = vec![false; width - 2];
     for y in 1..height.saturating_sub(1) {
-        let row = |yy: usize| &mask[yy * width..(yy + 1) * width];
         let (up, here, down) = (row(y - 1), row(y), row(y + 1));
         for ((((e, &m), (&l, &r)), &u), &d) in edge
             .iter_mut()
@@ -222,27 +237,29 @@ fn outline_pixels(mask: &[bool], width: usize, height: usize, half: usize) -> Ve
         {
             *e = m & !(l & r & u & d);
         }
+        let window = y.saturating_sub(half)..(y + half + 1).min(height);
+        while rows.end < window.end {
+            slide(rows.end, 1, &mut count, &mut row_sum);
+            rows.end += 1;
+        }
+        while rows.start < window.start {
+            slide(rows.start, -1, &mut count, &mut row_sum);
+            rows.start += 1;
+        }
         for x in edge
             .iter()
             .enumerate()
             .filter(|(_, &e)| e)
             .map(|(i, _)| i + 1)
         {
-            let (mut count, mut sx, mut sy) = (0i64, 0i64, 0i64);
             let (x0, x1) = (x.saturating_sub(half), (x + half + 1).min(width));
-            for yy in y.saturating_sub(half)..(y + half + 1).min(height) {
-                for (xx, &m) in (x0..x1).zip(&row(yy)[x0..x1]) {
-                    if m {
-                        count += 1;
-                        sx += xx as i64;
-                        sy += yy as i64;
-                    }
-                }
+            let (mut n, mut sx, mut sy) = (0i64, 0i64, 0i64);
+            for xx in x0..x1 {
+                n += count[xx];
+                sx += xx as i64 * count[xx];
+                sy += row_sum[xx];
             }
-            let sum = Vector2::new(
-                (sx - count * x as i64) as f64,
-                (sy - count * y as i64) as f64,
-            );
+            let sum = Vector2::new((sx - n * x as i64) as f64, (sy - n * y as i64) as f64);
             if let Some(inward) = sum.try_normalize(1e-9) {
                 out.push(OutlinePixel {
                     at: Point2::new(x as f64, y as f64),

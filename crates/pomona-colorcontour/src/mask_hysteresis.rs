@@ -35,8 +35,7 @@ pub fn hysteresis_mask(
     if low >= high || width == 0 || values.len() != width * height {
         return mask;
     }
-    let strong = Runs::passing(values, width, |v| v >= high);
-    let weak = Runs::passing(values, width, |v| v >= low && v < high);
+    let (strong, weak) = Runs::strong_and_weak(values, width, (high, low));
     let mut strong_sets = strong.regions();
     let size = strong.region_areas(&mut strong_sets);
     let seeds: Vec<bool> = (0..strong.runs.len())

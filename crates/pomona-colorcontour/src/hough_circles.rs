@@ -31,6 +31,7 @@ use pomona_core::nalgebra::{Point2, Vector2};
 use serde::{Deserialize, Serialize};
 
 use crate::local_maxima::local_maxima;
+use crate::window_reduce::window_reduce;
 use crate::{refine_circle, ContourCircle};
 
 /// Settings of the Hough circles (a model file may leave any of them out: the default is used).
@@ -180,14 +181,23 @@ pub fn hough_circles(
             }
         }
     }
+    let owned: Vec<bool> = owner.iter().map(|&h| h != u32::MAX).collect();
     let mut voters: Vec<Vec<usize>> = vec![Vec::new(); peaks.len()];
-    grid.vote(&outline, params.min_radius_px, max_radius, |p, k| {
-        if let Some(list) = voters.get_mut(owner[k] as usize) {
-            if list.last() != Some(&p) {
-                list.push(p);
+    // Only the votes into owned cells matter here: the walk jumps over stretches of ray far
+    // from them.
+    let near_owned = grid.near(&owned);
+    grid.vote_near(
+        &outline,
+        (params.min_radius_px, max_radius),
+        &near_owned,
+        |p, k| {
+            if let Some(list) = voters.get_mut(owner[k] as usize) {
+                if list.last() != Some(&p) {
+                    list.push(p);
+                }
             }
-        }
-    });
+        },
+    );
     let index = OutlineIndex::new(&outline, width, height);
     peaks
         .iter()
@@ -302,12 +312,46 @@ impl VoteGrid {
         outline: &[OutlinePixel],
         min_radius: f64,
         max_radius: f64,
+        vote: impl FnMut(usize, usize),
+    ) {
+        self.walk(outline, (min_radius, max_radius), None, vote);
+    }
+
+    /// As [`VoteGrid::vote`], but only sure to call `vote` for the cells where `wanted` holds:
+    /// `near_wanted` (from [`VoteGrid::near`]) marks the cells with a wanted cell within
+    /// [`VoteGrid::SKIP`] − 1 cells, and the walk jumps [`VoteGrid::SKIP`] samples at once from a
+    /// sample whose cell is not marked (the samples jumped lie within that many cells of it).
+    fn vote_near(
+        &self,
+        outline: &[OutlinePixel],
+        (min_radius, max_radius): (f64, f64),
+        near_wanted: &[bool],
+        vote: impl FnMut(usize, usize),
+    ) {
+        self.walk(outline, (min_radius, max_radius), Some(near_wanted), vote);
+    }
+
+    /// Samples jumped at once by [`VoteGrid::vote_near`].
+    const SKIP: usize = 4;
+
+    /// The cells with a cell of `wanted` within [`VoteGrid::SKIP`] − 1 cells in x and y.
+    fn near(&self, wanted: &[bool]) -> Vec<bool> {
+        window_reduce(wanted, self.cols, Self::SKIP - 1, |a, b| a | b)
+    }
+
+    fn walk(
+        &self,
+        outline: &[OutlinePixel],
+        (min_radius, max_radius): (f64, f64),
+        near_wanted: Option<&[bool]>,
         mut vote: impl FnMut(usize, usize),
     ) {
-        // Fixed point in cells, 16 fractional bits: one add per sample.
+        // Fixed point in cells, 16 fractional bits: one add per sample. A sample moves at most
+        // one cell in x and in y.
         const ONE: f64 = 65536.0;
         let steps = ((max_radius - min_radius) / self.cell).floor() as i64;
         let (cols, rows) = (self.cols as i64, self.rows as i64);
+        let jump = Self::SKIP as i64;
         for (index, p) in outline.iter().enumerate() {
             let start = p.at + p.inward * min_radius;
             let (mut x, mut y) = (
@@ -316,18 +360,26 @@ impl VoteGrid {
             );
             let (dx, dy) = ((p.inward.x * ONE) as i64, (p.inward.y * ONE) as i64);
             let mut last = usize::MAX;
-            for _ in 0..=steps {
+            let mut step = 0;
+            while step <= steps {
                 let (i, j) = (x >> 16, y >> 16);
                 if i < 0 || j < 0 || i >= cols || j >= rows {
                     break;
                 }
                 let k = (j * cols + i) as usize;
+                if let Some(near) = near_wanted {
+                    if step % jump == 0 && !near[k] {
+                        (x, y, step) = (x + jump * dx, y + jump * dy, step + jump);
+                        continue;
+                    }
+                }
                 if k != last {
                     vote(index, k);
                     last = k;
                 }
                 x += dx;
                 y += dy;
+                step += 1;
             }
         }
     }
@@ -391,14 +443,17 @@ fn fullest_radius(
     for &p in voters {
         hist[((outline[p].at - center).norm().round() as usize).min(bins - 1)] += 1;
     }
+    // below[i]: voters in bins 0..i, so a window of bins is one difference.
+    let mut below = vec![0u32; bins + 1];
+    for (i, &n) in hist.iter().enumerate() {
+        below[i + 1] = below[i] + n;
+    }
     let lo = params.min_radius_px.ceil() as usize;
     let hi = (max_radius.floor() as usize).min(bins - 1);
     let (mut best_r, mut best_n) = (0usize, 0u32);
     for r in lo..=hi {
         let t = tolerance(params, r as f64).floor() as usize;
-        let n: u32 = hist[r.saturating_sub(t)..(r + t + 1).min(bins)]
-            .iter()
-            .sum();
+        let n = below[(r + t + 1).min(bins)] - below[r.saturating_sub(t)];
         if n > best_n {
             (best_r, best_n) = (r, n);
         }

@@ -226,19 +226,29 @@ fn color_purity(fruit: &[bool], width: usize, height: usize, c: &ContourCircle) 
     let r = c.radius_px;
     let step = (r / 10.0).max(1.0);
     let steps = (r / step).ceil() as i64;
+    // A grid point's pixel column depends on its column of the grid only, and its row on its
+    // row: round each once (`None` outside the image).
+    let pixel = |center: f64, k: i64, size: usize| {
+        let v = (center + k as f64 * step).round();
+        (v >= 0.0 && v < size as f64).then_some(v as usize)
+    };
+    let columns: Vec<Option<usize>> = (-steps..=steps)
+        .map(|i| pixel(c.center_px.x, i, width))
+        .collect();
     let (mut inside, mut hits) = (0usize, 0usize);
     for j in -steps..=steps {
-        for i in -steps..=steps {
-            let (dx, dy) = (i as f64 * step, j as f64 * step);
+        let Some(y) = pixel(c.center_px.y, j, height) else {
+            continue;
+        };
+        let dy = j as f64 * step;
+        for (i, x) in (-steps..=steps).zip(&columns) {
+            let dx = i as f64 * step;
+            let Some(x) = *x else { continue };
             if dx * dx + dy * dy > r * r {
                 continue;
             }
-            let (x, y) = ((c.center_px.x + dx).round(), (c.center_px.y + dy).round());
-            if x < 0.0 || y < 0.0 || x >= width as f64 || y >= height as f64 {
-                continue;
-            }
             inside += 1;
-            hits += usize::from(fruit[y as usize * width + x as usize]);
+            hits += usize::from(fruit[y * width + x]);
         }
     }
     if inside == 0 {

@@ -3,14 +3,15 @@
 //!
 //! The paper says a non-zero root exists for c/a ∈ [0, 2/π]; in fact f(θ) = sin θ − kθ with
 //! k = c/a is positive just above 0 and equals −kπ < 0 at π for every 0 < k < 1, so a root in
-//! (0, π) always exists (and is unique: f is concave there). We solve it by Newton's method,
-//! falling back to bisection on the bracket whenever a step leaves it.
+//! (0, π) always exists (and is unique: f is concave there). We solve it by Newton-type steps
+//! (Halley's, below), falling back to bisection on the bracket whenever a step leaves it, until
+//! f is zero to within its rounding.
 //!
 //! The edge fit solves it about ten thousand times a frame, so two choices keep that cheap: the
 //! start is read off a table of θ over u = √(1 − k) (smooth in u, unlike in k near a straight
-//! arc), interpolated to within about 10⁻⁶; and the step is Halley's — Newton's with the second
-//! derivative, −sin θ, which the sine already computed gives for free — so one step reaches
-//! machine precision and a frame needs two sines and a cosine per window instead of seven or
+//! arc), interpolated to within 10⁻⁵; and the step is Halley's — Newton's with the second
+//! derivative, −sin θ, which the sine already computed gives for free — so one step from there
+//! reaches machine precision and a frame needs two sines and a cosine per window instead of seven or
 //! eight trigonometric calls from the series start θ ≈ √(6(1 − k)).
 
 /// The half-angle θ ∈ (0, π) of Eq. 8 for the ratio `chord_over_arc` = c/a; `None` unless

@@ -29,6 +29,7 @@
 use pomona_core::nalgebra::{Point2, Vector2};
 use serde::{Deserialize, Serialize};
 
+use crate::contour::next_around;
 use crate::{arc_half_angle, fit_circle, refine_circle, Contour};
 
 /// Settings of the adaptive edge fitting.
@@ -159,7 +160,7 @@ impl<'a> ArcTable<'a> {
         let mut s = 0.0;
         cumulative.push(0.0);
         for i in 0..n {
-            s += (points[(i + 1) % n] - points[i]).norm();
+            s += (points[next_around(i, n)] - points[i]).norm();
             cumulative.push(s);
         }
         Self { points, cumulative }
@@ -180,8 +181,12 @@ impl<'a> ArcTable<'a> {
         }
     }
 
+    /// Point `i`, wrapping once past the end (windows start before it and span at most half
+    /// the contour, so `i` < 2n): a subtraction where `i % n` would divide, three times a window.
     fn point(&self, i: usize) -> Point2<f64> {
-        self.points[i % self.points.len()]
+        let n = self.points.len();
+        debug_assert!(i < 2 * n);
+        self.points[if i >= n { i - n } else { i }]
     }
 }
 
@@ -396,7 +401,7 @@ pub(crate) fn step_points(points: &[Point2<f64>], steps: &[usize]) -> Vec<Point2
     let mut out = Vec::with_capacity(steps.len() + 1);
     for (k, &i) in steps.iter().enumerate() {
         out.push(points[i]);
-        let next = (i + 1) % n;
+        let next = next_around(i, n);
         let next_listed =
             steps.get(k + 1) == Some(&next) || (next == 0 && steps.first() == Some(&0));
         if !next_listed {
@@ -412,7 +417,7 @@ pub(crate) fn step_support(points: &[Point2<f64>], steps: &[usize], radius: f64)
     let n = points.len();
     let arc: f64 = steps
         .iter()
-        .map(|&i| (points[(i + 1) % n] - points[i]).norm())
+        .map(|&i| (points[next_around(i, n)] - points[i]).norm())
         .sum();
     (arc / (2.0 * std::f64::consts::PI * radius)).min(1.0)
 }

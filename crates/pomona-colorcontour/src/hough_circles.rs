@@ -317,10 +317,11 @@ impl VoteGrid {
         self.walk(outline, (min_radius, max_radius), None, vote);
     }
 
-    /// As [`VoteGrid::vote`], but only sure to call `vote` for the cells where `wanted` holds:
-    /// `near_wanted` (from [`VoteGrid::near`]) marks the cells with a wanted cell within
+    /// As [`VoteGrid::vote`], but sure to call `vote` only for the wanted cells: `near_wanted`
+    /// ([`VoteGrid::near`] of them) marks the cells with a wanted cell within
     /// [`VoteGrid::SKIP`] − 1 cells, and the walk jumps [`VoteGrid::SKIP`] samples at once from a
-    /// sample whose cell is not marked (the samples jumped lie within that many cells of it).
+    /// sample whose cell is not marked (the samples jumped lie within that many cells of it, so
+    /// none is wanted). Other cells may be called too.
     fn vote_near(
         &self,
         outline: &[OutlinePixel],

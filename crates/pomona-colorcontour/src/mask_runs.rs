@@ -57,23 +57,15 @@ impl Runs {
     /// those in `low..high`, in raster order, in one pass over the values: the same runs as
     /// [`Runs::passing`] with those two tests (the colour hysteresis reads both).
     pub fn strong_and_weak(values: &[u8], width: usize, (high, low): (u8, u8)) -> (Self, Self) {
+        let runs = |runs, row_starts| Self { runs, row_starts };
+        if width == 0 {
+            return (runs(Vec::new(), vec![0]), runs(Vec::new(), vec![0]));
+        }
         let (mut strong, mut weak) = (Vec::new(), Vec::new());
         let (mut strong_starts, mut weak_starts) = (vec![0], vec![0]);
-        if width == 0 {
-            return (
-                Self {
-                    runs: strong,
-                    row_starts: strong_starts,
-                },
-                Self {
-                    runs: weak,
-                    row_starts: weak_starts,
-                },
-            );
-        }
         // Per row: each pixel's level (0 neither, 1 weak, 2 strong), then the places where it
-        // changes as bits of 64-pixel words, visited by their trailing zeros — no branch per
-        // pixel, none mispredicted at the many run ends of a textured frame.
+        // changes as bits of 64-pixel words, visited by their trailing zeros: no branch per
+        // pixel, only per run end (a textured frame has many).
         let mut level = vec![0u8; width];
         for (y, row) in values.chunks_exact(width).enumerate() {
             for (l, &v) in level.iter_mut().zip(row) {
@@ -106,16 +98,7 @@ impl Runs {
             strong_starts.push(strong.len());
             weak_starts.push(weak.len());
         }
-        (
-            Self {
-                runs: strong,
-                row_starts: strong_starts,
-            },
-            Self {
-                runs: weak,
-                row_starts: weak_starts,
-            },
-        )
+        (runs(strong, strong_starts), runs(weak, weak_starts))
     }
 
     /// Rows of the image.

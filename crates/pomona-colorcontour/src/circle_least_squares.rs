@@ -202,6 +202,11 @@ mod tests {
             (geo.0 - c).norm() < 1.5 && (geo.1 - r).abs() < 1.5,
             "{geo:?}"
         );
+        // The cost returned with the circle is the points' sum of squared distances from it.
+        let (circle, cost) = refine_circle_with_cost(&noisy, kasa, 20).unwrap();
+        assert_eq!(circle, geo);
+        let rms = rms_distance(&noisy, geo.0, geo.1);
+        assert_eq!((cost / noisy.len() as f64).sqrt(), rms);
         assert!(refine_circle(&noisy[..2], kasa, 5).is_none());
         assert!(refine_circle(&noisy, (c, f64::NAN), 5).is_none());
         assert_eq!(rms_distance(&[], c, r), 0.0);

@@ -584,6 +584,81 @@ fn coverage(points: &[Point2<f64>], center: Point2<f64>, bins: usize) -> f64 {
 mod tests {
     use super::*;
     use crate::test_shapes::{assert_each_disc_found, mask_of, mask_of_discs, near};
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    #[test]
+    fn outline_normals_are_the_mean_offsets_of_their_windows_on_random_masks() {
+        let mut rng = ChaCha8Rng::seed_from_u64(49);
+        for _ in 0..200 {
+            let (w, h): (usize, usize) = (rng.gen_range(3..40), rng.gen_range(1..40));
+            let density = rng.gen_range(0.1..0.9);
+            let mask: Vec<bool> = (0..w * h).map(|_| rng.gen_bool(density)).collect();
+            let half: usize = rng.gen_range(1..5);
+            // The definition: every outline pixel's window summed pixel by pixel.
+            let at = |x: usize, y: usize| mask[y * w + x];
+            let mut expected = Vec::new();
+            for y in 1..h.saturating_sub(1) {
+                for x in 1..w - 1 {
+                    let inner = at(x - 1, y) && at(x + 1, y) && at(x, y - 1) && at(x, y + 1);
+                    if !at(x, y) || inner {
+                        continue;
+                    }
+                    let (mut sx, mut sy) = (0i64, 0i64);
+                    for yy in y.saturating_sub(half)..(y + half + 1).min(h) {
+                        for xx in x.saturating_sub(half)..(x + half + 1).min(w) {
+                            if at(xx, yy) {
+                                sx += xx as i64 - x as i64;
+                                sy += yy as i64 - y as i64;
+                            }
+                        }
+                    }
+                    if let Some(n) = Vector2::new(sx as f64, sy as f64).try_normalize(1e-9) {
+                        expected.push((x, y, n));
+                    }
+                }
+            }
+            let got: Vec<_> = outline_pixels(&mask, w, h, half)
+                .into_iter()
+                .map(|p| (p.at.x as usize, p.at.y as usize, p.inward))
+                .collect();
+            assert_eq!(got, expected, "{w}×{h}, half {half}");
+        }
+    }
+
+    #[test]
+    fn the_jumping_walk_calls_every_wanted_cell_the_full_walk_calls() {
+        let mut rng = ChaCha8Rng::seed_from_u64(4);
+        let grid = VoteGrid::new(90, 70, 2.0);
+        for _ in 0..100 {
+            let outline: Vec<OutlinePixel> = (0..40)
+                .map(|_| {
+                    let angle = rng.gen_range(0.0..std::f64::consts::TAU);
+                    OutlinePixel {
+                        at: Point2::new(rng.gen_range(0.0..90.0), rng.gen_range(0.0..70.0)),
+                        inward: Vector2::new(angle.cos(), angle.sin()),
+                    }
+                })
+                .collect();
+            let share = rng.gen_range(0.001..0.2);
+            let wanted: Vec<bool> = (0..grid.cols * grid.rows)
+                .map(|_| rng.gen_bool(share))
+                .collect();
+            let (mut full, mut jumping) = (Vec::new(), Vec::new());
+            grid.vote(&outline, 5.0, 60.0, |p, k| {
+                if wanted[k] {
+                    full.push((p, k));
+                }
+            });
+            grid.vote_near(&outline, (5.0, 60.0), &grid.near(&wanted), |p, k| {
+                if wanted[k] {
+                    jumping.push((p, k));
+                }
+            });
+            assert!(!full.is_empty());
+            assert_eq!(jumping, full);
+        }
+    }
 
     #[test]
     fn a_disc_notched_by_leaves_into_short_arcs_keeps_its_circle() {

@@ -30,59 +30,55 @@ impl Runs {
     /// The maximal runs of the pixels of `values` (row-major, `width` wide) that pass `test`,
     /// in raster order; none for a width of 0.
     pub fn passing<T: Copy>(values: &[T], width: usize, test: impl Fn(T) -> bool) -> Self {
-        let mut runs = Vec::new();
-        let mut row_starts = vec![0];
-        if width == 0 {
-            return Self { runs, row_starts };
-        }
-        for (y, row) in values.chunks_exact(width).enumerate() {
-            let mut x = 0;
-            while x < width {
-                if test(row[x]) {
-                    let x0 = x;
-                    while x < width && test(row[x]) {
-                        x += 1;
-                    }
-                    runs.push(Run { y, x0, x1: x });
-                } else {
-                    x += 1;
-                }
-            }
-            row_starts.push(runs.len());
-        }
-        Self { runs, row_starts }
+        let [runs] = Self::by_level(values, width, |v| u8::from(test(v)));
+        runs
     }
 
     /// The maximal runs of the `values` (row-major, `width` wide) at or above `high` and of
     /// those in `low..high`, in raster order, in one pass over the values: the same runs as
     /// [`Runs::passing`] with those two tests (the colour hysteresis reads both).
     pub fn strong_and_weak(values: &[u8], width: usize, (high, low): (u8, u8)) -> (Self, Self) {
-        let runs = |runs, row_starts| Self { runs, row_starts };
+        let [weak, strong] =
+            Self::by_level(values, width, |v| u8::from(v >= low) + u8::from(v >= high));
+        (strong, weak)
+    }
+
+    /// The maximal runs of each level 1..=N of the values (`level` gives 0..=N; 0 is no run),
+    /// in raster order, in one pass: per row, each pixel's level, then the places where it
+    /// changes as bits of 64-pixel words, visited by their trailing zeros — a branch per run
+    /// end, not per pixel (a textured frame has many run ends).
+    fn by_level<T: Copy, const N: usize>(
+        values: &[T],
+        width: usize,
+        level: impl Fn(T) -> u8,
+    ) -> [Self; N] {
+        let mut out: [Self; N] = std::array::from_fn(|_| Self {
+            runs: Vec::new(),
+            row_starts: vec![0],
+        });
         if width == 0 {
-            return (runs(Vec::new(), vec![0]), runs(Vec::new(), vec![0]));
+            return out;
         }
-        let (mut strong, mut weak) = (Vec::new(), Vec::new());
-        let (mut strong_starts, mut weak_starts) = (vec![0], vec![0]);
-        // Per row: each pixel's level (0 neither, 1 weak, 2 strong), then the places where it
-        // changes as bits of 64-pixel words, visited by their trailing zeros: no branch per
-        // pixel, only per run end (a textured frame has many).
-        let mut level = vec![0u8; width];
+        let mut levels = vec![0u8; width];
         for (y, row) in values.chunks_exact(width).enumerate() {
-            for (l, &v) in level.iter_mut().zip(row) {
-                *l = u8::from(v >= low) + u8::from(v >= high);
+            for (l, &v) in levels.iter_mut().zip(row) {
+                *l = level(v);
             }
-            let mut emit = |kind: u8, x0: usize, x1: usize| match kind {
-                2 => strong.push(Run { y, x0, x1 }),
-                1 => weak.push(Run { y, x0, x1 }),
-                _ => {}
+            let mut emit = |kind: u8, x0: usize, x1: usize| {
+                if let Some(runs) = usize::from(kind)
+                    .checked_sub(1)
+                    .and_then(|k| out.get_mut(k))
+                {
+                    runs.runs.push(Run { y, x0, x1 });
+                }
             };
-            let (mut kind, mut x0) = (level[0], 0);
+            let (mut kind, mut x0) = (levels[0], 0);
             for first in (1..width).step_by(64) {
                 let last = (first + 64).min(width);
                 let mut changes = 0u64;
-                for (bit, (a, b)) in level[first..last]
+                for (bit, (a, b)) in levels[first..last]
                     .iter()
-                    .zip(&level[first - 1..last - 1])
+                    .zip(&levels[first - 1..last - 1])
                     .enumerate()
                 {
                     changes |= u64::from(a != b) << bit;
@@ -91,14 +87,15 @@ impl Runs {
                     let x = first + changes.trailing_zeros() as usize;
                     changes &= changes - 1;
                     emit(kind, x0, x);
-                    (kind, x0) = (level[x], x);
+                    (kind, x0) = (levels[x], x);
                 }
             }
             emit(kind, x0, width);
-            strong_starts.push(strong.len());
-            weak_starts.push(weak.len());
+            for runs in &mut out {
+                runs.row_starts.push(runs.runs.len());
+            }
         }
-        (runs(strong, strong_starts), runs(weak, weak_starts))
+        out
     }
 
     /// Rows of the image.

@@ -390,29 +390,8 @@ impl VoteGrid {
 /// most votes first, at most `max_hypotheses`.
 fn peaks(votes: &[u32], grid: &VoteGrid, params: &HoughCircleParams) -> Vec<usize> {
     let cols = grid.cols;
-    // 3×3 sums: each row plus its neighbours along the row, then each row plus the rows above
-    // and below, one shifted slice at a time (the slices stop at the grid's edges).
-    let mut across = votes.to_vec();
-    for (out, row) in across.chunks_exact_mut(cols).zip(votes.chunks_exact(cols)) {
-        if cols > 1 {
-            for (o, &r) in out[..cols - 1].iter_mut().zip(&row[1..]) {
-                *o += r;
-            }
-            for (o, &r) in out[1..].iter_mut().zip(&row[..cols - 1]) {
-                *o += r;
-            }
-        }
-    }
-    let mut summed = across.clone();
-    let n = across.len();
-    if n > cols {
-        for (o, &r) in summed[..n - cols].iter_mut().zip(&across[cols..]) {
-            *o += r;
-        }
-        for (o, &r) in summed[cols..].iter_mut().zip(&across[..n - cols]) {
-            *o += r;
-        }
-    }
+    // 3×3 sums (cells outside the grid count nothing).
+    let summed = window_reduce(votes, cols, 1, |a, b| a + b);
     let min_votes = params.min_votes.max(1);
     let mut found: Vec<(u32, usize)> =
         local_maxima(&summed, cols, params.peak_half_window_cells, |v| {

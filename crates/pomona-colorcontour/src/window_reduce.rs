@@ -2,11 +2,14 @@
 //! then down columns, each cell is combined with the cells `1..=radius` either side of it that
 //! lie inside the grid (cells outside are ignored, not padded), one shifted slice at a time so
 //! that the compiler can vectorise it. The cost grows with the radius, which is a few cells
-//! where it is used: the mask closing ([`crate::close_mask`], `|` then `&`) and the local maxima
-//! of the Hough votes and of the distance transform ([`crate::local_maxima`], the larger).
+//! where it is used: the mask closing ([`crate::close_mask`], `|` then `&`), the local maxima
+//! of the Hough votes and of the distance transform ([`crate::local_maxima`], the larger), the
+//! Hough votes' 3×3 sums (`+`) and the cells near a hypothesis whose votes the second pass
+//! keeps (`|`).
 //!
 //! The operation must be commutative and associative over the values it meets (or, and, the
-//! larger of totally ordered values), since each cell meets its neighbours in no fixed order.
+//! larger of totally ordered values, sums of integers), since each cell meets its neighbours in
+//! no fixed order.
 
 /// `values` (row-major, `width` wide, whole rows) with every cell replaced by `op` folded over
 /// its `(2 radius + 1)²` window inside the grid.

@@ -47,13 +47,24 @@ fn approach_sequences_are_tracked_to_the_target() {
     let report = dir.path().join("report.json");
     let report_s = report.to_str().unwrap();
     let tracks_s = tracks.to_str().unwrap();
-    // `pomona track` on the sequences from the truth, with `extra` arguments; the report.
-    let track_from_truth = |extra: &[&str]| {
+    // `pomona track` on the sequences of `folder` into `tracks`, with `extra` arguments.
+    let track_in = |folder: &std::path::Path, extra: &[&str]| {
         let mut args = vec![
-            "track", "--data", data_s, "--out", tracks_s, "--json", report_s, "--init", "truth",
+            "track",
+            "--data",
+            folder.to_str().unwrap(),
+            "--out",
+            tracks_s,
         ];
         args.extend_from_slice(extra);
-        let out = pomona(&args);
+        pomona(&args)
+    };
+    // The same on the rendered sequences from the truth; the report.
+    let track_from_truth = |extra: &[&str]| {
+        let out = track_in(
+            &data,
+            &[&["--json", report_s, "--init", "truth"], extra].concat(),
+        );
         assert!(out.status.success(), "{}", stderr(&out));
         serde_json::from_str::<serde_json::Value>(&std::fs::read_to_string(report_s).unwrap())
             .unwrap()
@@ -96,7 +107,7 @@ fn approach_sequences_are_tracked_to_the_target() {
         ("local_redetect.max_radius_ratio=0.5", "max_radius_ratio"),
         (r#"redetect="sometimes""#, "sometimes"),
     ] {
-        let out = pomona(&["track", "--data", data_s, "--out", tracks_s, "--set", set]);
+        let out = track_in(&data, &["--set", set]);
         assert!(!out.status.success());
         assert!(stderr(&out).contains(says), "{set}: {}", stderr(&out));
     }
@@ -113,15 +124,7 @@ fn approach_sequences_are_tracked_to_the_target() {
         serde_json::from_str(&std::fs::read_to_string(&record).unwrap()).unwrap();
     approach["target_id"] = "no-such-fruit".into();
     std::fs::write(&record, approach.to_string()).unwrap();
-    let out = pomona(&[
-        "track",
-        "--data",
-        only.to_str().unwrap(),
-        "--out",
-        tracks_s,
-        "--init",
-        "truth",
-    ]);
+    let out = track_in(&only, &["--init", "truth"]);
     assert!(out.status.success(), "{}", stderr(&out));
     assert!(
         stderr(&out).contains("seq-0000: not tracked") && stderr(&out).contains("no-such-fruit"),
@@ -137,13 +140,7 @@ fn approach_sequences_are_tracked_to_the_target() {
     // Tracking a folder without sequences is an error naming it.
     let empty = dir.path().join("empty");
     std::fs::create_dir(&empty).unwrap();
-    let out = pomona(&[
-        "track",
-        "--data",
-        empty.to_str().unwrap(),
-        "--out",
-        tracks_s,
-    ]);
+    let out = track_in(&empty, &[]);
     assert!(!out.status.success());
     assert!(stderr(&out).contains("empty"), "{}", stderr(&out));
 }

@@ -425,6 +425,8 @@ pub(crate) fn step_support(points: &[Point2<f64>], steps: &[usize], radius: f64)
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::{smooth_mask, trace_contours};
+    use rand::{Rng, SeedableRng};
 
     #[test]
     fn edge_fit_settings_that_cannot_run_are_named() {
@@ -450,8 +452,6 @@ mod tests {
             Some("edge_fit.min_window")
         );
     }
-    use crate::{smooth_mask, trace_contours};
-    use rand::{Rng, SeedableRng};
 
     /// A disc of radius `r` at `(cx, cy)` with the pixels for which `hidden` holds removed.
     fn partial_disc(

@@ -10,9 +10,10 @@
 //!    distance (the distance band is narrowed to ±[`START_BAND_HALF_M`] around it);
 //! 3. the target is the fruit nearest the image centre among the ripe ones (albedo green over
 //!    red at most [`RIPE_MAX_GREEN_OVER_RED`]: a harvester picks orange fruit, not yellow or
-//!    green ones) at
-//!    least [`TARGET_MIN_VISIBILITY`] visible in the first frame, preferring one with no other
-//!    fruit in its corridor (below); the most visible fruit if none qualifies;
+//!    green ones) at least [`TARGET_MIN_VISIBILITY`] visible in the first frame — unhidden
+//!    *and* inside the image: the truth's visibility times the share of the fruit's image disc
+//!    within the frame — preferring one with no other fruit in its corridor (below); the most
+//!    visible fruit if none qualifies;
 //! 4. leaves whose bounding sphere reaches into the arm's corridor (the cylinder of the
 //!    target's radius plus [`CORRIDOR_MARGIN_M`] around the line from the camera to the target's
 //!    centre, in front of the target) are removed: an arm cannot reach a fruit through a leaf,
@@ -62,7 +63,8 @@ pub const SWAY_PENDULUM_M: (f64, f64) = (0.08, 0.3);
 pub const SWAY_AMPLITUDE_M: (f64, f64) = (0.01, 0.03);
 /// Name of the per-sequence record.
 pub const APPROACH_FILE: &str = "approach.json";
-/// Visibility the target needs in the first frame (when some fruit has it).
+/// Visibility the target needs in the first frame (when some fruit has it): the share of its
+/// image disc that is inside the frame and not hidden.
 pub const TARGET_MIN_VISIBILITY: f64 = 0.6;
 /// Half-width of the distance band the scene's fruit are drawn in, around the start distance.
 pub const START_BAND_HALF_M: f64 = 0.05;
@@ -248,7 +250,20 @@ impl Plan {
                 (u - centre.0).hypot(v - centre.1)
             })
         };
-        let visibility = |t: &pomona_core::FruitTruth| t.visibility.unwrap_or(0.0);
+        // The truth's visibility counts only pixels inside the image; a fruit mostly beyond the
+        // frame's edge is not visible either.
+        let (width, height) = (f64::from(camera.width), f64::from(camera.height));
+        let visibility = |t: &pomona_core::FruitTruth| {
+            let in_view = match (t.center_px, t.radius_px) {
+                (Some(center_px), Some(radius_px)) => pomona_core::ImageCircle {
+                    center_px,
+                    radius_px,
+                }
+                .fraction_inside(width, height),
+                _ => 1.0,
+            };
+            t.visibility.unwrap_or(0.0) * in_view
+        };
         let index_of = |t: &pomona_core::FruitTruth| t.id.parse::<usize>().ok();
         let mut candidates: Vec<&pomona_core::FruitTruth> = first
             .truth
@@ -477,6 +492,48 @@ mod tests {
                 assert!(c.x.abs() < 1e-6 && c.y.abs() < 1e-6, "{c}");
                 assert!((d - r.end_distance_m).abs() < 1e-9);
             }
+        }
+    }
+
+    #[test]
+    fn the_target_is_in_view_not_beyond_the_frame_edge() {
+        // Seed 41's orchard set as `pomona synth --approach 20 --frames 25 --seed 41 --domain
+        // orchard --fruit orange` draws it (the tracker's tuning set): under a rule that counted only the
+        // pixels inside the image, sequences 10 and 19 took fruit whose image centre lay 9 px
+        // inside and 33 px outside the top edge.
+        let spec = ApproachSpec::new(
+            SceneSpec {
+                fruit: FruitChoice::Only(FruitKind::Orange),
+                domain: Domain::Orchard,
+                noise: crate::NoiseModel::TofMultipath,
+                backgrounds: Domain::Orchard.default_backgrounds(),
+                ..SceneSpec::default()
+            },
+            20,
+            25,
+            41,
+            false,
+        );
+        let camera = spec.scene.camera;
+        for index in [10, 19] {
+            let plan = Plan::draw(&spec, index).unwrap();
+            let first = crate::render(&plan.scene, &camera).unwrap();
+            let target = first
+                .truth
+                .fruits
+                .iter()
+                .find(|t| t.id == plan.record.target_id)
+                .unwrap();
+            let circle = pomona_core::ImageCircle {
+                center_px: target.center_px.unwrap(),
+                radius_px: target.radius_px.unwrap(),
+            };
+            let in_view = circle.fraction_inside(f64::from(camera.width), f64::from(camera.height));
+            assert!(
+                in_view * target.visibility.unwrap() >= TARGET_MIN_VISIBILITY,
+                "sequence {index}: {in_view} in view, {:?} visible",
+                target.visibility
+            );
         }
     }
 

@@ -7,6 +7,7 @@
 //! without a 3D centre also gets its box. Detections: red — their image circle by the same rule
 //! (color-contour's own circle, a sphere projected, a box's inscribed circle, or a small fixed
 //! circle when the method gives no size), a dot at the centre and a label `score | ⌀ mm`. Frames without colour are drawn on their depth as grey.
+//! Tracks (`pomona track --overlay`): the tracker's circle red, the target's truth circle green.
 //! Drawing uses `plotters`' bitmap backend on the image buffer and DejaVu Sans compiled into the
 //! binary (via `ab_glyph`), as `pomona-eval`'s PR plots do, so no system font is needed.
 
@@ -16,7 +17,9 @@ use std::sync::OnceLock;
 use anyhow::{anyhow, bail, Result};
 use plotters::prelude::*;
 use plotters::style::{register_font, FontStyle};
-use pomona_core::{ColorImage, DepthImage, Detection, FrameTruth, FruitTruth, PinholeCamera};
+use pomona_core::{
+    ColorImage, DepthImage, Detection, FrameTruth, FruitTruth, ImageCircle, PinholeCamera,
+};
 use pomona_io::Dataset;
 
 /// Radius, pixels, of a detection without a diameter.
@@ -107,23 +110,73 @@ pub fn draw_overlay(
         for d in detections {
             draw_detection(&root, camera, d, &det_style, (w, h))?;
         }
-        if !title.is_empty() {
-            let style = ("sans-serif", 14).into_font().color(&WHITE);
-            let (tw, th) = root.estimate_text_size(title, &style).map_err(draw_err)?;
-            root.draw(&Rectangle::new(
-                [(0, 0), (tw as i32 + 8, th as i32 + 6)],
-                BLACK.mix(0.6).filled(),
-            ))
-            .map_err(draw_err)?;
-            root.draw(&Text::new(title.to_owned(), (4, 3), style))
-                .map_err(draw_err)?;
-        }
+        draw_title(&root, title)?;
         root.present().map_err(draw_err)?;
     }
     ColorImage::from_rgb(w, h, buf).map_err(|e| anyhow!("drawing the overlay: {e}"))
 }
 
+/// A tracked circle (red, with a dot at its centre) and the target's truth circle when known
+/// (green), on `image` with `title` in the top left corner, written as a PNG (`pomona track
+/// --overlay`).
+///
+/// # Errors
+/// Drawing errors and the PNG writer's errors naming `path`.
+pub fn write_track_overlay(
+    path: &Path,
+    image: &ColorImage,
+    estimate: &ImageCircle,
+    truth: Option<&ImageCircle>,
+    title: &str,
+) -> Result<()> {
+    if !font_ready() {
+        bail!("drawing the overlay: the embedded font could not be loaded");
+    }
+    let (w, h) = (image.width(), image.height());
+    let mut buf = image.as_rgb().to_vec();
+    {
+        let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
+        for (circle, color) in truth
+            .map(|t| (t, TRUTH))
+            .into_iter()
+            .chain([(estimate, DETECTION)])
+        {
+            let (x, y) = (to_px(circle.center_px.x), to_px(circle.center_px.y));
+            root.draw(&Circle::new(
+                (x, y),
+                to_px(circle.radius_px).max(2),
+                color.stroke_width(2),
+            ))
+            .map_err(draw_err)?;
+            root.draw(&Circle::new((x, y), 2, color.filled()))
+                .map_err(draw_err)?;
+        }
+        draw_title(&root, title)?;
+        root.present().map_err(draw_err)?;
+    }
+    let img = ColorImage::from_rgb(w, h, buf).map_err(|e| anyhow!("drawing the overlay: {e}"))?;
+    pomona_io::write_color_png(path, &img)?;
+    Ok(())
+}
+
 type Area<'a> = DrawingArea<BitMapBackend<'a>, plotters::coord::Shift>;
+
+/// `title` in white on a dark box in the top left corner (nothing when empty).
+fn draw_title(root: &Area<'_>, title: &str) -> Result<()> {
+    if title.is_empty() {
+        return Ok(());
+    }
+    let style = ("sans-serif", 14).into_font().color(&WHITE);
+    let (tw, th) = root.estimate_text_size(title, &style).map_err(draw_err)?;
+    root.draw(&Rectangle::new(
+        [(0, 0), (tw as i32 + 8, th as i32 + 6)],
+        BLACK.mix(0.6).filled(),
+    ))
+    .map_err(draw_err)?;
+    root.draw(&Text::new(title.to_owned(), (4, 3), style))
+        .map_err(draw_err)?;
+    Ok(())
+}
 
 /// One truth fruit: cross, circle, and box when it has no 3D centre (see the module docs).
 fn draw_truth(

@@ -1,5 +1,6 @@
 //! `pomona synth --approach` and `pomona track` through the binary: approach sequences are
-//! written as datasets with their target, and the tracker follows the target to the last frame.
+//! written as datasets with their target, and the tracker follows the target to the last frame;
+//! `--start` follows the fruit under a pixel through one dataset.
 
 #![allow(clippy::unwrap_used)]
 
@@ -83,6 +84,79 @@ fn approach_sequences_are_tracked_to_the_target() {
     assert_eq!(report["params"]["scan_threshold_fraction"], 0.75);
     assert_eq!(report["params"]["redetect"], "on-doubt");
     assert_eq!(report["params"]["max_search_radii"], 2.0);
+    // Started from the truth: every track starts on its target, with no error.
+    assert_eq!(report["started_on_target"], 3, "{report}");
+    assert_eq!(
+        report["per_sequence"][0]["init_error_radii"], 0.0,
+        "{report}"
+    );
+
+    // Your own frames: one sequence as a plain dataset, the fruit under a pixel followed from
+    // the detection covering it, scored against the truth fruit there; overlays drawn.
+    let seq = data.join("seq-0001");
+    let first: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(tracks.join("seq-0001.json")).unwrap())
+            .unwrap();
+    let at = &first["frames"][0]["truth_center_px"];
+    let start = format!("{},{}", at[0], at[1]);
+    let own = dir.path().join("own");
+    let overlays = dir.path().join("overlays");
+    // `pomona track --start` on `seq` into `own`, with `extra` arguments.
+    let own_track = |extra: &[&str]| {
+        let mut args = vec![
+            "track",
+            "--data",
+            seq.to_str().unwrap(),
+            "--out",
+            own.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        pomona(&args)
+    };
+    let out = own_track(&["--start", &start, "--overlay", overlays.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let track: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(own.join("track.json")).unwrap()).unwrap();
+    assert_eq!(track["target_id"], first["target_id"], "{track}");
+    assert_eq!(track["init"], "detection");
+    assert!(
+        track["init_error_radii"].as_f64().unwrap() <= 0.5,
+        "{track}"
+    );
+    assert!(track["success"].is_boolean(), "{track}");
+    assert_eq!(track["frames"].as_array().unwrap().len(), 12);
+    assert!(overlays.join("000000.png").exists() && overlays.join("000011.png").exists());
+    // With a radius the circle itself starts the track; a pixel outside the frames, or one no
+    // detection covers, is an error that says what to do.
+    let out = own_track(&["--start", &format!("{start},15")]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let track: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(own.join("track.json")).unwrap()).unwrap();
+    assert_eq!(track["init"], "circle");
+    assert_eq!(track["init_circle_px"][2], 15.0);
+    let out = own_track(&["--start", "5000,10"]);
+    assert!(!out.status.success());
+    assert!(stderr(&out).contains("outside"), "{}", stderr(&out));
+    for bad in ["1,2,-3", "1;2", "x,2"] {
+        let out = own_track(&["--start", bad]);
+        assert!(!out.status.success(), "{bad}");
+        assert!(stderr(&out).contains("--start"), "{bad}: {}", stderr(&out));
+    }
+    // A first frame of plain grey has no detection to start from.
+    let first_png = seq.join("color/000000.png");
+    let camera: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(seq.join("camera.json")).unwrap()).unwrap();
+    let size = |key: &str| u32::try_from(camera[key].as_u64().unwrap()).unwrap();
+    let (w, h) = (size("width"), size("height"));
+    pomona_io::write_color_png(&first_png, &pomona_core::ColorImage::filled(w, h, [90; 3]))
+        .unwrap();
+    let out = own_track(&["--start", &start]);
+    assert!(!out.status.success());
+    assert!(
+        stderr(&out).contains("no detection") && stderr(&out).contains("--start X,Y,R"),
+        "{}",
+        stderr(&out)
+    );
 
     // `--set` overrides a tracker parameter, recorded in the report; a typo or an invalid
     // value is an error that says so.

@@ -16,8 +16,17 @@
 //!   of the centre, radius = f·r/√(d² − r²), the sphere's apparent radius on the optical axis).
 //!
 //! Writes `TRACKDIR/<sequence>.json` (every frame's estimate, status, time and error) and prints
-//! `success_rate` and `ms_per_frame`; `--json` also writes that summary as a file
-//! (docs/formats.md).
+//! `success_rate` and `ms_per_frame`, and how many tracks started on their target (the start
+//! circle's centre within half the target's truth radius, the hit rule of `pomona eval --2d`: a
+//! track that starts on another fruit fails by its detector, not by the tracker); `--json` also
+//! writes that summary as a file (docs/formats.md).
+//!
+//! **Your own frames** (`--start X,Y[,R]`): `--data` is then one dataset — any colour frames in
+//! name order, for example extracted from a recording with `pomona extract` — and the fruit at
+//! pixel (X, Y) of the first frame is followed: from the detection whose circle covers that pixel
+//! (centred nearest it), or from the circle of radius R there. The track is `TRACKDIR/track.json`; it is scored
+//! only when the dataset has truth and a truth fruit's circle contains the start pixel.
+//! `--overlay DIR` draws every frame's estimate (red) and the target's truth (green).
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -29,16 +38,21 @@ use pomona_colorcontour::{
     TrackStatus, PIPELINE_NAME,
 };
 use pomona_core::nalgebra::Point2;
-use pomona_core::{FruitTruth, PinholeCamera};
+use pomona_core::{FruitTruth, ImageCircle, PinholeCamera};
 use pomona_io::{write_json, Dataset};
 use pomona_learn::ModelFile;
 use pomona_synth::{ApproachRecord, APPROACH_FILE};
 use serde::Serialize;
 
 use crate::detection_run::load_detector;
+use crate::number_pair::parse_number_pair;
+use crate::overlay::write_track_overlay;
 
 /// A last-frame estimate is a success within this many target radii of the truth centre.
 pub const SUCCESS_RADII: f64 = 0.3;
+/// A track starts on its target when the start circle's centre lies within this many target
+/// radii of the truth centre (the hit rule of `pomona eval --2d`).
+pub const ON_TARGET_RADII: f64 = 0.5;
 
 /// Arguments of `pomona track`.
 #[derive(Debug, Clone, clap::Args)]
@@ -60,6 +74,16 @@ pub struct TrackArgs {
     /// Where the track starts in the first frame.
     #[arg(long, value_enum, default_value_t = InitArg::Detection)]
     pub init: InitArg,
+    /// Follow one fruit through a dataset of your own (`--data` is then one dataset, frames in
+    /// name order): the first frame's detection whose circle covers pixel X,Y (the one centred
+    /// nearest it), or the circle of radius R pixels there. The track is written to
+    /// `TRACKDIR/track.json`.
+    #[arg(long, value_name = "X,Y[,R]", value_parser = parse_start)]
+    pub start: Option<StartCircle>,
+    /// Also draw every frame's estimate (red) and the target's truth circle (green) on its
+    /// colour image: `DIR/<sequence>/<frame>.png` (with `--start`: `DIR/<frame>.png`).
+    #[arg(long, value_name = "DIR")]
+    pub overlay: Option<PathBuf>,
     /// Override a tracker parameter, KEY=VALUE (dotted keys of `TrackParams`, JSON values, e.g.
     /// `max_radius_change=1.2` or `edge_scan.gap_px=3`); repeat.
     #[arg(long = "set", value_name = "KEY=VALUE")]
@@ -74,6 +98,52 @@ pub enum InitArg {
     Detection,
     /// The target's truth circle in the first frame.
     Truth,
+}
+
+/// `--start`: a pixel of the first frame, and the start circle's radius if given.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StartCircle {
+    /// The pixel, (x, y).
+    pub at_px: Point2<f64>,
+    /// The start circle's radius, pixels (`None`: start from the nearest detection).
+    pub radius_px: Option<f64>,
+}
+
+fn parse_start(s: &str) -> Result<StartCircle, String> {
+    let example = "X,Y or X,Y,R in pixels (e.g. 320,240 or 320,240,25)";
+    let (xy, radius) = match s.matches(',').count() {
+        2 => match s.rsplit_once(',') {
+            Some((xy, r)) => (xy, Some(r)),
+            None => (s, None),
+        },
+        _ => (s, None),
+    };
+    let (x, y) = parse_number_pair(xy, example)?;
+    let radius_px = radius
+        .map(|r| {
+            r.trim()
+                .parse::<f64>()
+                .ok()
+                .filter(|v| v.is_finite() && *v > 0.0)
+                .ok_or_else(|| format!("the radius `{r}` is not a positive number"))
+        })
+        .transpose()?;
+    Ok(StartCircle {
+        at_px: Point2::new(x, y),
+        radius_px,
+    })
+}
+
+/// How a track started, as recorded in track files and reports.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum StartedFrom {
+    /// A detection of the first frame.
+    Detection,
+    /// The target's truth circle.
+    Truth,
+    /// A circle given with `--start X,Y,R`.
+    Circle,
 }
 
 /// One frame of a track file.
@@ -104,14 +174,17 @@ pub struct TrackedFrame {
 pub struct SequenceTrack {
     /// Sequence folder name.
     pub sequence: String,
-    /// Truth id of the target.
-    pub target_id: String,
+    /// Truth id of the target (absent for a `--start` track with no truth fruit there).
+    pub target_id: Option<String>,
     /// How the track started.
-    pub init: InitArg,
+    pub init: StartedFrom,
     /// The start circle: centre and radius, pixels (absent when no detection was made).
     pub init_circle_px: Option<[f64; 3]>,
-    /// Whether the last frame's estimate is within 0.3 radii of the truth centre.
-    pub success: bool,
+    /// The start circle's centre error over the target's truth radius, first frame.
+    pub init_error_radii: Option<f64>,
+    /// Whether the last frame's estimate is within 0.3 radii of the truth centre (absent when
+    /// the target has no truth).
+    pub success: Option<bool>,
     /// Why the sequence failed without tracking, if it did.
     pub failure: Option<String>,
     /// Every frame.
@@ -125,8 +198,10 @@ pub struct TrackReport {
     pub sequences: usize,
     /// Sequences whose last estimate is within 0.3 radii of the truth.
     pub succeeded: usize,
-    /// `succeeded / sequences`.
-    pub success_rate: f64,
+    /// `succeeded` over the sequences whose target has truth (absent when none has).
+    pub success_rate: Option<f64>,
+    /// Sequences whose start circle lies within 0.5 target radii of the truth centre.
+    pub started_on_target: usize,
     /// Mean time of one tracker update, milliseconds (one thread, decoding excluded).
     pub ms_per_frame: f64,
     /// Median update time, milliseconds.
@@ -142,7 +217,7 @@ pub struct TrackReport {
     /// Frames found by the local contour re-detection (`redetect` not `off`).
     pub redetected_frames: usize,
     /// How tracks started.
-    pub init: InitArg,
+    pub init: StartedFrom,
     /// The tracker's parameters (defaults with `--set` applied).
     pub params: TrackParams,
     /// Per sequence: name, success and the last frame's error in radii.
@@ -154,8 +229,10 @@ pub struct TrackReport {
 pub struct SequenceResult {
     /// Sequence folder name.
     pub sequence: String,
-    /// Success.
-    pub success: bool,
+    /// Success (absent when the target has no truth).
+    pub success: Option<bool>,
+    /// The start circle's centre error over the truth radius.
+    pub init_error_radii: Option<f64>,
     /// Last frame's centre error over the truth radius.
     pub final_error_radii: Option<f64>,
 }
@@ -230,172 +307,300 @@ fn track_params(overrides: &[pomona::ParamOverride]) -> Result<TrackParams> {
     Ok(params)
 }
 
-/// Tracks one sequence.
-fn track_sequence(
-    dir: &Path,
-    args: &TrackArgs,
+/// What every track shares: the tracker's parameters, the model's colour table and stages,
+/// and the detector that starts tracks.
+struct Tracking<'a> {
     params: TrackParams,
-    (table, stage): (&(HSigmaLut, u8), &ColorContourParams),
-    detector: &pomona::Detector,
-) -> Result<SequenceTrack> {
-    let name = dir
-        .file_name()
-        .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
-    let record_path = dir.join(APPROACH_FILE);
-    let record: ApproachRecord = serde_json::from_str(
-        &std::fs::read_to_string(&record_path)
-            .with_context(|| format!("cannot read {}", record_path.display()))?,
-    )
-    .with_context(|| format!("{} is not an approach record", record_path.display()))?;
-    let dataset = Dataset::open(dir)?;
-    let camera = *dataset.camera();
-    let target_in = |stem: &str| -> Result<Option<(Point2<f64>, f64)>> {
-        let truth = dataset.load_truth(stem)?;
-        Ok(truth
-            .and_then(|t| t.fruits.into_iter().find(|f| f.id == record.target_id))
-            .and_then(|f| truth_circle(&camera, &f)))
-    };
-    let mut track = SequenceTrack {
-        sequence: name,
-        target_id: record.target_id.clone(),
-        init: args.init,
-        init_circle_px: None,
-        success: false,
-        failure: None,
-        frames: Vec::new(),
-    };
-    let Some(first) = dataset.frames().first() else {
-        track.failure = Some("the sequence has no frames".into());
-        return Ok(track);
-    };
-    let Some((target_c, target_r)) = target_in(first)? else {
-        track.failure = Some(format!(
-            "the target (id `{}`) is not in the first frame's truth: not visible there, or not a \
-             fruit of this sequence",
-            record.target_id
-        ));
-        return Ok(track);
-    };
-    let start = match args.init {
-        InitArg::Truth => Some((target_c, target_r)),
-        InitArg::Detection => {
-            let frame = dataset.load_frame(first)?;
-            detector
-                .detect(&frame)?
-                .iter()
-                .filter_map(|d| d.bbox_px)
-                .map(|b| {
-                    let c = Point2::new(0.5 * (b.xmin + b.xmax), 0.5 * (b.ymin + b.ymax));
-                    (c, 0.5 * (b.xmax - b.xmin).max(b.ymax - b.ymin))
-                })
-                .min_by(|a, b| (a.0 - target_c).norm().total_cmp(&(b.0 - target_c).norm()))
-        }
-    };
-    let Some((c0, r0)) = start else {
-        track.failure = Some("no detection in the first frame".into());
-        return Ok(track);
-    };
-    track.init_circle_px = Some([c0.x, c0.y, r0]);
-    let (lut, threshold) = table.clone();
-    let mut tracker = ApproachTracker::from_table(lut, threshold, stage, params, c0, r0)
-        .context("cannot start the tracker")?;
-    for stem in dataset.frames() {
-        let color = dataset
-            .load_color(stem)?
-            .with_context(|| format!("frame {stem} of {} has no colour image", dir.display()))?;
-        let started = Instant::now();
-        let est = tracker.update(&color);
-        let ms = started.elapsed().as_secs_f64() * 1e3;
-        let truth = target_in(stem)?;
-        track.frames.push(TrackedFrame {
-            frame: stem.clone(),
-            center_px: [est.center_px.x, est.center_px.y],
-            radius_px: est.radius_px,
-            status: est.status,
-            probes: est.probes,
-            ms,
-            truth_center_px: truth.map(|(c, _)| [c.x, c.y]),
-            truth_radius_px: truth.map(|(_, r)| r),
-            error_radii: truth.map(|(c, r)| (est.center_px - c).norm() / r),
-        });
+    table: &'a (HSigmaLut, u8),
+    stage: &'a ColorContourParams,
+    detector: &'a pomona::Detector,
+    /// Where overlays go (`--overlay`), if anywhere.
+    overlay: Option<PathBuf>,
+}
+
+impl Tracking<'_> {
+    /// The first frame's detection whose centre is nearest `point`, as a circle.
+    fn detection_nearest(
+        &self,
+        dataset: &Dataset,
+        first: &str,
+        point: Point2<f64>,
+    ) -> Result<Option<(Point2<f64>, f64)>> {
+        let frame = dataset.load_frame(first)?;
+        Ok(self
+            .detector
+            .detect(&frame)?
+            .iter()
+            .filter_map(|d| d.image_circle(dataset.camera()))
+            .map(|c| (c.center_px, c.radius_px))
+            .min_by(|a, b| (a.0 - point).norm().total_cmp(&(b.0 - point).norm())))
     }
-    track.success = track
-        .frames
-        .last()
-        .and_then(|f| f.error_radii)
-        .is_some_and(|e| e <= SUCCESS_RADII);
-    Ok(track)
+
+    /// Follows the fruit from `start` through every frame of `dataset`, scored against the truth
+    /// fruit `track.target_id` where it has truth; fills `track`'s frames and success.
+    fn follow(
+        &self,
+        dataset: &Dataset,
+        start: (Point2<f64>, f64),
+        track: &mut SequenceTrack,
+        overlay_dir: Option<&Path>,
+    ) -> Result<()> {
+        let camera = *dataset.camera();
+        let target_in = |stem: &str| -> Result<Option<(Point2<f64>, f64)>> {
+            let Some(id) = &track.target_id else {
+                return Ok(None);
+            };
+            Ok(dataset
+                .load_truth(stem)?
+                .and_then(|t| t.fruits.into_iter().find(|f| &f.id == id))
+                .and_then(|f| truth_circle(&camera, &f)))
+        };
+        let (c0, r0) = start;
+        track.init_circle_px = Some([c0.x, c0.y, r0]);
+        if let Some(first) = dataset.frames().first() {
+            track.init_error_radii = target_in(first)?.map(|(c, r)| (c0 - c).norm() / r);
+        }
+        let (lut, threshold) = self.table.clone();
+        let mut tracker =
+            ApproachTracker::from_table(lut, threshold, self.stage, self.params, c0, r0)
+                .context("cannot start the tracker")?;
+        if let Some(dir) = overlay_dir {
+            std::fs::create_dir_all(dir)
+                .with_context(|| format!("cannot create {}", dir.display()))?;
+        }
+        for stem in dataset.frames() {
+            let color = dataset.load_color(stem)?.with_context(|| {
+                format!(
+                    "frame {stem} of {} has no colour image",
+                    dataset.root().display()
+                )
+            })?;
+            let started = Instant::now();
+            let est = tracker.update(&color);
+            let ms = started.elapsed().as_secs_f64() * 1e3;
+            let truth = target_in(stem)?;
+            if let Some(dir) = overlay_dir {
+                let circle = |(center_px, radius_px)| ImageCircle {
+                    center_px,
+                    radius_px,
+                };
+                let status = serde_json::to_value(est.status)?;
+                let title = format!(
+                    "{} {stem}: {}",
+                    track.sequence,
+                    status.as_str().unwrap_or_default()
+                );
+                write_track_overlay(
+                    &dir.join(format!("{stem}.png")),
+                    &color,
+                    &circle((est.center_px, est.radius_px)),
+                    truth.map(circle).as_ref(),
+                    &title,
+                )?;
+            }
+            track.frames.push(TrackedFrame {
+                frame: stem.clone(),
+                center_px: [est.center_px.x, est.center_px.y],
+                radius_px: est.radius_px,
+                status: est.status,
+                probes: est.probes,
+                ms,
+                truth_center_px: truth.map(|(c, _)| [c.x, c.y]),
+                truth_radius_px: truth.map(|(_, r)| r),
+                error_radii: truth.map(|(c, r)| (est.center_px - c).norm() / r),
+            });
+        }
+        track.success = track.target_id.as_ref().map(|_| {
+            track
+                .frames
+                .last()
+                .and_then(|f| f.error_radii)
+                .is_some_and(|e| e <= SUCCESS_RADII)
+        });
+        Ok(())
+    }
+
+    /// Tracks one approach sequence (`dir/approach.json` names the target).
+    fn approach(&self, dir: &Path, init: InitArg) -> Result<SequenceTrack> {
+        let name = dir
+            .file_name()
+            .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
+        let record_path = dir.join(APPROACH_FILE);
+        let record: ApproachRecord = serde_json::from_str(
+            &std::fs::read_to_string(&record_path)
+                .with_context(|| format!("cannot read {}", record_path.display()))?,
+        )
+        .with_context(|| format!("{} is not an approach record", record_path.display()))?;
+        let dataset = Dataset::open(dir)?;
+        let camera = *dataset.camera();
+        let mut track = SequenceTrack {
+            sequence: name,
+            target_id: Some(record.target_id.clone()),
+            init: match init {
+                InitArg::Detection => StartedFrom::Detection,
+                InitArg::Truth => StartedFrom::Truth,
+            },
+            init_circle_px: None,
+            init_error_radii: None,
+            success: Some(false),
+            failure: None,
+            frames: Vec::new(),
+        };
+        let Some(first) = dataset.frames().first() else {
+            track.failure = Some("the sequence has no frames".into());
+            return Ok(track);
+        };
+        let target = dataset
+            .load_truth(first)?
+            .and_then(|t| t.fruits.into_iter().find(|f| f.id == record.target_id))
+            .and_then(|f| truth_circle(&camera, &f));
+        let Some((target_c, target_r)) = target else {
+            track.failure = Some(format!(
+                "the target (id `{}`) is not in the first frame's truth: not visible there, or \
+                 not a fruit of this sequence",
+                record.target_id
+            ));
+            return Ok(track);
+        };
+        let start = match init {
+            InitArg::Truth => Some((target_c, target_r)),
+            InitArg::Detection => self.detection_nearest(&dataset, first, target_c)?,
+        };
+        let Some(start) = start else {
+            track.failure = Some("no detection in the first frame".into());
+            return Ok(track);
+        };
+        let overlay = self.overlay.as_ref().map(|d| d.join(&track.sequence));
+        self.follow(&dataset, start, &mut track, overlay.as_deref())?;
+        Ok(track)
+    }
+
+    /// Tracks the fruit at `start` through the dataset `data` (`--start`).
+    fn own(&self, data: &Path, start: StartCircle) -> Result<SequenceTrack> {
+        let dataset = Dataset::open(data)?;
+        let camera = *dataset.camera();
+        let first = dataset
+            .frames()
+            .first()
+            .with_context(|| format!("{} has no frames", data.display()))?;
+        let p = start.at_px;
+        if !(0.0..f64::from(camera.width)).contains(&p.x)
+            || !(0.0..f64::from(camera.height)).contains(&p.y)
+        {
+            bail!(
+                "--start {},{} lies outside the {}×{} frames of {}",
+                p.x,
+                p.y,
+                camera.width,
+                camera.height,
+                data.display()
+            );
+        }
+        // The truth fruit under the start pixel, if the dataset has truth: the target.
+        let target_id = dataset
+            .load_truth(first)?
+            .and_then(|t| {
+                t.fruits
+                    .into_iter()
+                    .filter_map(|f| truth_circle(&camera, &f).map(|c| (c, f.id)))
+                    .filter(|((c, r), _)| (c - p).norm() <= *r)
+                    .min_by(|a, b| (a.0 .0 - p).norm().total_cmp(&(b.0 .0 - p).norm()))
+            })
+            .map(|(_, id)| id);
+        let (from, circle) = match start.radius_px {
+            Some(r) => (StartedFrom::Circle, (p, r)),
+            None => match self.detection_nearest(&dataset, first, p)? {
+                Some((c, r)) if (c - p).norm() <= r => (StartedFrom::Detection, (c, r)),
+                nearest => bail!(
+                    "no detection of the first frame ({first}) of {} covers pixel {},{}{}; give \
+                     the start circle's radius to start there anyway (--start X,Y,R)",
+                    data.display(),
+                    p.x,
+                    p.y,
+                    nearest.map_or_else(String::new, |(c, r)| format!(
+                        " (the nearest is centred at {:.0},{:.0} with radius {r:.0} px)",
+                        c.x, c.y
+                    ))
+                ),
+            },
+        };
+        let mut track = SequenceTrack {
+            sequence: data
+                .file_name()
+                .map_or_else(|| "track".to_string(), |n| n.to_string_lossy().into_owned()),
+            target_id,
+            init: from,
+            init_circle_px: None,
+            init_error_radii: None,
+            success: None,
+            failure: None,
+            frames: Vec::new(),
+        };
+        self.follow(&dataset, circle, &mut track, self.overlay.as_deref())?;
+        Ok(track)
+    }
 }
 
 /// Runs `pomona track`.
 ///
 /// # Errors
-/// No sequences in `--data`, an unreadable sequence, model or frame (the message names it), or
-/// an output file that could not be written.
+/// No sequences in `--data` (or, with `--start`, not a dataset or a start outside its frames),
+/// an unreadable sequence, model or frame (the message names it), or an output file that could
+/// not be written.
 pub fn run(args: &TrackArgs) -> Result<TrackReport> {
     let params = track_params(&args.set)?;
-    let dirs = sequences(&args.data)?;
+    let dirs = match args.start {
+        Some(_) => Vec::new(),
+        None => sequences(&args.data)?,
+    };
     let model = model_file(args.model.as_deref())?;
     let stage = ColorContourStageParams::from_model(&model).context("the model's parameters")?;
     let table = stage.color_table().context("the model's colour table")?;
     let pipeline = pomona::pipeline(PIPELINE_NAME)?;
     let detector = load_detector(pipeline.as_ref(), args.model.as_deref(), &[])?;
+    let tracking = Tracking {
+        params,
+        table: &table,
+        stage: &stage.params,
+        detector: &detector,
+        overlay: args.overlay.clone(),
+    };
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create {}", args.out.display()))?;
-    let mut per_sequence = Vec::new();
-    let mut times = Vec::new();
-    let (mut searched, mut lost, mut redetected) = (0, 0, 0);
+    let mut tracks = Vec::new();
+    if let Some(start) = args.start {
+        let track = tracking
+            .own(&args.data, start)
+            .with_context(|| format!("tracking {}", args.data.display()))?;
+        write_json(&args.out.join("track.json"), &track)?;
+        tracks.push(track);
+    }
     for dir in &dirs {
-        let track = track_sequence(dir, args, params, (&table, &stage.params), &detector)
+        let track = tracking
+            .approach(dir, args.init)
             .with_context(|| format!("tracking {}", dir.display()))?;
         write_json(&args.out.join(format!("{}.json", track.sequence)), &track)?;
         if let Some(reason) = &track.failure {
             eprintln!("{}: not tracked: {reason}", dir.display());
         }
-        for f in &track.frames {
-            times.push(f.ms);
-            searched += usize::from(f.status == TrackStatus::Searched);
-            lost += usize::from(f.status == TrackStatus::Lost);
-            redetected += usize::from(f.status == TrackStatus::Redetected);
-        }
-        per_sequence.push(SequenceResult {
-            sequence: track.sequence.clone(),
-            success: track.success,
-            final_error_radii: track.frames.last().and_then(|f| f.error_radii),
-        });
+        tracks.push(track);
     }
-    let succeeded = per_sequence.iter().filter(|s| s.success).count();
-    let mut sorted = times.clone();
-    sorted.sort_by(f64::total_cmp);
-    let median = sorted.get(sorted.len() / 2).copied().unwrap_or(0.0);
-    let report = TrackReport {
-        sequences: per_sequence.len(),
-        succeeded,
-        success_rate: succeeded as f64 / per_sequence.len().max(1) as f64,
-        // A fold from +0 (an empty `sum` of floats is −0, printed "-0.0000").
-        ms_per_frame: times.iter().fold(0.0, |a, b| a + b) / times.len().max(1) as f64,
-        ms_per_frame_median: median,
-        ms_per_frame_max: times.iter().copied().fold(0.0, f64::max),
-        frames: times.len(),
-        searched_frames: searched,
-        lost_frames: lost,
-        redetected_frames: redetected,
-        init: args.init,
-        params,
-        per_sequence,
-    };
+    let report = TrackReport::of(&tracks, params);
+    let rate = report
+        .success_rate
+        .map_or_else(|| "–".to_string(), |r| format!("{r:.3}"));
     println!(
-        "tracked {} sequences ({} frames, init {}): success_rate {:.3} ({} of {}), ms_per_frame \
-         {:.4} (median {:.4}, max {:.3}), {} frames found by search, {} by re-detection, {} lost",
+        "tracked {} sequences ({} frames, init {}): success_rate {rate} ({} of {}; {} started on \
+         the target), ms_per_frame {:.4} (median {:.4}, max {:.3}), {} frames found by search, {} \
+         by re-detection, {} lost",
         report.sequences,
         report.frames,
-        match args.init {
-            InitArg::Detection => "detection",
-            InitArg::Truth => "truth",
-        },
-        report.success_rate,
+        serde_json::to_value(report.init)?
+            .as_str()
+            .unwrap_or_default(),
         report.succeeded,
-        report.sequences,
+        tracks.iter().filter(|t| t.success.is_some()).count(),
+        report.started_on_target,
         report.ms_per_frame,
         report.ms_per_frame_median,
         report.ms_per_frame_max,
@@ -407,4 +612,54 @@ pub fn run(args: &TrackArgs) -> Result<TrackReport> {
         write_json(path, &report)?;
     }
     Ok(report)
+}
+
+impl TrackReport {
+    /// The summary of `tracks`, tracked with `params`.
+    fn of(tracks: &[SequenceTrack], params: TrackParams) -> Self {
+        let times: Vec<f64> = tracks
+            .iter()
+            .flat_map(|t| &t.frames)
+            .map(|f| f.ms)
+            .collect();
+        let count = |status| {
+            tracks
+                .iter()
+                .flat_map(|t| &t.frames)
+                .filter(|f| f.status == status)
+                .count()
+        };
+        let scored = tracks.iter().filter(|t| t.success.is_some()).count();
+        let succeeded = tracks.iter().filter(|t| t.success == Some(true)).count();
+        let mut sorted = times.clone();
+        sorted.sort_by(f64::total_cmp);
+        Self {
+            sequences: tracks.len(),
+            succeeded,
+            success_rate: (scored > 0).then(|| succeeded as f64 / scored as f64),
+            started_on_target: tracks
+                .iter()
+                .filter(|t| t.init_error_radii.is_some_and(|e| e <= ON_TARGET_RADII))
+                .count(),
+            // A fold from +0 (an empty `sum` of floats is −0, printed "-0.0000").
+            ms_per_frame: times.iter().fold(0.0, |a, b| a + b) / times.len().max(1) as f64,
+            ms_per_frame_median: sorted.get(sorted.len() / 2).copied().unwrap_or(0.0),
+            ms_per_frame_max: times.iter().copied().fold(0.0, f64::max),
+            frames: times.len(),
+            searched_frames: count(TrackStatus::Searched),
+            lost_frames: count(TrackStatus::Lost),
+            redetected_frames: count(TrackStatus::Redetected),
+            init: tracks.first().map_or(StartedFrom::Detection, |t| t.init),
+            params,
+            per_sequence: tracks
+                .iter()
+                .map(|t| SequenceResult {
+                    sequence: t.sequence.clone(),
+                    success: t.success,
+                    init_error_radii: t.init_error_radii,
+                    final_error_radii: t.frames.last().and_then(|f| f.error_radii),
+                })
+                .collect(),
+        }
+    }
 }

@@ -1,5 +1,6 @@
 //! The native part of the `pomona` Python package (`pomona._pomona`): thin PyO3 wrappers over the
-//! Rust facade (`pomona::Detector`, `pomona::Dataset`) and the synthesis and evaluation crates.
+//! Rust facade (`pomona::Detector`, `pomona::Dataset`, `pomona::Tracker`) and the synthesis and
+//! evaluation crates.
 //!
 //! Why a separate crate: the Python package is a front end beside the CLI (top layer), and it
 //! must add nothing of its own to what is detected: every wrapper converts Python values in,
@@ -18,6 +19,7 @@ mod py_error;
 mod py_evaluate;
 mod py_failures_list;
 mod py_synth;
+mod py_tracker;
 
 use pyo3::prelude::*;
 
@@ -28,6 +30,8 @@ fn _pomona(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("PomonaError", m.py().get_type::<py_error::PomonaError>())?;
     m.add_class::<py_detector::Detector>()?;
     m.add_class::<py_dataset::Dataset>()?;
+    m.add_class::<py_tracker::Tracker>()?;
+    m.add_class::<py_tracker::Track>()?;
     m.add_function(wrap_pyfunction!(pipelines, m)?)?;
     m.add_function(wrap_pyfunction!(py_synth::synth, m)?)?;
     m.add_function(wrap_pyfunction!(py_evaluate::evaluate, m)?)?;

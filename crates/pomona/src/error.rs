@@ -1,6 +1,6 @@
 //! The one error type of the facade: everything that can go wrong between "I have a model name
-//! or file" and "here are the detections", and in the output folder a detection run writes
-//! them to, each variant naming the file, model or frame at fault.
+//! or file" and "here are the detections" (or a tracked fruit), and in the output folder a
+//! detection run writes them to, each variant naming the file, model or frame at fault.
 
 use std::path::PathBuf;
 
@@ -80,6 +80,14 @@ pub enum Error {
         /// Pipeline name.
         pipeline: &'static str,
         /// The stage's reason.
+        source: Box<PipelineError>,
+    },
+    /// A tracker's parameters or start circle are refused.
+    #[error("cannot track with {model}: {source}")]
+    Track {
+        /// Where the tracker's model came from (a path or "the built-in model").
+        model: String,
+        /// The tracker's reason.
         source: Box<PipelineError>,
     },
     /// A confidence threshold that cannot be applied.

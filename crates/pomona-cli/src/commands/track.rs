@@ -1,6 +1,6 @@
 //! `pomona track`: follow the target fruit through every approach sequence of a folder made by
-//! `pomona synth --approach`, with seed 004's approach tracker (§3.3,
-//! `pomona_colorcontour::ApproachTracker`; by default with the local contour re-detection,
+//! `pomona synth --approach`, with seed 004's approach tracker (§3.3, the facade's
+//! `pomona::Tracker`; by default with the local contour re-detection,
 //! `--set redetect="off"` for the paper's tracker alone), and score it. The tracker uses the
 //! model's colour table and, for the re-detection, its stage parameters.
 //!
@@ -24,8 +24,9 @@
 //! **Your own frames** (`--start X,Y[,R]`): `--data` is then one dataset — any colour frames in
 //! name order, for example extracted from a recording with `pomona extract` — and the fruit at
 //! pixel (X, Y) of the first frame is followed: from the detection whose circle covers that pixel
-//! (centred nearest it), or from the circle of radius R there. The track is `TRACKDIR/track.json`; it is scored
-//! only when the dataset has truth and a truth fruit's circle contains the start pixel.
+//! (centred nearest it), or from the circle of radius R there. The track is
+//! `TRACKDIR/track.json`; it is scored only when the dataset has truth and a truth fruit's circle
+//! contains the start pixel.
 //! `--overlay DIR` draws every frame's estimate (red) and the target's truth (green).
 
 use std::path::{Path, PathBuf};
@@ -33,14 +34,10 @@ use std::time::Instant;
 
 use anyhow::{bail, Context, Result};
 use clap::ValueEnum;
-use pomona_colorcontour::{
-    ApproachTracker, ColorContourParams, ColorContourStageParams, HSigmaLut, TrackParams,
-    TrackStatus, PIPELINE_NAME,
-};
+use pomona_colorcontour::{TrackParams, TrackStatus, PIPELINE_NAME};
 use pomona_core::nalgebra::Point2;
 use pomona_core::{FruitTruth, ImageCircle, PinholeCamera};
 use pomona_io::{write_json, Dataset};
-use pomona_learn::ModelFile;
 use pomona_synth::{ApproachRecord, APPROACH_FILE};
 use serde::Serialize;
 
@@ -273,46 +270,10 @@ fn sequences(data: &Path) -> Result<Vec<PathBuf>> {
     Ok(dirs)
 }
 
-/// The colour-contour model file: `--model` or the built-in one.
-fn model_file(path: Option<&Path>) -> Result<ModelFile> {
-    match path {
-        Some(p) => Ok(ModelFile::load(p, PIPELINE_NAME)?),
-        None => {
-            let pipeline = pomona::pipeline(PIPELINE_NAME)?;
-            let text = pipeline
-                .default_model()
-                .context("color-contour ships no built-in model")?;
-            let label = format!("<built-in model of {PIPELINE_NAME}>");
-            Ok(ModelFile::from_json(
-                text,
-                Path::new(&label),
-                PIPELINE_NAME,
-            )?)
-        }
-    }
-}
-
-/// The tracker's default parameters with `overrides` applied (keys as in its JSON form).
-///
-/// # Errors
-/// An unknown key, a value of the wrong type, or parameters the tracker refuses.
-fn track_params(overrides: &[pomona::ParamOverride]) -> Result<TrackParams> {
-    let mut json = serde_json::to_value(TrackParams::default())?;
-    pomona::apply_overrides(&mut json, overrides, "the tracker")?;
-    let params: TrackParams =
-        serde_json::from_value(json).context("the tracker's parameters after --set")?;
-    if let Some(reason) = params.invalid_reason() {
-        bail!("invalid tracker parameters after --set: {reason}");
-    }
-    Ok(params)
-}
-
-/// What every track shares: the tracker's parameters, the model's colour table and stages,
-/// and the detector that starts tracks.
+/// What every track shares: the loaded tracker (the model's colour table and stages, the
+/// tracker's parameters) and the detector that starts tracks.
 struct Tracking<'a> {
-    params: TrackParams,
-    table: &'a (HSigmaLut, u8),
-    stage: &'a ColorContourParams,
+    tracker: &'a pomona::Tracker,
     detector: &'a pomona::Detector,
     /// Where overlays go (`--overlay`), if anywhere.
     overlay: Option<PathBuf>,
@@ -360,10 +321,10 @@ impl Tracking<'_> {
         if let Some(first) = dataset.frames().first() {
             track.init_error_radii = target_in(first)?.map(|(c, r)| (c0 - c).norm() / r);
         }
-        let (lut, threshold) = self.table.clone();
-        let mut tracker =
-            ApproachTracker::from_table(lut, threshold, self.stage, self.params, c0, r0)
-                .context("cannot start the tracker")?;
+        let mut tracker = self.tracker.start(ImageCircle {
+            center_px: c0,
+            radius_px: r0,
+        })?;
         if let Some(dir) = overlay_dir {
             std::fs::create_dir_all(dir)
                 .with_context(|| format!("cannot create {}", dir.display()))?;
@@ -548,20 +509,19 @@ impl Tracking<'_> {
 /// an unreadable sequence, model or frame (the message names it), or an output file that could
 /// not be written.
 pub fn run(args: &TrackArgs) -> Result<TrackReport> {
-    let params = track_params(&args.set)?;
     let dirs = match args.start {
         Some(_) => Vec::new(),
         None => sequences(&args.data)?,
     };
-    let model = model_file(args.model.as_deref())?;
-    let stage = ColorContourStageParams::from_model(&model).context("the model's parameters")?;
-    let table = stage.color_table().context("the model's colour table")?;
+    let mut builder = pomona::Tracker::builder().overrides(args.set.iter().cloned());
+    if let Some(path) = &args.model {
+        builder = builder.model_file(path);
+    }
+    let tracker = builder.build()?;
     let pipeline = pomona::pipeline(PIPELINE_NAME)?;
     let detector = load_detector(pipeline.as_ref(), args.model.as_deref(), &[])?;
     let tracking = Tracking {
-        params,
-        table: &table,
-        stage: &stage.params,
+        tracker: &tracker,
         detector: &detector,
         overlay: args.overlay.clone(),
     };
@@ -585,7 +545,7 @@ pub fn run(args: &TrackArgs) -> Result<TrackReport> {
         }
         tracks.push(track);
     }
-    let report = TrackReport::of(&tracks, params);
+    let report = TrackReport::of(&tracks, *tracker.params());
     let rate = report
         .success_rate
         .map_or_else(|| "–".to_string(), |r| format!("{r:.3}"));

@@ -14,7 +14,10 @@ a calibrated confidence: exactly what ``pomona detect`` writes, computed by the 
 ``synth`` renders synthetic datasets, ``evaluate`` scores detection files, and
 ``pomona.dask.detect_dataset`` spreads a dataset over a Dask cluster (resuming a killed run with
 ``resume=True``). ``Detector.prepare_folder`` and ``write_failures`` apply the output-folder
-rules of ``pomona detect`` for a runner of your own.
+rules of ``pomona detect`` for a runner of your own. ``Tracker`` follows one fruit from frame to
+frame while the arm closes in (seed 004's approach tracker, as ``pomona track``):
+``Tracker().start(x, y, radius)`` from a detection's ``center_px`` and ``radius_px``, then
+``track.update(rgb)`` with every frame.
 """
 
 from __future__ import annotations
@@ -26,6 +29,8 @@ from pomona._pomona import (
     Dataset,
     Detector,
     PomonaError,
+    Track,
+    Tracker,
     __version__,
     evaluate,
     pipelines,
@@ -37,6 +42,8 @@ __all__ = [
     "Dataset",
     "Detector",
     "PomonaError",
+    "Track",
+    "Tracker",
     "__version__",
     "detect",
     "evaluate",

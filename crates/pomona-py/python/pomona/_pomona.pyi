@@ -55,6 +55,27 @@ class Detector:
         min_confidence: Optional[float] = None,
     ) -> list[str]: ...
 
+class Tracker:
+    """Seed 004's approach tracker, loaded once: a ``color-contour`` model and parameters."""
+
+    def __init__(
+        self,
+        model: Optional[StrPath] = None,
+        set: Optional[Mapping[str, Any]] = None,
+    ) -> None: ...
+    @property
+    def params(self) -> dict[str, Any]: ...
+    @property
+    def model_id(self) -> str: ...
+    def start(self, x: float, y: float, radius: float) -> Track: ...
+
+class Track:
+    """One fruit being followed; ``update`` it with every colour frame."""
+
+    def update(self, color: npt.NDArray[np.uint8]) -> dict[str, Any]: ...
+    @property
+    def circle(self) -> tuple[float, float, float]: ...
+
 class Dataset:
     """A dataset folder read frame by frame into numpy arrays."""
 

@@ -5,7 +5,9 @@
 //! values of the file `pomona detect` or `pomona eval` writes, with no second description of
 //! each type to keep in step. The cost (microseconds per frame) is nothing beside detection.
 
+use pomona::ParamOverride;
 use pyo3::prelude::*;
+use pyo3::types::PyDict;
 use serde::de::DeserializeOwned;
 use serde::Serialize;
 
@@ -34,4 +36,22 @@ pub fn from_python<T: DeserializeOwned>(obj: &Bound<'_, PyAny>, what: &str) -> P
         .map_err(|e| to_py(format!("{what} is not JSON-serialisable: {e}")))?
         .extract()?;
     serde_json::from_str(&text).map_err(|e| to_py(format!("invalid {what} {text}: {e}")))
+}
+
+/// A constructor's `set={"dotted.key": value}` as parameter overrides, in the dict's order.
+///
+/// # Errors
+/// `TypeError` for a key that is not a string, `PomonaError` for a value that is not
+/// JSON-serialisable.
+pub fn overrides_from(set: Option<&Bound<'_, PyDict>>) -> PyResult<Vec<ParamOverride>> {
+    let Some(set) = set else {
+        return Ok(Vec::new());
+    };
+    set.iter()
+        .map(|(key, value)| {
+            let key: String = key.extract()?;
+            let value: serde_json::Value = from_python(&value, &format!("value of `{key}`"))?;
+            Ok(ParamOverride::new(key, value))
+        })
+        .collect()
 }

@@ -10,12 +10,12 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use pomona::{ParamOverride, RgbdFrame};
+use pomona::RgbdFrame;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
 use crate::frame_arrays::frame_from_arrays;
-use crate::json_bridge::{from_python, to_python};
+use crate::json_bridge::{overrides_from, to_python};
 use crate::py_error::to_py;
 
 /// A fruit detector of one pipeline, loaded once and called many times (thread-safe; the GIL is
@@ -85,13 +85,7 @@ impl Detector {
         if let Some(path) = model {
             builder = builder.model_file(path);
         }
-        if let Some(set) = set {
-            for (key, value) in set.iter() {
-                let key: String = key.extract()?;
-                let value: serde_json::Value = from_python(&value, &format!("value of `{key}`"))?;
-                builder = builder.overrides([ParamOverride::new(key, value)]);
-            }
-        }
+        builder = builder.overrides(overrides_from(set)?);
         Ok(Self {
             inner: builder.build().map_err(to_py)?,
         })

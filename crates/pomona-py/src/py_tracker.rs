@@ -9,12 +9,12 @@ use std::path::PathBuf;
 use std::sync::Mutex;
 
 use pomona::nalgebra::Point2;
-use pomona::{ImageCircle, ParamOverride};
+use pomona::ImageCircle;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use crate::frame_arrays::color_from_array;
-use crate::json_bridge::{from_python, to_python};
+use crate::json_bridge::{overrides_from, to_python};
 use crate::py_error::to_py;
 
 /// An approach tracker loaded once: the ``color-contour`` model's colour table and stages (the
@@ -34,13 +34,7 @@ impl Tracker {
         if let Some(path) = model {
             builder = builder.model_file(path);
         }
-        if let Some(set) = set {
-            for (key, value) in set.iter() {
-                let key: String = key.extract()?;
-                let value: serde_json::Value = from_python(&value, &format!("value of `{key}`"))?;
-                builder = builder.overrides([ParamOverride::new(key, value)]);
-            }
-        }
+        builder = builder.overrides(overrides_from(set)?);
         Ok(Self {
             inner: builder.build().map_err(to_py)?,
         })

@@ -11,6 +11,7 @@ use pomona_core::{Detection, RgbdFrame};
 use pomona_learn::ModelFile;
 use pomona_pipeline::{Pipeline, StageTimings};
 
+use crate::model_choice::{built_in, ModelChoice};
 use crate::model_info::{ModelInfo, ModelSource};
 use crate::param_override::{apply_overrides, ParamOverride};
 use crate::{registry, Error};
@@ -204,8 +205,7 @@ impl PipelineHandle<'_> {
 /// ```
 pub struct DetectorBuilder<'p> {
     pipeline: PipelineHandle<'p>,
-    model: Option<(ModelFile, ModelSource)>,
-    model_path: Option<PathBuf>,
+    model: ModelChoice,
     overrides: Vec<ParamOverride>,
 }
 
@@ -213,8 +213,7 @@ impl<'p> DetectorBuilder<'p> {
     fn new(pipeline: PipelineHandle<'p>) -> Self {
         Self {
             pipeline,
-            model: None,
-            model_path: None,
+            model: ModelChoice::BuiltIn,
             overrides: Vec::new(),
         }
     }
@@ -222,16 +221,14 @@ impl<'p> DetectorBuilder<'p> {
     /// Use the model file at `path` instead of the built-in model.
     #[must_use]
     pub fn model_file(mut self, path: impl Into<PathBuf>) -> Self {
-        self.model_path = Some(path.into());
-        self.model = None;
+        self.model = ModelChoice::File(path.into());
         self
     }
 
     /// Use `model` (for example one just trained), labelled `source` in messages.
     #[must_use]
     pub fn model(mut self, model: ModelFile, source: ModelSource) -> Self {
-        self.model = Some((model, source));
-        self.model_path = None;
+        self.model = ModelChoice::Given(Box::new((model, source)));
         self
     }
 
@@ -258,23 +255,14 @@ impl<'p> DetectorBuilder<'p> {
     pub fn build(self) -> Result<Detector, Error> {
         let pipeline = self.pipeline.get();
         let name = pipeline.name();
-        let (main, depth_only) = match (self.model, self.model_path) {
-            (Some(given), _) => (given, None),
-            (None, Some(path)) => {
-                let model = ModelFile::load(&path, name)?;
-                ((model, ModelSource::File(path)), None)
-            }
-            (None, None) => {
-                let depth_only = pipeline
-                    .default_depth_only_model()
-                    .map(|text| builtin_model(name, text, ModelSource::BuiltInDepthOnly))
-                    .transpose()?;
-                let text = pipeline.default_model().ok_or(Error::NoBuiltInModel {
-                    pipeline: name.to_owned(),
-                })?;
-                (builtin_model(name, text, ModelSource::BuiltIn)?, depth_only)
-            }
+        let depth_only = match self.model.is_built_in() {
+            true => pipeline
+                .default_depth_only_model()
+                .map(|text| built_in(name, text, ModelSource::BuiltInDepthOnly))
+                .transpose()?,
+            false => None,
         };
+        let main = self.model.load(pipeline)?;
         let load = |(mut model, source): (ModelFile, ModelSource)| -> Result<Loaded, Error> {
             let owner = format!("the model of `{name}` ({source})");
             if !self.overrides.is_empty() {
@@ -306,17 +294,6 @@ impl<'p> DetectorBuilder<'p> {
             depth_only: depth_only.map(load).transpose()?,
         })
     }
-}
-
-/// Parses a built-in model's JSON text.
-fn builtin_model(
-    pipeline: &str,
-    text: &str,
-    source: ModelSource,
-) -> Result<(ModelFile, ModelSource), Error> {
-    let label = format!("<{source} of {pipeline}>");
-    let model = ModelFile::from_json(text, Path::new(&label), pipeline)?;
-    Ok((model, source))
 }
 
 #[cfg(test)]

@@ -70,6 +70,7 @@ mod detector;
 mod error;
 mod failures_list;
 mod frame_record;
+mod model_choice;
 mod model_info;
 mod param_override;
 mod registry;

@@ -1,0 +1,60 @@
+//! Which model a builder loads ([`crate::DetectorBuilder`], [`crate::TrackerBuilder`]): the
+//! pipeline's built-in one, a file from `pomona train`, or one handed over in memory. One type so
+//! that both builders find, parse and label models the same way.
+
+use std::path::{Path, PathBuf};
+
+use pomona_learn::ModelFile;
+use pomona_pipeline::Pipeline;
+
+use crate::model_info::ModelSource;
+use crate::Error;
+
+/// A builder's choice of model.
+#[derive(Debug, Default)]
+pub(crate) enum ModelChoice {
+    /// The pipeline's built-in model.
+    #[default]
+    BuiltIn,
+    /// A model file.
+    File(PathBuf),
+    /// A model in memory, with its label (boxed: a model is much larger than a path).
+    Given(Box<(ModelFile, ModelSource)>),
+}
+
+impl ModelChoice {
+    /// Whether the built-in model is chosen.
+    pub(crate) fn is_built_in(&self) -> bool {
+        matches!(self, Self::BuiltIn)
+    }
+
+    /// The chosen model of `pipeline` and where it came from.
+    ///
+    /// # Errors
+    /// [`Error::ModelFile`] for a file that is unreadable or made for another pipeline or
+    /// version, [`Error::NoBuiltInModel`] when the pipeline ships none.
+    pub(crate) fn load(self, pipeline: &dyn Pipeline) -> Result<(ModelFile, ModelSource), Error> {
+        let name = pipeline.name();
+        match self {
+            Self::Given(given) => Ok(*given),
+            Self::File(path) => Ok((ModelFile::load(&path, name)?, ModelSource::File(path))),
+            Self::BuiltIn => {
+                let text = pipeline.default_model().ok_or(Error::NoBuiltInModel {
+                    pipeline: name.to_owned(),
+                })?;
+                built_in(name, text, ModelSource::BuiltIn)
+            }
+        }
+    }
+}
+
+/// Parses a built-in model's JSON text.
+pub(crate) fn built_in(
+    pipeline: &str,
+    text: &str,
+    source: ModelSource,
+) -> Result<(ModelFile, ModelSource), Error> {
+    let label = format!("<{source} of {pipeline}>");
+    let model = ModelFile::from_json(text, Path::new(&label), pipeline)?;
+    Ok((model, source))
+}

@@ -13,7 +13,8 @@
 //!   decoding is not), on one thread;
 //! * success: the last frame's estimate lies within 0.3 target radii of the target's truth
 //!   centre (truth circles are projected from `center_m` and `diameter_m`: centre = projection
-//!   of the centre, radius = f·r/√(d² − r²), the sphere's apparent radius on the optical axis).
+//!   of the centre, radius = f·r/√(d² − r²), the sphere's apparent radius on the optical axis;
+//!   truth annotated only in the image gives its `center_px` and `radius_px`).
 //!
 //! Writes `TRACKDIR/<sequence>.json` (every frame's estimate, status, time and error) and prints
 //! `success_rate` and `ms_per_frame`, and how many tracks started on their target (the start
@@ -234,10 +235,14 @@ pub struct SequenceResult {
     pub final_error_radii: Option<f64>,
 }
 
-/// The target's truth circle in a frame: projected centre and apparent radius, pixels.
+/// The target's truth circle in a frame, pixels: its sphere (`center_m`, `diameter_m`)
+/// projected — the centre's projection and the apparent radius f·r/√(d² − r²) — or, for truth
+/// annotated only in the image (real frames marked by hand), its `center_px` and `radius_px`.
 pub fn truth_circle(camera: &PinholeCamera, fruit: &FruitTruth) -> Option<(Point2<f64>, f64)> {
-    let c = fruit.center_m?;
-    let r = 0.5 * fruit.diameter_m?;
+    let (Some(c), Some(diameter)) = (fruit.center_m, fruit.diameter_m) else {
+        return fruit.center_px.zip(fruit.radius_px);
+    };
+    let r = 0.5 * diameter;
     let d = c.coords.norm();
     if d <= r {
         return None;

@@ -134,6 +134,10 @@ fn approach_sequences_are_tracked_to_the_target() {
         serde_json::from_str(&std::fs::read_to_string(own.join("track.json")).unwrap()).unwrap();
     assert_eq!(track["init"], "circle");
     assert_eq!(track["init_circle_px"][2], 15.0);
+    // --init belongs to approach sequences.
+    let out = own_track(&["--start", &start, "--init", "truth"]);
+    assert!(!out.status.success());
+    assert!(stderr(&out).contains("--init"), "{}", stderr(&out));
     let out = own_track(&["--start", "5000,10"]);
     assert!(!out.status.success());
     assert!(stderr(&out).contains("outside"), "{}", stderr(&out));

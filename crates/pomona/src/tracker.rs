@@ -6,8 +6,9 @@
 //! table and, for the local contour re-detection, the detector's stage parameters; the tracker's
 //! own settings are [`TrackParams`], overridable by dotted key as `pomona track --set` does —
 //! and [`Tracker::start`] gives a [`Track`] per fruit, which [`Track::update`] moves through the
-//! frames. Loading compiles the table (a few milliseconds to a few tens of them); starting a
-//! track copies it, so many tracks of one model compile it once.
+//! frames. Loading compiles the table (70 ms on one core for the built-in model, whose network
+//! has the intensity input; docs/results.md, "Colour with intensity"); starting a track copies
+//! it, so many tracks of one model compile it once.
 //!
 //! ```
 //! # fn main() -> Result<(), pomona::Error> {

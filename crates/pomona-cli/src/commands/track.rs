@@ -76,7 +76,7 @@ pub struct TrackArgs {
     /// name order): the first frame's detection whose circle covers pixel X,Y (the one centred
     /// nearest it), or the circle of radius R pixels there. The track is written to
     /// `TRACKDIR/track.json`.
-    #[arg(long, value_name = "X,Y[,R]", value_parser = parse_start)]
+    #[arg(long, value_name = "X,Y[,R]", value_parser = parse_start, conflicts_with = "init")]
     pub start: Option<StartCircle>,
     /// Also draw every frame's estimate (red) and the target's truth circle (green) on its
     /// colour image: `DIR/<sequence>/<frame>.png` (with `--start`: `DIR/<frame>.png`).

@@ -45,6 +45,7 @@ use serde::Serialize;
 use crate::detection_run::load_detector;
 use crate::number_pair::parse_number_pair;
 use crate::overlay::write_track_overlay;
+use crate::progress::progress_bar;
 
 /// A last-frame estimate is a success within this many target radii of the truth centre.
 pub const SUCCESS_RADII: f64 = 0.3;
@@ -540,15 +541,26 @@ pub fn run(args: &TrackArgs) -> Result<TrackReport> {
         write_json(&args.out.join("track.json"), &track)?;
         tracks.push(track);
     }
+    let bar = (!dirs.is_empty()).then(|| progress_bar(dirs.len(), "tracking"));
     for dir in &dirs {
         let track = tracking
             .approach(dir, args.init)
             .with_context(|| format!("tracking {}", dir.display()))?;
         write_json(&args.out.join(format!("{}.json", track.sequence)), &track)?;
         if let Some(reason) = &track.failure {
-            eprintln!("{}: not tracked: {reason}", dir.display());
+            let say = || eprintln!("{}: not tracked: {reason}", dir.display());
+            match &bar {
+                Some(bar) => bar.suspend(say),
+                None => say(),
+            }
         }
         tracks.push(track);
+        if let Some(bar) = &bar {
+            bar.inc(1);
+        }
+    }
+    if let Some(bar) = bar {
+        bar.finish_and_clear();
     }
     let report = TrackReport::of(&tracks, *tracker.params());
     let rate = report

@@ -40,8 +40,9 @@ enum Command {
     Extract(commands::extract::ExtractArgs),
     /// Repeated random train/test splits of one dataset: train, detect, evaluate; mean ± sd.
     Experiment(commands::experiment::ExperimentArgs),
-    /// Follow the target fruit through approach sequences (`synth --approach`) with the
-    /// colour-contour tracker; reports success rate and time per frame.
+    /// Follow the target fruit through approach sequences (`synth --approach`), or the fruit at
+    /// a pixel through your own frames (`--start`), with the colour-contour tracker; reports
+    /// success rate and time per frame.
     Track(commands::track::TrackArgs),
     /// Render a small synthetic scene set, run every detector with a built-in model on it,
     /// evaluate, and draw overlays.

@@ -56,11 +56,12 @@ pub const ON_TARGET_RADII: f64 = 0.5;
 /// Arguments of `pomona track`.
 #[derive(Debug, Clone, clap::Args)]
 pub struct TrackArgs {
-    /// Folder of approach sequences (`pomona synth --approach`): `DIR/seq-*/`.
+    /// Folder of approach sequences (`pomona synth --approach`): `DIR/seq-*/`; with `--start`,
+    /// one dataset.
     #[arg(long, value_name = "DIR")]
     pub data: PathBuf,
-    /// Folder for one track file per sequence (created if missing; existing track files of the
-    /// same names are replaced).
+    /// Folder for one track file per sequence (`track.json` with `--start`; created if missing;
+    /// existing track files of the same names are replaced).
     #[arg(long, value_name = "TRACKDIR")]
     pub out: PathBuf,
     /// Also write the summary (success rate, time per frame, per-sequence results) here.

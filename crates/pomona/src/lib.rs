@@ -57,7 +57,8 @@
 //! table: [`Tracker::start`] from the chosen fruit's circle (a detection's
 //! [`Detection::image_circle`]), then [`Track::update`] every frame: a few tenths of a
 //! millisecond on average, as `pomona track` measures it on approach sequences (which it also
-//! runs on your own frames).
+//! runs on your own frames). `examples/track_fruit.rs` detects once and follows the chosen fruit
+//! through a dataset.
 //!
 //! ## What a detection holds
 //! See [`Detection`]: `center_m` (camera frame: x right, y down, z forward), `score` (raw

@@ -40,12 +40,22 @@ use crate::{apply_overrides, registry, Error, ModelInfo, ModelSource, ParamOverr
 
 /// A loaded approach tracker: a `color-contour` model's colour table and stages, and the
 /// tracker's parameters. [`Tracker::start`] follows a fruit.
-#[derive(Debug, Clone)]
+#[derive(Clone)]
 pub struct Tracker {
     table: (HSigmaLut, u8),
     stage: ColorContourParams,
     params: TrackParams,
     model: ModelInfo,
+}
+
+impl std::fmt::Debug for Tracker {
+    // Not the colour table: megabytes of cells.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Tracker")
+            .field("model", &self.model)
+            .field("params", &self.params)
+            .finish_non_exhaustive()
+    }
 }
 
 impl Tracker {
@@ -93,9 +103,18 @@ impl Tracker {
 }
 
 /// One fruit being followed (see the module docs).
-#[derive(Debug, Clone)]
+#[derive(Clone)]
 pub struct Track {
     inner: ApproachTracker,
+}
+
+impl std::fmt::Debug for Track {
+    // Not the tracker's colour table: megabytes of cells.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Track")
+            .field("circle", &self.circle())
+            .finish_non_exhaustive()
+    }
 }
 
 impl Track {
@@ -277,6 +296,12 @@ mod tests {
             "{missing:?}"
         );
         let tracker = Tracker::builder().build()?;
+        let shown = format!("{tracker:?}");
+        assert!(
+            shown.contains("BuiltIn") && shown.len() < 4000,
+            "{} bytes",
+            shown.len()
+        );
         let bad = tracker.start(circle(f64::NAN, 10.0, 5.0));
         assert!(matches!(bad, Err(Error::Track { .. })), "{bad:?}");
         assert!(tracker.start(circle(10.0, 10.0, 0.0)).is_err());

@@ -96,24 +96,17 @@ pub fn draw_overlay(
     min_visibility: f64,
     title: &str,
 ) -> Result<ColorImage> {
-    if !font_ready() {
-        bail!("drawing the overlay: the embedded font could not be loaded");
-    }
-    let (w, h) = (image.width(), image.height());
-    let mut buf = image.as_rgb().to_vec();
-    {
-        let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
+    let size = (image.width(), image.height());
+    draw_on(image, title, |root| {
         for fruit in truth.map(|t| t.fruits.as_slice()).unwrap_or_default() {
-            draw_truth(&root, camera, fruit, min_visibility)?;
+            draw_truth(root, camera, fruit, min_visibility)?;
         }
         let det_style = ("sans-serif", 13).into_font().color(&DETECTION);
         for d in detections {
-            draw_detection(&root, camera, d, &det_style, (w, h))?;
+            draw_detection(root, camera, d, &det_style, size)?;
         }
-        draw_title(&root, title)?;
-        root.present().map_err(draw_err)?;
-    }
-    ColorImage::from_rgb(w, h, buf).map_err(|e| anyhow!("drawing the overlay: {e}"))
+        Ok(())
+    })
 }
 
 /// A tracked circle (red, with a dot at its centre) and the target's truth circle when known
@@ -129,6 +122,29 @@ pub fn write_track_overlay(
     truth: Option<&ImageCircle>,
     title: &str,
 ) -> Result<()> {
+    let img = draw_on(image, title, |root| {
+        for (circle, color) in truth
+            .map(|t| (t, TRUTH))
+            .into_iter()
+            .chain([(estimate, DETECTION)])
+        {
+            let center = (to_px(circle.center_px.x), to_px(circle.center_px.y));
+            draw_ring(root, center, to_px(circle.radius_px).max(2), color)?;
+        }
+        Ok(())
+    })?;
+    pomona_io::write_color_png(path, &img)?;
+    Ok(())
+}
+
+type Area<'a> = DrawingArea<BitMapBackend<'a>, plotters::coord::Shift>;
+
+/// A copy of `image` with `draw` applied and `title` in the top left corner.
+fn draw_on(
+    image: &ColorImage,
+    title: &str,
+    draw: impl FnOnce(&Area<'_>) -> Result<()>,
+) -> Result<ColorImage> {
     if !font_ready() {
         bail!("drawing the overlay: the embedded font could not be loaded");
     }
@@ -136,30 +152,21 @@ pub fn write_track_overlay(
     let mut buf = image.as_rgb().to_vec();
     {
         let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
-        for (circle, color) in truth
-            .map(|t| (t, TRUTH))
-            .into_iter()
-            .chain([(estimate, DETECTION)])
-        {
-            let (x, y) = (to_px(circle.center_px.x), to_px(circle.center_px.y));
-            root.draw(&Circle::new(
-                (x, y),
-                to_px(circle.radius_px).max(2),
-                color.stroke_width(2),
-            ))
-            .map_err(draw_err)?;
-            root.draw(&Circle::new((x, y), 2, color.filled()))
-                .map_err(draw_err)?;
-        }
+        draw(&root)?;
         draw_title(&root, title)?;
         root.present().map_err(draw_err)?;
     }
-    let img = ColorImage::from_rgb(w, h, buf).map_err(|e| anyhow!("drawing the overlay: {e}"))?;
-    pomona_io::write_color_png(path, &img)?;
-    Ok(())
+    ColorImage::from_rgb(w, h, buf).map_err(|e| anyhow!("drawing the overlay: {e}"))
 }
 
-type Area<'a> = DrawingArea<BitMapBackend<'a>, plotters::coord::Shift>;
+/// A circle of radius `r` around `(x, y)` in `color`, two pixels wide, with a dot at its centre.
+fn draw_ring(root: &Area<'_>, (x, y): (i32, i32), r: i32, color: RGBColor) -> Result<()> {
+    root.draw(&Circle::new((x, y), r, color.stroke_width(2)))
+        .map_err(draw_err)?;
+    root.draw(&Circle::new((x, y), 2, color.filled()))
+        .map_err(draw_err)?;
+    Ok(())
+}
 
 /// `title` in white on a dark box in the top left corner (nothing when empty).
 fn draw_title(root: &Area<'_>, title: &str) -> Result<()> {
@@ -240,10 +247,7 @@ fn draw_detection(
     };
     let (x, y) = (to_px(p.x), to_px(p.y));
     let r = circle.map_or(NO_SIZE_RADIUS_PX, |c| to_px(c.radius_px).max(2));
-    root.draw(&Circle::new((x, y), r, DETECTION.stroke_width(2)))
-        .map_err(draw_err)?;
-    root.draw(&Circle::new((x, y), 2, DETECTION.filled()))
-        .map_err(draw_err)?;
+    draw_ring(root, (x, y), r, DETECTION)?;
     let label = match d.diameter_m {
         Some(dm) => format!("{:.2} | ⌀{:.0} mm", d.score, dm * 1e3),
         None => format!("{:.2}", d.score),

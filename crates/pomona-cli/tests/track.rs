@@ -48,18 +48,14 @@ fn approach_sequences_are_tracked_to_the_target() {
     let report = dir.path().join("report.json");
     let report_s = report.to_str().unwrap();
     let tracks_s = tracks.to_str().unwrap();
-    // `pomona track` on the sequences of `folder` into `tracks`, with `extra` arguments.
-    let track_in = |folder: &std::path::Path, extra: &[&str]| {
-        let mut args = vec![
-            "track",
-            "--data",
-            folder.to_str().unwrap(),
-            "--out",
-            tracks_s,
-        ];
+    // `pomona track` on `data` into `out`, with `extra` arguments.
+    let track_into = |data: &std::path::Path, out: &str, extra: &[&str]| {
+        let mut args = vec!["track", "--data", data.to_str().unwrap(), "--out", out];
         args.extend_from_slice(extra);
         pomona(&args)
     };
+    // … on the sequences of `folder` into `tracks`.
+    let track_in = |folder: &std::path::Path, extra: &[&str]| track_into(folder, tracks_s, extra);
     // The same on the rendered sequences from the truth; the report.
     let track_from_truth = |extra: &[&str]| {
         let out = track_in(
@@ -101,18 +97,8 @@ fn approach_sequences_are_tracked_to_the_target() {
     let start = format!("{},{}", at[0], at[1]);
     let own = dir.path().join("own");
     let overlays = dir.path().join("overlays");
-    // `pomona track --start` on `seq` into `own`, with `extra` arguments.
-    let own_track = |extra: &[&str]| {
-        let mut args = vec![
-            "track",
-            "--data",
-            seq.to_str().unwrap(),
-            "--out",
-            own.to_str().unwrap(),
-        ];
-        args.extend_from_slice(extra);
-        pomona(&args)
-    };
+    // … on the one dataset `seq` into `own` (`--start` and the rest in `extra`).
+    let own_track = |extra: &[&str]| track_into(&seq, own.to_str().unwrap(), extra);
     let out = own_track(&["--start", &start, "--overlay", overlays.to_str().unwrap()]);
     assert!(out.status.success(), "{}", stderr(&out));
     let track: serde_json::Value =

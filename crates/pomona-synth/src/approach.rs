@@ -254,14 +254,9 @@ impl Plan {
         // frame's edge is not visible either.
         let (width, height) = (f64::from(camera.width), f64::from(camera.height));
         let visibility = |t: &pomona_core::FruitTruth| {
-            let in_view = match (t.center_px, t.radius_px) {
-                (Some(center_px), Some(radius_px)) => pomona_core::ImageCircle {
-                    center_px,
-                    radius_px,
-                }
-                .fraction_inside(width, height),
-                _ => 1.0,
-            };
+            let in_view = t
+                .image_circle(&camera)
+                .map_or(1.0, |c| c.fraction_inside(width, height));
             t.visibility.unwrap_or(0.0) * in_view
         };
         let index_of = |t: &pomona_core::FruitTruth| t.id.parse::<usize>().ok();
@@ -524,10 +519,7 @@ mod tests {
                 .iter()
                 .find(|t| t.id == plan.record.target_id)
                 .unwrap();
-            let circle = pomona_core::ImageCircle {
-                center_px: target.center_px.unwrap(),
-                radius_px: target.radius_px.unwrap(),
-            };
+            let circle = target.image_circle(&camera).unwrap();
             let in_view = circle.fraction_inside(f64::from(camera.width), f64::from(camera.height));
             assert!(
                 in_view * target.visibility.unwrap() >= TARGET_MIN_VISIBILITY,

@@ -240,17 +240,23 @@ pub struct SequenceResult {
 /// The target's truth circle in a frame, pixels: its sphere (`center_m`, `diameter_m`)
 /// projected — the centre's projection and the apparent radius f·r/√(d² − r²) — or, for truth
 /// annotated only in the image (real frames marked by hand), its `center_px` and `radius_px`.
-pub fn truth_circle(camera: &PinholeCamera, fruit: &FruitTruth) -> Option<(Point2<f64>, f64)> {
+pub fn truth_circle(camera: &PinholeCamera, fruit: &FruitTruth) -> Option<ImageCircle> {
     let (Some(c), Some(diameter)) = (fruit.center_m, fruit.diameter_m) else {
-        return fruit.center_px.zip(fruit.radius_px);
+        let (center_px, radius_px) = fruit.center_px.zip(fruit.radius_px)?;
+        return Some(ImageCircle {
+            center_px,
+            radius_px,
+        });
     };
     let r = 0.5 * diameter;
     let d = c.coords.norm();
     if d <= r {
         return None;
     }
-    let f = camera.mean_focal_px();
-    Some((camera.project(&c)?, f * r / (d * d - r * r).sqrt()))
+    Some(ImageCircle {
+        center_px: camera.project(&c)?,
+        radius_px: camera.mean_focal_px() * r / (d * d - r * r).sqrt(),
+    })
 }
 
 /// The sequence folders of `data`, sorted.
@@ -293,15 +299,15 @@ impl Tracking<'_> {
         dataset: &Dataset,
         first: &str,
         point: Point2<f64>,
-    ) -> Result<Option<(Point2<f64>, f64)>> {
+    ) -> Result<Option<ImageCircle>> {
         let frame = dataset.load_frame(first)?;
+        let distance = |c: &ImageCircle| (c.center_px - point).norm();
         Ok(self
             .detector
             .detect(&frame)?
             .iter()
             .filter_map(|d| d.image_circle(dataset.camera()))
-            .map(|c| (c.center_px, c.radius_px))
-            .min_by(|a, b| (a.0 - point).norm().total_cmp(&(b.0 - point).norm())))
+            .min_by(|a, b| distance(a).total_cmp(&distance(b))))
     }
 
     /// Follows the fruit from `start` through every frame of `dataset`, scored against the truth
@@ -309,12 +315,12 @@ impl Tracking<'_> {
     fn follow(
         &self,
         dataset: &Dataset,
-        start: (Point2<f64>, f64),
+        start: ImageCircle,
         track: &mut SequenceTrack,
         overlay_dir: Option<&Path>,
     ) -> Result<()> {
         let camera = *dataset.camera();
-        let target_in = |stem: &str| -> Result<Option<(Point2<f64>, f64)>> {
+        let target_in = |stem: &str| -> Result<Option<ImageCircle>> {
             let Some(id) = &track.target_id else {
                 return Ok(None);
             };
@@ -323,15 +329,14 @@ impl Tracking<'_> {
                 .and_then(|t| t.fruits.into_iter().find(|f| &f.id == id))
                 .and_then(|f| truth_circle(&camera, &f)))
         };
-        let (c0, r0) = start;
-        track.init_circle_px = Some([c0.x, c0.y, r0]);
+        let error_radii = |estimate: &ImageCircle, truth: &ImageCircle| {
+            estimate.center_distance_px(truth) / truth.radius_px
+        };
+        track.init_circle_px = Some([start.center_px.x, start.center_px.y, start.radius_px]);
         if let Some(first) = dataset.frames().first() {
-            track.init_error_radii = target_in(first)?.map(|(c, r)| (c0 - c).norm() / r);
+            track.init_error_radii = target_in(first)?.map(|t| error_radii(&start, &t));
         }
-        let mut tracker = self.tracker.start(ImageCircle {
-            center_px: c0,
-            radius_px: r0,
-        })?;
+        let mut tracker = self.tracker.start(start)?;
         if let Some(dir) = overlay_dir {
             std::fs::create_dir_all(dir)
                 .with_context(|| format!("cannot create {}", dir.display()))?;
@@ -347,11 +352,11 @@ impl Tracking<'_> {
             let est = tracker.update(&color);
             let ms = started.elapsed().as_secs_f64() * 1e3;
             let truth = target_in(stem)?;
+            let estimate = ImageCircle {
+                center_px: est.center_px,
+                radius_px: est.radius_px,
+            };
             if let Some(dir) = overlay_dir {
-                let circle = |(center_px, radius_px)| ImageCircle {
-                    center_px,
-                    radius_px,
-                };
                 let status = serde_json::to_value(est.status)?;
                 let title = format!(
                     "{} {stem}: {}",
@@ -361,8 +366,8 @@ impl Tracking<'_> {
                 write_track_overlay(
                     &dir.join(format!("{stem}.png")),
                     &color,
-                    &circle((est.center_px, est.radius_px)),
-                    truth.map(circle).as_ref(),
+                    &estimate,
+                    truth.as_ref(),
                     &title,
                 )?;
             }
@@ -373,9 +378,9 @@ impl Tracking<'_> {
                 status: est.status,
                 probes: est.probes,
                 ms,
-                truth_center_px: truth.map(|(c, _)| [c.x, c.y]),
-                truth_radius_px: truth.map(|(_, r)| r),
-                error_radii: truth.map(|(c, r)| (est.center_px - c).norm() / r),
+                truth_center_px: truth.map(|t| [t.center_px.x, t.center_px.y]),
+                truth_radius_px: truth.map(|t| t.radius_px),
+                error_radii: truth.map(|t| error_radii(&estimate, &t)),
             });
         }
         track.success = track.target_id.as_ref().map(|_| {
@@ -422,7 +427,7 @@ impl Tracking<'_> {
             .load_truth(first)?
             .and_then(|t| t.fruits.into_iter().find(|f| f.id == record.target_id))
             .and_then(|f| truth_circle(&camera, &f));
-        let Some((target_c, target_r)) = target else {
+        let Some(target) = target else {
             track.failure = Some(format!(
                 "the target (id `{}`) is not in the first frame's truth: not visible there, or \
                  not a fruit of this sequence",
@@ -431,8 +436,8 @@ impl Tracking<'_> {
             return Ok(track);
         };
         let start = match init {
-            InitArg::Truth => Some((target_c, target_r)),
-            InitArg::Detection => self.detection_nearest(&dataset, first, target_c)?,
+            InitArg::Truth => Some(target),
+            InitArg::Detection => self.detection_nearest(&dataset, first, target.center_px)?,
         };
         let Some(start) = start else {
             track.failure = Some("no detection in the first frame".into());
@@ -452,9 +457,7 @@ impl Tracking<'_> {
             .first()
             .with_context(|| format!("{} has no frames", data.display()))?;
         let p = start.at_px;
-        if !(0.0..f64::from(camera.width)).contains(&p.x)
-            || !(0.0..f64::from(camera.height)).contains(&p.y)
-        {
+        if !camera.contains(&p) {
             bail!(
                 "--start {},{} lies outside the {}×{} frames of {}",
                 p.x,
@@ -471,23 +474,33 @@ impl Tracking<'_> {
                 t.fruits
                     .into_iter()
                     .filter_map(|f| truth_circle(&camera, &f).map(|c| (c, f.id)))
-                    .filter(|((c, r), _)| (c - p).norm() <= *r)
-                    .min_by(|a, b| (a.0 .0 - p).norm().total_cmp(&(b.0 .0 - p).norm()))
+                    .filter(|(c, _)| c.contains(&p))
+                    .min_by(|(a, _), (b, _)| {
+                        (a.center_px - p)
+                            .norm()
+                            .total_cmp(&(b.center_px - p).norm())
+                    })
             })
             .map(|(_, id)| id);
         let (from, circle) = match start.radius_px {
-            Some(r) => (StartedFrom::Circle, (p, r)),
+            Some(radius_px) => (
+                StartedFrom::Circle,
+                ImageCircle {
+                    center_px: p,
+                    radius_px,
+                },
+            ),
             None => match self.detection_nearest(&dataset, first, p)? {
-                Some((c, r)) if (c - p).norm() <= r => (StartedFrom::Detection, (c, r)),
+                Some(c) if c.contains(&p) => (StartedFrom::Detection, c),
                 nearest => bail!(
                     "no detection of the first frame ({first}) of {} covers pixel {},{}{}; give \
                      the start circle's radius to start there anyway (--start X,Y,R)",
                     data.display(),
                     p.x,
                     p.y,
-                    nearest.map_or_else(String::new, |(c, r)| format!(
-                        " (the nearest is centred at {:.0},{:.0} with radius {r:.0} px)",
-                        c.x, c.y
+                    nearest.map_or_else(String::new, |c| format!(
+                        " (the nearest is centred at {:.0},{:.0} with radius {:.0} px)",
+                        c.center_px.x, c.center_px.y, c.radius_px
                     ))
                 ),
             },

@@ -100,5 +100,5 @@ pub use pixel_f1::{
 };
 pub use ray_circles::{ray_circles, RayCircleParams};
 pub use spiral_search::{spiral_points, SpiralParams};
-pub use tracking::{ApproachTracker, TrackEstimate, TrackParams, TrackStatus};
+pub use tracking::{ApproachTracker, TrackEstimate, TrackParams, TrackStatus, FRUIT_SHARE_GRID};
 pub use training_pixels::{fruit_labels, taught_labels, training_pixels};

@@ -277,17 +277,7 @@ fn truth_circles(truth: &FrameTruth, camera: &PinholeCamera) -> Vec<(String, Ima
     truth
         .fruits
         .iter()
-        .filter_map(|f| {
-            let sphere = f.center_m.zip(f.diameter_m);
-            let circle = ImageCircle::from_parts(
-                camera,
-                f.center_px,
-                f.radius_px,
-                sphere,
-                f.bbox_px.as_ref(),
-            )?;
-            Some((f.id.clone(), circle))
-        })
+        .filter_map(|f| Some((f.id.clone(), f.image_circle(camera)?)))
         .collect()
 }
 

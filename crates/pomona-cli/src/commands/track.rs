@@ -12,9 +12,10 @@
 //! * every frame, first included, is passed to the tracker; only `update` is timed (image
 //!   decoding is not), on one thread;
 //! * success: the last frame's estimate lies within 0.3 target radii of the target's truth
-//!   centre (truth circles are projected from `center_m` and `diameter_m`: centre = projection
-//!   of the centre, radius = f·r/√(d² − r²), the sphere's apparent radius on the optical axis;
-//!   truth annotated only in the image gives its `center_px` and `radius_px`).
+//!   circle's centre, the same circle `pomona eval --2d` scores against
+//!   ([`pomona_core::FruitTruth::image_circle`]: the truth's `center_px` and `radius_px`, which
+//!   `pomona synth` writes as the circle of the sphere's outline, else the sphere projected,
+//!   else the box).
 //!
 //! Writes `TRACKDIR/<sequence>.json` (every frame's estimate, status, time and error) and prints
 //! `success_rate` and `ms_per_frame`, and how many tracks started on their target (the start
@@ -37,7 +38,7 @@ use anyhow::{bail, Context, Result};
 use clap::ValueEnum;
 use pomona_colorcontour::{TrackParams, TrackStatus, PIPELINE_NAME};
 use pomona_core::nalgebra::Point2;
-use pomona_core::{FruitTruth, ImageCircle, PinholeCamera};
+use pomona_core::ImageCircle;
 use pomona_io::{write_json, Dataset};
 use pomona_synth::{ApproachRecord, APPROACH_FILE};
 use serde::Serialize;
@@ -237,28 +238,6 @@ pub struct SequenceResult {
     pub final_error_radii: Option<f64>,
 }
 
-/// The target's truth circle in a frame, pixels: its sphere (`center_m`, `diameter_m`)
-/// projected — the centre's projection and the apparent radius f·r/√(d² − r²) — or, for truth
-/// annotated only in the image (real frames marked by hand), its `center_px` and `radius_px`.
-pub fn truth_circle(camera: &PinholeCamera, fruit: &FruitTruth) -> Option<ImageCircle> {
-    let (Some(c), Some(diameter)) = (fruit.center_m, fruit.diameter_m) else {
-        let (center_px, radius_px) = fruit.center_px.zip(fruit.radius_px)?;
-        return Some(ImageCircle {
-            center_px,
-            radius_px,
-        });
-    };
-    let r = 0.5 * diameter;
-    let d = c.coords.norm();
-    if d <= r {
-        return None;
-    }
-    Some(ImageCircle {
-        center_px: camera.project(&c)?,
-        radius_px: camera.mean_focal_px() * r / (d * d - r * r).sqrt(),
-    })
-}
-
 /// The sequence folders of `data`, sorted.
 fn sequences(data: &Path) -> Result<Vec<PathBuf>> {
     let entries =
@@ -327,7 +306,7 @@ impl Tracking<'_> {
             Ok(dataset
                 .load_truth(stem)?
                 .and_then(|t| t.fruits.into_iter().find(|f| &f.id == id))
-                .and_then(|f| truth_circle(&camera, &f)))
+                .and_then(|f| f.image_circle(&camera)))
         };
         let error_radii = |estimate: &ImageCircle, truth: &ImageCircle| {
             estimate.center_distance_px(truth) / truth.radius_px
@@ -426,7 +405,7 @@ impl Tracking<'_> {
         let target = dataset
             .load_truth(first)?
             .and_then(|t| t.fruits.into_iter().find(|f| f.id == record.target_id))
-            .and_then(|f| truth_circle(&camera, &f));
+            .and_then(|f| f.image_circle(&camera));
         let Some(target) = target else {
             track.failure = Some(format!(
                 "the target (id `{}`) is not in the first frame's truth: not visible there, or \
@@ -473,7 +452,7 @@ impl Tracking<'_> {
             .and_then(|t| {
                 t.fruits
                     .into_iter()
-                    .filter_map(|f| truth_circle(&camera, &f).map(|c| (c, f.id)))
+                    .filter_map(|f| f.image_circle(&camera).map(|c| (c, f.id)))
                     .filter(|(c, _)| c.contains(&p))
                     .min_by(|(a, _), (b, _)| {
                         (a.center_px - p)

@@ -111,14 +111,15 @@ impl ImageCircle {
         (p - self.center_px).norm_squared() <= self.radius_px * self.radius_px
     }
 
-    /// The fraction of the disc's area inside an image of `width` × `height` pixels (the
-    /// rectangle from (0, 0) to (width, height)): 1 for a disc wholly in view, ½ for one centred
-    /// on an edge, 0 outside or for a radius that is not positive. The disc is cut into 256
+    /// The fraction of the disc's area inside an image of `width` × `height` pixels (pixel
+    /// centres are integers, so the image spans −0.5 to `width − 0.5` across, as
+    /// [`PinholeCamera::contains`]): 1 for a disc wholly in view, ½ for one centred on an edge, 0
+    /// outside or for a radius that is not positive. The disc is cut into 256
     /// strips of equal width, each clipped to the image's rows (error below 10⁻³).
     ///
     /// ```
     /// use pomona_core::{nalgebra::Point2, ImageCircle};
-    /// let on_corner = ImageCircle { center_px: Point2::new(0.0, 0.0), radius_px: 10.0 };
+    /// let on_corner = ImageCircle { center_px: Point2::new(-0.5, -0.5), radius_px: 10.0 };
     /// assert!((on_corner.fraction_inside(640.0, 480.0) - 0.25).abs() < 1e-3);
     /// ```
     pub fn fraction_inside(&self, width: f64, height: f64) -> f64 {
@@ -127,7 +128,8 @@ impl ImageCircle {
         if !(r > 0.0 && r.is_finite()) {
             return 0.0;
         }
-        let (cx, cy) = (self.center_px.x, self.center_px.y);
+        // Shifted so that the image spans 0..width and 0..height.
+        let (cx, cy) = (self.center_px.x + 0.5, self.center_px.y + 0.5);
         let strip = 2.0 * r / STRIPS as f64;
         let (mut inside, mut whole) = (0.0, 0.0);
         for i in 0..STRIPS {
@@ -162,16 +164,16 @@ mod tests {
         };
         let inside = |c: ImageCircle| c.fraction_inside(640.0, 480.0);
         assert_eq!(inside(at(320.0, 240.0, 50.0)), 1.0);
-        assert!((inside(at(0.0, 240.0, 50.0)) - 0.5).abs() < 1e-3);
-        assert!((inside(at(320.0, 480.0, 50.0)) - 0.5).abs() < 1e-3);
-        assert!((inside(at(640.0, 0.0, 50.0)) - 0.25).abs() < 1e-3);
+        assert!((inside(at(-0.5, 240.0, 50.0)) - 0.5).abs() < 1e-3);
+        assert!((inside(at(320.0, 479.5, 50.0)) - 0.5).abs() < 1e-3);
+        assert!((inside(at(639.5, -0.5, 50.0)) - 0.25).abs() < 1e-3);
         assert_eq!(inside(at(-60.0, 240.0, 50.0)), 0.0);
         assert_eq!(inside(at(320.0, 240.0, 0.0)), 0.0);
         // A cap of height h = r/2 outside: the segment's area is r²(θ − sin θ cos θ) with
         // cos θ = 1/2, so π/3 − √3/4 of r² out of πr².
         let theta = std::f64::consts::FRAC_PI_3;
         let outside = (theta - theta.sin() * theta.cos()) / std::f64::consts::PI;
-        assert!((inside(at(320.0, 25.0, 50.0)) - (1.0 - outside)).abs() < 1e-3);
+        assert!((inside(at(320.0, 24.5, 50.0)) - (1.0 - outside)).abs() < 1e-3);
     }
 
     #[test]

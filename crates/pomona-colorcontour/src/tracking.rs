@@ -661,14 +661,18 @@ mod tests {
         assert_eq!(est.status, TrackStatus::Confirmed);
     }
 
+    /// A darker orange whose table value lies between 0.6 and 1 of the threshold 128.
+    fn weak_orange(lut: &HSigmaLut) -> [u8; 3] {
+        (40..100)
+            .map(|pct| ORANGE.map(|c| (u32::from(c) * pct / 100) as u8))
+            .find(|&c| (80..120).contains(&lut.value(c)))
+            .unwrap()
+    }
+
     #[test]
     fn scans_with_the_lower_threshold_cross_the_shaded_side() {
         let lut = orange_lut();
-        // A darker orange whose table value lies between 0.6 and 1 of the threshold.
-        let shade = (40..100)
-            .map(|pct| ORANGE.map(|c| (u32::from(c) * pct / 100) as u8))
-            .find(|&c| (80..120).contains(&lut.value(c)))
-            .unwrap();
+        let shade = weak_orange(&lut);
         let (cx, cy, r) = (60.0, 45.0, 20.0);
         let mut img = scene(120, 90, &[(cx, cy, r)]);
         // The sun lights the upper left: past a diagonal terminator the fruit is in shade.
@@ -705,10 +709,7 @@ mod tests {
     fn a_circle_of_faint_background_is_not_taken() {
         let lut = orange_lut();
         // Background whose colour passes the scans' weaker threshold but not the check's.
-        let faint = (40..100)
-            .map(|pct| ORANGE.map(|c| (u32::from(c) * pct / 100) as u8))
-            .find(|&c| (80..120).contains(&lut.value(c)))
-            .unwrap();
+        let faint = weak_orange(&lut);
         let (cx, cy, r) = (60.0, 45.0, 30.0);
         let mut img = scene(120, 90, &[(cx, cy, 4.0)]);
         for v in 0..90u32 {

@@ -1,7 +1,8 @@
 //! `pomona track`: follow the target fruit through every approach sequence of a folder made by
 //! `pomona synth --approach`, with seed 004's approach tracker (§3.3, the facade's
 //! `pomona::Tracker`; by default with the local contour re-detection,
-//! `--set redetect="off"` for the paper's tracker alone), and score it. The tracker uses the
+//! `--set redetect="off" --set max_search_radii=null --set min_fruit_share=0` for the paper's
+//! tracker alone), and score it. The tracker uses the
 //! model's colour table and, for the re-detection, its stage parameters.
 //!
 //! Per sequence (`DIR/seq-*/`, a dataset with `approach.json` naming the target):

@@ -109,8 +109,9 @@ pub struct TrackParams {
     #[serde(default)]
     pub max_search_radii: Option<f64>,
     /// Not in the paper: a circle from the position check is taken only when at least this
-    /// share of it is fruit-coloured at the full threshold (sampled on a grid of at most
-    /// [`FRUIT_SHARE_GRID`]² points; pixels outside the image count as not fruit). Default 0.6,
+    /// share of its part in the image is fruit-coloured at the full threshold (sampled on a
+    /// grid of at most [`FRUIT_SHARE_GRID`]² points; a fruit filling the view close up is
+    /// partly outside it). Default 0.6,
     /// chosen among 0.3–0.9 on the approaches of seeds 41, 43, 45 and 46 (0.5–0.7 tie;
     /// docs/results.md, "Fruit share of a tracked circle"); 0 (and older files) takes any
     /// circle, as the paper does.
@@ -240,7 +241,8 @@ impl FruitPixels<'_> {
     }
 
     /// Share of the disc (`center`, `radius`) that is fruit-coloured at the full threshold,
-    /// from the points of a [`FRUIT_SHARE_GRID`]² grid over its bounding square that lie in it.
+    /// from the points of a [`FRUIT_SHARE_GRID`]² grid over its bounding square that lie in it
+    /// and in the image (0 when none does).
     fn fruit_share(&self, center: Point2<f64>, radius: f64) -> f64 {
         let half = f64::from(FRUIT_SHARE_GRID / 2);
         let step = radius / half;
@@ -251,9 +253,12 @@ impl FruitPixels<'_> {
                 if dx * dx + dy * dy > radius * radius {
                     continue;
                 }
-                inside += 1;
                 let (x, y) = ((center.x + dx).round(), (center.y + dy).round());
-                fruit += u32::from(self.is_fruit(x as i64, y as i64));
+                let Some(value) = self.value(x as i64, y as i64) else {
+                    continue; // outside the image: neither fruit nor background
+                };
+                inside += 1;
+                fruit += u32::from(value >= self.threshold);
             }
         }
         if inside == 0 {
@@ -751,6 +756,25 @@ mod tests {
         .unwrap()
         .update(&scene(120, 90, &[(cx, cy, r)]));
         assert_eq!(whole.status, TrackStatus::Confirmed);
+        // So does a fruit running off the image: only its part in view is counted.
+        let (ex, er) = (108.0, 20.0);
+        let at_edge = ApproachTracker::new(
+            lut.clone(),
+            128,
+            TrackParams {
+                min_fruit_share: 0.95,
+                ..paper()
+            },
+            Point2::new(ex, cy),
+            er,
+        )
+        .unwrap()
+        .update(&scene(120, 90, &[(ex, cy, er)]));
+        assert_eq!(at_edge.status, TrackStatus::Confirmed, "{at_edge:?}");
+        assert!(
+            (at_edge.center_px - Point2::new(ex, cy)).norm() < 1.5,
+            "{at_edge:?}"
+        );
         assert!(TrackParams {
             min_fruit_share: 1.5,
             ..paper()

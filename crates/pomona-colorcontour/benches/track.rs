@@ -63,7 +63,7 @@ fn render(sway: bool) -> Vec<Sequence> {
                 .iter()
                 .find(|f| f.id == target)
                 .unwrap_or_else(|| panic!("no target {target} in {first}"));
-            let (Some(center), Some(radius)) = (fruit.center_px, fruit.radius_px) else {
+            let Some(circle) = fruit.image_circle(data.camera()) else {
                 panic!("the target has no image circle")
             };
             let frames = data
@@ -77,7 +77,7 @@ fn render(sway: bool) -> Vec<Sequence> {
                 .collect();
             Sequence {
                 frames,
-                start: (center, radius),
+                start: (circle.center_px, circle.radius_px),
             }
         })
         .collect()

@@ -255,12 +255,14 @@ impl<'p> DetectorBuilder<'p> {
     pub fn build(self) -> Result<Detector, Error> {
         let pipeline = self.pipeline.get();
         let name = pipeline.name();
-        let depth_only = match self.model.is_built_in() {
-            true => pipeline
+        // A built-in model comes with the pipeline's depth-only one, if it has one.
+        let depth_only = if self.model.is_built_in() {
+            pipeline
                 .default_depth_only_model()
                 .map(|text| built_in(name, text, ModelSource::BuiltInDepthOnly))
-                .transpose()?,
-            false => None,
+                .transpose()?
+        } else {
+            None
         };
         let main = self.model.load(pipeline)?;
         let load = |(mut model, source): (ModelFile, ModelSource)| -> Result<Loaded, Error> {

@@ -22,6 +22,8 @@
 //! sweep), since the two circle centres' independent errors dominate the depth error, and
 //! [`PairEvidence`] can give the relaxation more evidence than disparity (the same sweep's NCC of
 //! every candidate pair, and the agreement of the two radii), as a floor or a cost.
+//! [`LeftoverPairing`] then pairs circles the relaxation left unpaired where the primary
+//! patch, swept along its whole ray, lands on an unclaimed stereo circle.
 //!
 //! Seeing and reaching (§4.2): [`ArmSimulation`] is the robot in numbers — the camera on the
 //! arm takes two shots rotated ±β about the hub, a target projects to pixel coordinates in both,
@@ -47,6 +49,7 @@ mod error;
 mod exact_planner;
 mod heuristic_planner;
 mod joint_network;
+mod leftover_pairing;
 mod matching_windows;
 mod motion_model;
 mod network_training;
@@ -73,6 +76,7 @@ pub use error::ArmError;
 pub use exact_planner::{plan_exact, MAX_EXACT_TARGETS};
 pub use heuristic_planner::plan_heuristic;
 pub use joint_network::{JointNetwork, LinearScaling, NETWORK_INPUTS, NETWORK_OUTPUTS};
+pub use leftover_pairing::LeftoverPairing;
 pub use matching_windows::{MatchingWindows, WORKING_VOLUME_GRID_PX};
 pub use motion_model::MotionModel;
 pub use network_training::{train_joint_network, NetworkTraining, TrainingReport};

@@ -398,7 +398,7 @@ fn radius_log_ratio(
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::test_scenes::{backdrop_hit, radius_px, ray_to_fruit, rig, RADIUS_M};
     use crate::{match_centres, MatchingWindows, RelaxationParams, StereoMatching};
@@ -471,15 +471,16 @@ mod tests {
     /// Fruit A (primary only: its stereo circle was missed) sits 30 px right of fruit B at the
     /// same depth; a near fruit C pulls the mean disparity up, so by disparity alone A's
     /// candidate with B's stereo circle (30 px more disparity) beats B's own.
-    struct Scene {
-        rig: RotatedStereo,
-        images: (ColorImage, ColorImage),
-        primary: Vec<ImageCircle>,
-        stereo: Vec<ImageCircle>,
-        windows: MatchingWindows,
+    /// (Also the scene of `leftover_pairing`'s tests.)
+    pub(crate) struct Scene {
+        pub(crate) rig: RotatedStereo,
+        pub(crate) images: (ColorImage, ColorImage),
+        pub(crate) primary: Vec<ImageCircle>,
+        pub(crate) stereo: Vec<ImageCircle>,
+        pub(crate) windows: MatchingWindows,
     }
 
-    fn scene() -> Scene {
+    pub(crate) fn scene() -> Scene {
         let rig = rig();
         let b = Point3::new(0.0, 0.0, 1.2);
         let a = Point3::new(30.0 * 1.2 / 400.0, 0.0, 1.2);

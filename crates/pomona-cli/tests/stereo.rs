@@ -168,6 +168,8 @@ fn the_row_gate_keeps_consistent_pairs_and_bad_matching_parameters_are_refused()
     for option in [
         ["--match-max-row-px", "1.5"],
         ["--match-better-elsewhere", "off"],
+        ["--match-leftovers", "off"],
+        ["--match-leftovers", "2"],
     ] {
         let out = stereo(
             &ds,
@@ -187,6 +189,8 @@ fn the_row_gate_keeps_consistent_pairs_and_bad_matching_parameters_are_refused()
             "--match-elsewhere-radii=-1",
             "better_elsewhere.min_distance_radii",
         ),
+        ("--match-leftovers=-1", "max_distance_radii"),
+        ("--match-leftovers-min-ncc=2", "min_ncc"),
         // The refinement's sweep spacing: positive and no wider than the sweep.
         ("--refine-step-px=0", "step_px"),
         ("--refine-step-px=7", "step_px"),

@@ -18,7 +18,12 @@
 //! its ray (`--match-better-elsewhere`, beyond the seed: the fruit's own stereo circle is missing
 //! and the candidate is a neighbour's; fewer wrong pairs on held-out rigs, docs/results.md,
 //! "A better match elsewhere on the ray"); `--match-better-elsewhere off` is the seed's
-//! relaxation bit for bit. `--match-min-ncc` (a floor), `--match-ncc-weight` /
+//! relaxation bit for bit. After the relaxation, by default, a primary circle it left unpaired is
+//! paired with an unpaired stereo circle where its patch, swept along its whole ray, lands within
+//! half a radius of that circle's centre (`--match-leftovers`, beyond the seed: a fruit whose two
+//! circles sit too far apart in height for Eq. 10's row window; `off` is the seed's;
+//! [`pomona_arm::LeftoverPairing`], docs/results.md, "Leftover circles paired by appearance").
+//! `--match-min-ncc` (a floor), `--match-ncc-weight` /
 //! `--match-radius-weight` (costs added to the relaxation's σ) and `--match-max-row-px` (a row
 //! gate) are further evidence, off by default ([`pomona_arm::PairEvidence`]). The detection files have
 //! the format of `pomona detect`, so `pomona eval --data DIR` scores them against the primary
@@ -33,8 +38,8 @@ use anyhow::{bail, Context, Result};
 use clap::ValueEnum;
 use pomona::{Detection, Detector};
 use pomona_arm::{
-    BetterElsewhere, DisparityMatrix, DisparityRefinement, MatchingWindows, PairEvidence,
-    RefinementOutcome, RelaxationParams, RotatedStereo, StereoMatching,
+    BetterElsewhere, DisparityMatrix, DisparityRefinement, LeftoverPairing, MatchingWindows,
+    PairEvidence, RefinementOutcome, RelaxationParams, RotatedStereo, StereoMatching,
 };
 use pomona_core::nalgebra::{Point2, Point3};
 use pomona_core::{ColorImage, DepthImage, ImageCircle, RgbdFrame};
@@ -141,6 +146,16 @@ pub struct StereoArgs {
     /// radii from the candidate's circle counts.
     #[arg(long, value_name = "RADII", default_value_t = 1.0)]
     pub match_elsewhere_radii: f64,
+    /// Matching (beyond the seed): after the relaxation, sweep each unpaired primary circle's
+    /// patch along its whole ray over the working range and pair it with an unpaired stereo
+    /// circle whose centre lies within RADII of its radii from the best match, inside the
+    /// disparity window (a fruit whose two circles sit too far apart in height for Eq. 10's
+    /// row window). `off`: the seed's matching.
+    #[arg(long, value_name = "RADII|off", value_parser = parse_or_off, default_value = "0.5")]
+    pub match_leftovers: OrOff,
+    /// With --match-leftovers: the lowest NCC of the best match along the ray that pairs.
+    #[arg(long, value_name = "NCC", default_value_t = 0.5)]
+    pub match_leftovers_min_ncc: f64,
     /// Matching: weight (pixels²) of the appearance cost 1 − NCC added to each candidate's
     /// squared disparity deviation in the relaxation. 0 (default) = the seed's matching.
     #[arg(long, value_name = "PX2", default_value_t = PairEvidence::default().ncc_weight_px2)]
@@ -283,11 +298,13 @@ fn located(
 }
 
 /// How a frame is located: the rig, the Eq. 10 windows, the evidence added to the relaxation
-/// (off: the seed's), the method and the refinement (`None`: the circle centres, as in the seed).
+/// (off: the seed's), the pass over the circles it leaves unpaired (`None`: none, as in the
+/// seed), the method and the refinement (`None`: the circle centres, as in the seed).
 struct Locating<'a> {
     rig: &'a RotatedStereo,
     windows: &'a MatchingWindows,
     evidence: PairEvidence,
+    leftovers: Option<LeftoverPairing>,
     method: StereoMethod,
     refinement: Option<DisparityRefinement>,
 }
@@ -348,9 +365,24 @@ fn run_frame(
         )
         .with_context(|| format!("scoring the candidate pairs of frame {stem}"))?;
     let matching: StereoMatching = matrix.relax(&RelaxationParams::default());
+    let mut all_pairs = matching.pairs.clone();
+    let leftovers = match &how.leftovers {
+        Some(pass) => pass
+            .pair(
+                rig,
+                (&images.0, &images.1),
+                (&discs(&pc), &discs(&sc)),
+                how.windows,
+                &matching.pairs,
+            )
+            .with_context(|| format!("pairing the leftover circles of frame {stem}"))?,
+        None => Vec::new(),
+    };
+    all_pairs.extend(leftovers.iter().copied());
+    all_pairs.sort_by_key(|p| p.primary);
     let mut detections = Vec::new();
     let mut pairs = Vec::new();
-    for pair in &matching.pairs {
+    for pair in &all_pairs {
         let (p, s) = (pc[pair.primary], sc[pair.stereo]);
         let refinement = match &how.refinement {
             Some(r) => Some(
@@ -371,6 +403,7 @@ fn run_frame(
             refinement,
             center_m,
             evidence: evidence.score(pair.primary, pair.stereo),
+            from_leftovers: leftovers.contains(pair),
         });
     }
     Ok(FrameRun {
@@ -438,13 +471,14 @@ pub fn run(args: &StereoArgs) -> Result<()> {
             Ok(r)
         })
         .transpose()?;
+    // Hub distances to distances from the lens (the hub lies `d` behind it on the axis).
+    let distance_range_m = ((near - d).max(0.05), far - d);
     let evidence = PairEvidence {
         max_row_residual_px: args.match_max_row_px,
-        // Hub distances to distances from the lens (the hub lies `d` behind it on the axis).
         better_elsewhere: args.match_better_elsewhere.0.map(|margin| BetterElsewhere {
             margin,
             min_distance_radii: args.match_elsewhere_radii,
-            distance_range_m: ((near - d).max(0.05), far - d),
+            distance_range_m,
         }),
         min_ncc: args.match_min_ncc,
         ncc_weight_px2: args.match_ncc_weight,
@@ -455,10 +489,20 @@ pub fn run(args: &StereoArgs) -> Result<()> {
         },
     };
     evidence.validate().context("bad --match-* option")?;
+    let leftovers = args.match_leftovers.0.map(|radii| LeftoverPairing {
+        max_distance_radii: radii,
+        min_ncc: args.match_leftovers_min_ncc,
+        ..LeftoverPairing::new(distance_range_m)
+    });
+    if let Some(pass) = &leftovers {
+        pass.validate()
+            .context("bad --match-leftovers or --match-leftovers-min-ncc")?;
+    }
     let how = Locating {
         rig: &rig,
         windows: &windows,
         evidence,
+        leftovers,
         method: args.method,
         refinement,
     };

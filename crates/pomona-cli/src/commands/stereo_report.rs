@@ -59,6 +59,8 @@ pub struct LocatedPair {
     pub center_m: Point3<f64>,
     /// The matching evidence's score of the pair (`None` when the evidence is off).
     pub evidence: Option<PairScore>,
+    /// Whether the pass over the leftover circles made the pair (not the relaxation).
+    pub from_leftovers: bool,
 }
 
 /// How many located pairs the appearance refinement moved and why the others kept their
@@ -156,6 +158,8 @@ pub struct WrongPair {
     /// With `--match-better-elsewhere`: the best NCC along the primary ray, and how many
     /// stereo-circle radii from the pair's stereo circle it lies.
     pub best_along_ray: Option<[f64; 2]>,
+    /// Whether the pass over the leftover circles made the pair.
+    pub from_leftovers: bool,
 }
 
 /// Matching scores.
@@ -173,6 +177,9 @@ pub struct MatchingScore {
     pub precision: Option<f64>,
     /// Correct pairs beyond the first of their fruit (duplicated circles paired again).
     pub repeated: usize,
+    /// Located pairs made by the pass over the circles the relaxation left unpaired
+    /// (`--match-leftovers`), and of those, pairs of two different fruit.
+    pub from_leftovers: [usize; 2],
     /// Pairs of two different fruit, by cause: `duplicate` (the primary fruit or the stereo fruit
     /// has another circle in its view), `partner_missing` (the primary fruit has no circle in the
     /// stereo view), `rival` (neither: the relaxation preferred a neighbour).
@@ -382,6 +389,13 @@ impl StereoReport {
                 }
             ));
         }
+        let [leftover, leftover_wrong] = self.matching.from_leftovers;
+        if leftover > 0 {
+            s.push_str(&format!(
+                "paired from the leftovers by appearance: {leftover} (of two different fruit: \
+                 {leftover_wrong})\n\n"
+            ));
+        }
         s.push_str(&format!(
             "pixel errors of {} correct pairs: primary centre median {} px, disparity median {} px \
              (signed), {} px (absolute)\n\n",
@@ -507,6 +521,7 @@ impl Tally {
         for pair in &outcome.pairs {
             let (p, s, located) = (&pair.primary_px, &pair.stereo_px, &pair.center_m);
             self.matching.pairs += 1;
+            self.matching.from_leftovers[0] += usize::from(pair.from_leftovers);
             let (ia, ib) = (identity(&cp, p), identity(&cs, &pair.stereo_circle_px));
             for (own, other) in [(&ia, &ib), (&ib, &ia)] {
                 if let Some(id) = own {
@@ -533,6 +548,7 @@ impl Tally {
                     "rival"
                 };
                 *self.matching.wrong_by_cause.entry(cause).or_default() += 1;
+                self.matching.from_leftovers[1] += usize::from(pair.from_leftovers);
                 self.matching.wrong_pairs.push(WrongPair {
                     stem: outcome.stem.clone(),
                     primary_px: [p.x, p.y],
@@ -544,6 +560,7 @@ impl Tally {
                     best_along_ray: pair.evidence.and_then(|e| {
                         Some([e.best_along_ray_ncc?, e.best_along_ray_distance_radii?])
                     }),
+                    from_leftovers: pair.from_leftovers,
                 });
                 continue;
             }

@@ -267,7 +267,8 @@ fn sequences(data: &Path) -> Result<Vec<PathBuf>> {
 /// tracker's parameters) and the detector that starts tracks.
 struct Tracking<'a> {
     tracker: &'a pomona::Tracker,
-    detector: &'a pomona::Detector,
+    /// The detector tracks start from; loaded only when a track starts from a detection.
+    detector: Option<&'a pomona::Detector>,
     /// Where overlays go (`--overlay`), if anywhere.
     overlay: Option<PathBuf>,
 }
@@ -280,10 +281,12 @@ impl Tracking<'_> {
         first: &str,
         point: Point2<f64>,
     ) -> Result<Option<ImageCircle>> {
+        let detector = self
+            .detector
+            .context("a track starts from a detection, but no detector was loaded")?;
         let frame = dataset.load_frame(first)?;
         let distance = |c: &ImageCircle| (c.center_px - point).norm();
-        Ok(self
-            .detector
+        Ok(detector
             .detect(&frame)?
             .iter()
             .filter_map(|d| d.image_circle(dataset.camera()))
@@ -518,11 +521,20 @@ pub fn run(args: &TrackArgs) -> Result<TrackReport> {
         builder = builder.model_file(path);
     }
     let tracker = builder.build()?;
-    let pipeline = pomona::pipeline(PIPELINE_NAME)?;
-    let detector = load_detector(pipeline.as_ref(), args.model.as_deref(), &[])?;
+    // The detector (its colour table takes a while to compile) only when a track starts from a
+    // detection: `--init detection`, or `--start X,Y` without a radius.
+    let from_detection = args
+        .start
+        .map_or(args.init == InitArg::Detection, |s| s.radius_px.is_none());
+    let detector = if from_detection {
+        let pipeline = pomona::pipeline(PIPELINE_NAME)?;
+        Some(load_detector(pipeline.as_ref(), args.model.as_deref(), &[])?)
+    } else {
+        None
+    };
     let tracking = Tracking {
         tracker: &tracker,
-        detector: &detector,
+        detector: detector.as_ref(),
         overlay: args.overlay.clone(),
     };
     std::fs::create_dir_all(&args.out)

@@ -43,11 +43,7 @@ impl EndPositionError {
         errors_mm.sort_by(f64::total_cmp);
         let n = errors_mm.len();
         let rank = |q: f64| errors_mm[((q * n as f64).ceil() as usize).clamp(1, n) - 1];
-        let median = if n % 2 == 1 {
-            errors_mm[n / 2]
-        } else {
-            0.5 * (errors_mm[n / 2 - 1] + errors_mm[n / 2])
-        };
+        let median = pomona_core::quantile(&errors_mm, 0.5)?;
         Some(Self {
             count: n,
             failed: samples.len() - n,

@@ -5,7 +5,7 @@
 
 use std::collections::BTreeMap;
 
-use pomona_core::{Detection, FrameTruth, PinholeCamera};
+use pomona_core::{median, Detection, FrameTruth, PinholeCamera};
 
 use crate::report::{CenterError, DiameterError, FrameReport};
 use crate::{match_frame, DetectionOutcome, EvalConfig, EvalError, EvalReport, PrCurve};
@@ -19,19 +19,6 @@ pub struct FrameInput {
     pub truth: FrameTruth,
     /// Its detections (empty when the detector found nothing or wrote no file).
     pub detections: Vec<Detection>,
-}
-
-fn median(values: &mut [f64]) -> Option<f64> {
-    if values.is_empty() {
-        return None;
-    }
-    values.sort_by(f64::total_cmp);
-    let n = values.len();
-    Some(if n % 2 == 1 {
-        values[n / 2]
-    } else {
-        0.5 * (values[n / 2 - 1] + values[n / 2])
-    })
 }
 
 fn mean(values: &[f64]) -> Option<f64> {

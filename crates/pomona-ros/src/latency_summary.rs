@@ -23,16 +23,6 @@ pub struct LatencySummary {
     pub overhead_ms_median: f64,
 }
 
-/// The `q` quantile (0–1) of sorted values, interpolated between neighbours.
-fn quantile(sorted: &[f64], q: f64) -> f64 {
-    let pos = q * (sorted.len().saturating_sub(1)) as f64;
-    let (lo, hi) = (pos.floor() as usize, pos.ceil() as usize);
-    match (sorted.get(lo), sorted.get(hi)) {
-        (Some(a), Some(b)) => a + (b - a) * (pos - lo as f64),
-        _ => f64::NAN,
-    }
-}
-
 impl LatencySummary {
     /// The summary of `timings`; `None` when there are none.
     pub fn of(timings: &[FrameTiming]) -> Option<Self> {
@@ -44,6 +34,8 @@ impl LatencySummary {
             v.sort_by(f64::total_cmp);
             v
         };
+        // `timings` is not empty, so neither is any list.
+        let quantile = |v: &[f64], q: f64| pomona_core::quantile(v, q).unwrap_or(f64::NAN);
         let latency = sorted(|t| t.latency_ms);
         Some(Self {
             frames: timings.len(),

@@ -18,7 +18,7 @@ use std::collections::{BTreeMap, HashSet};
 use anyhow::{Context, Result};
 use pomona_arm::{EvidenceOutcome, PairScore, RefinementOutcome, RotatedStereo};
 use pomona_core::nalgebra::{Point2, Point3};
-use pomona_core::{FrameTruth, ImageCircle, PinholeCamera};
+use pomona_core::{quantile, FrameTruth, ImageCircle, PinholeCamera};
 use pomona_io::Dataset;
 use serde::Serialize;
 
@@ -296,15 +296,6 @@ fn identity(circles: &[(String, ImageCircle)], centre: &Point2<f64>) -> Option<S
         .filter(|(_, dist, r)| dist <= r)
         .min_by(|a, b| a.1.total_cmp(&b.1))
         .map(|(id, _, _)| id.clone())
-}
-
-fn quantile(sorted: &[f64], q: f64) -> Option<f64> {
-    if sorted.is_empty() {
-        return None;
-    }
-    let pos = q * (sorted.len() - 1) as f64;
-    let (lo, hi) = (pos.floor() as usize, pos.ceil() as usize);
-    Some(sorted[lo] + (sorted[hi] - sorted[lo]) * (pos - lo as f64))
 }
 
 fn sorted(mut v: Vec<f64>) -> Vec<f64> {
@@ -730,12 +721,5 @@ mod tests {
             Some("b")
         );
         assert_eq!(identity(&circles, &Point2::new(40.0, 0.0)), None);
-    }
-
-    #[test]
-    fn quantiles_interpolate() {
-        assert_eq!(quantile(&[], 0.5), None);
-        assert_eq!(quantile(&[1.0, 2.0, 4.0], 0.5), Some(2.0));
-        assert_eq!(quantile(&[1.0, 3.0], 0.5), Some(2.0));
     }
 }

@@ -528,7 +528,11 @@ pub fn run(args: &TrackArgs) -> Result<TrackReport> {
         .map_or(args.init == InitArg::Detection, |s| s.radius_px.is_none());
     let detector = if from_detection {
         let pipeline = pomona::pipeline(PIPELINE_NAME)?;
-        Some(load_detector(pipeline.as_ref(), args.model.as_deref(), &[])?)
+        Some(load_detector(
+            pipeline.as_ref(),
+            args.model.as_deref(),
+            &[],
+        )?)
     } else {
         None
     };
@@ -626,7 +630,7 @@ impl TrackReport {
                 .count(),
             // A fold from +0 (an empty `sum` of floats is −0, printed "-0.0000").
             ms_per_frame: times.iter().fold(0.0, |a, b| a + b) / times.len().max(1) as f64,
-            ms_per_frame_median: sorted.get(sorted.len() / 2).copied().unwrap_or(0.0),
+            ms_per_frame_median: pomona_core::quantile(&sorted, 0.5).unwrap_or(0.0),
             ms_per_frame_max: times.iter().copied().fold(0.0, f64::max),
             frames: times.len(),
             searched_frames: count(TrackStatus::Searched),

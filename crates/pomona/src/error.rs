@@ -98,6 +98,9 @@ pub enum Error {
         /// Why not (out of range, or the model has no calibration).
         reason: String,
     },
+    /// Stereo matching or locating refused its settings or images ([`crate::StereoLocator`]).
+    #[error("stereo: {0}")]
+    Stereo(#[from] pomona_arm::ArmError),
     /// A frame built in memory is inconsistent (image sizes, camera parameters).
     #[error("invalid frame: {0}")]
     Frame(#[from] pomona_core::CoreError),

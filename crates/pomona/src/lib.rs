@@ -60,6 +60,12 @@
 //! runs on your own frames). `examples/track_fruit.rs` detects once and follows the chosen fruit
 //! through a dataset.
 //!
+//! ## Fruit in 3D from two colour shots
+//! [`StereoLocator`] is seed 004's stereo from a rotating camera (§4.1–4.2): the `color-contour`
+//! detector on both shots of a [`RotatedStereo`] rig, matched and located with the defaults of
+//! `pomona stereo` ([`StereoSettings`]), each located fruit a [`Detection`] in the primary
+//! camera frame; [`StereoFrame`] also says which circles were paired and how.
+//!
 //! ## What a detection holds
 //! See [`Detection`]: `center_m` (camera frame: x right, y down, z forward), `score` (raw
 //! classifier value), `confidence` (calibrated, comparable across models), `diameter_m`, and
@@ -75,6 +81,7 @@ mod model_choice;
 mod model_info;
 mod param_override;
 mod registry;
+mod stereo_locator;
 mod tracker;
 
 pub use detection_folder::{prepare_detection_folder, RunIdentity};
@@ -85,8 +92,13 @@ pub use frame_record::KeepRule;
 pub use model_info::{ModelInfo, ModelSource};
 pub use param_override::{apply_overrides, overrides_to_json, settable_keys, ParamOverride};
 pub use registry::{find_pipeline, pipeline, pipeline_names, pipelines};
+pub use stereo_locator::{LocatedPair, StereoFrame, StereoLocator, StereoMethod, StereoSettings};
 pub use tracker::{Track, Tracker, TrackerBuilder};
 
+pub use pomona_arm::{
+    BetterElsewhere, DisparityRefinement, EvidenceOutcome, LeftoverPairing, MatchingWindows,
+    PairEvidence, PairScore, RefinementOutcome, RotatedStereo,
+};
 pub use pomona_colorcontour::{TrackEstimate, TrackParams, TrackStatus};
 pub use pomona_core::{
     nalgebra, ColorImage, DepthImage, Detection, FrameDetections, FrameTruth, FruitTruth,

@@ -30,24 +30,23 @@
 //! view's truth. A fruit's diameter is its primary circle's radius scaled to the located depth.
 //!
 //! `--report R.json` also measures the matching and the 3D error against the truth of both views
-//! (see `stereo_report.rs`).
+//! (see `stereo_report.rs`). Each frame goes through [`pomona::StereoLocator`], the library's
+//! entry point for the same work; this module turns options into its settings and writes files.
 
 use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
-use clap::ValueEnum;
-use pomona::{Detection, Detector};
+use pomona::{Detection, StereoLocator, StereoMethod, StereoSettings};
 use pomona_arm::{
-    BetterElsewhere, DisparityMatrix, DisparityRefinement, LeftoverPairing, MatchingWindows,
-    PairEvidence, RefinementOutcome, RelaxationParams, RotatedStereo, StereoMatching,
+    BetterElsewhere, DisparityRefinement, LeftoverPairing, PairEvidence, RefinementOutcome,
+    RotatedStereo,
 };
-use pomona_core::nalgebra::{Point2, Point3};
-use pomona_core::{ColorImage, DepthImage, ImageCircle, RgbdFrame};
+use pomona_core::ColorImage;
 use pomona_io::Dataset;
 use pomona_synth::RigFile;
 use rayon::prelude::*;
 
-use crate::commands::stereo_report::{LocatedPair, StereoFrameOutcome, StereoReport};
+use crate::commands::stereo_report::{StereoFrameOutcome, StereoReport};
 use crate::detection_run::{keep_rule, load_detector, thread_pool};
 use crate::number_pair::parse_number_pair;
 
@@ -66,7 +65,7 @@ pub struct StereoArgs {
     #[arg(long, value_name = "DETDIR")]
     pub out: PathBuf,
     /// How a matched pair becomes a 3D point.
-    #[arg(long, value_enum, default_value_t = StereoMethod::Paper)]
+    #[arg(long, value_name = "paper|triangulate", default_value = "paper", value_parser = parse_method)]
     pub method: StereoMethod,
     /// color-contour model file (default: the built-in model).
     #[arg(long, value_name = "M")]
@@ -176,31 +175,13 @@ pub struct StereoArgs {
     pub threads: Option<u64>,
 }
 
-/// `--method` values.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum, serde::Serialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum StereoMethod {
-    /// The seed's rotated-camera depth, Eq. 18.
-    Paper,
-    /// Calibrated triangulation (midpoint of the two rays).
-    Triangulate,
-}
-
-impl StereoMethod {
-    /// Locates the fruit seen at `primary` and `stereo` with this method.
-    ///
-    /// # Errors
-    /// When the pixels do not locate a point in front of both views.
-    pub fn locate(
-        self,
-        rig: &RotatedStereo,
-        primary: &Point2<f64>,
-        stereo: &Point2<f64>,
-    ) -> Result<Point3<f64>, pomona_arm::ArmError> {
-        match self {
-            Self::Paper => rig.locate_paper(primary, stereo),
-            Self::Triangulate => rig.triangulate(primary, stereo),
-        }
+/// `--method`: `paper` (the seed's rotated-camera depth, Eq. 18) or `triangulate` (calibrated
+/// triangulation, the midpoint of the two rays).
+fn parse_method(s: &str) -> Result<StereoMethod, String> {
+    match s {
+        "paper" => Ok(StereoMethod::Paper),
+        "triangulate" => Ok(StereoMethod::Triangulate),
+        _ => Err(format!("need `paper` or `triangulate`, got `{s}`")),
     }
 }
 
@@ -267,56 +248,8 @@ struct FrameRun {
     outcome: StereoFrameOutcome,
 }
 
-/// The circles of the kept detections: (centre, radius, detection index).
-fn circles(detections: &[Detection]) -> Vec<(Point2<f64>, f64, usize)> {
-    detections
-        .iter()
-        .enumerate()
-        .filter_map(|(i, d)| Some((d.center_px?, d.radius_px?, i)))
-        .collect()
-}
-
-/// The located detection of a matched pair: primary circle, centre from `method`.
-fn located(
-    rig: &RotatedStereo,
-    center_m: Point3<f64>,
-    primary: &Detection,
-    stereo: &Detection,
-    radius_px: f64,
-) -> Detection {
-    let f = rig.camera.mean_focal_px();
-    Detection {
-        center_m,
-        diameter_m: Some(2.0 * center_m.z * radius_px / f),
-        score: 0.5 * (primary.score + stereo.score),
-        confidence: primary
-            .confidence
-            .zip(stereo.confidence)
-            .map(|(a, b)| a.min(b)),
-        ..primary.clone()
-    }
-}
-
-/// How a frame is located: the rig, the Eq. 10 windows, the evidence added to the relaxation
-/// (off: the seed's), the pass over the circles it leaves unpaired (`None`: none, as in the
-/// seed), the method and the refinement (`None`: the circle centres, as in the seed).
-struct Locating<'a> {
-    rig: &'a RotatedStereo,
-    windows: &'a MatchingWindows,
-    evidence: PairEvidence,
-    leftovers: Option<LeftoverPairing>,
-    method: StereoMethod,
-    refinement: Option<DisparityRefinement>,
-}
-
-/// Detects, matches and locates the fruit of frame `stem`.
-fn run_frame(
-    stem: &str,
-    views: (&Dataset, &Dataset),
-    detector: &Detector,
-    keep: pomona::KeepRule,
-    how: &Locating,
-) -> Result<FrameRun> {
+/// Locates the fruit of frame `stem` (its two colour views) with `locator`.
+fn run_frame(stem: &str, views: (&Dataset, &Dataset), locator: &StereoLocator) -> Result<FrameRun> {
     let load = |dataset: &Dataset| -> Result<ColorImage> {
         let where_ = || format!("frame {stem} of {}", dataset.root().display());
         dataset
@@ -325,96 +258,22 @@ fn run_frame(
             .with_context(|| format!("{} has no colour image", where_()))
     };
     let images = (load(views.0)?, load(views.1)?);
-    let detect = |dataset: &Dataset, color: &ColorImage| -> Result<Vec<Detection>> {
-        // The colour view only: depth, if the dataset has any, is not read.
-        let where_ = || format!("frame {stem} of {}", dataset.root().display());
-        let color = Some(color.clone());
-        let camera = *dataset.camera();
-        let frame = RgbdFrame::new(
-            camera,
-            DepthImage::empty(camera.width, camera.height),
-            color,
+    let found = locator.locate(&images.0, &images.1).with_context(|| {
+        format!(
+            "locating the fruit of frame {stem} of {}",
+            views.0.root().display()
         )
-        .with_context(where_)?;
-        let found = detector.detect(&frame).with_context(|| {
-            format!("detecting in frame {stem} of {}", dataset.root().display())
-        })?;
-        Ok(found.into_iter().filter(|d| keep.keeps(d)).collect())
-    };
-    let primary = detect(views.0, &images.0)?;
-    let stereo = detect(views.1, &images.1)?;
-    let (pc, sc) = (circles(&primary), circles(&stereo));
-    let centres = |c: &[(Point2<f64>, f64, usize)]| c.iter().map(|x| x.0).collect::<Vec<_>>();
-    let rig = how.rig;
-    let mut matrix = DisparityMatrix::from_centres(&centres(&pc), &centres(&sc), how.windows);
-    let discs = |c: &[(Point2<f64>, f64, usize)]| {
-        c.iter()
-            .map(|x| ImageCircle {
-                center_px: x.0,
-                radius_px: x.1,
-            })
-            .collect::<Vec<_>>()
-    };
-    let evidence = how
-        .evidence
-        .apply(
-            &mut matrix,
-            rig,
-            (&images.0, &images.1),
-            (&discs(&pc), &discs(&sc)),
-        )
-        .with_context(|| format!("scoring the candidate pairs of frame {stem}"))?;
-    let matching: StereoMatching = matrix.relax(&RelaxationParams::default());
-    let mut all_pairs = matching.pairs.clone();
-    let leftovers = match &how.leftovers {
-        Some(pass) => pass
-            .pair(
-                rig,
-                (&images.0, &images.1),
-                (&discs(&pc), &discs(&sc)),
-                how.windows,
-                &matching.pairs,
-            )
-            .with_context(|| format!("pairing the leftover circles of frame {stem}"))?,
-        None => Vec::new(),
-    };
-    all_pairs.extend(leftovers.iter().copied());
-    all_pairs.sort_by_key(|p| p.primary);
-    let mut detections = Vec::new();
-    let mut pairs = Vec::new();
-    for pair in &all_pairs {
-        let (p, s) = (pc[pair.primary], sc[pair.stereo]);
-        let refinement = match &how.refinement {
-            Some(r) => Some(
-                r.refine(rig, (&images.0, &images.1), &p.0, p.1, &s.0)
-                    .with_context(|| format!("refining a pair of frame {stem}"))?,
-            ),
-            None => None,
-        };
-        let stereo_px = refinement.map_or(s.0, |r| r.stereo_center_px(&s.0));
-        let Ok(center_m) = how.method.locate(rig, &p.0, &stereo_px) else {
-            continue;
-        };
-        detections.push(located(rig, center_m, &primary[p.2], &stereo[s.2], p.1));
-        pairs.push(LocatedPair {
-            primary_px: p.0,
-            stereo_circle_px: s.0,
-            stereo_px,
-            refinement,
-            center_m,
-            evidence: evidence.score(pair.primary, pair.stereo),
-            from_leftovers: leftovers.contains(pair),
-        });
-    }
+    })?;
+    let centres = |d: &[Detection]| d.iter().filter_map(|d| d.center_px).collect::<Vec<_>>();
     Ok(FrameRun {
-        detections,
         outcome: StereoFrameOutcome {
             stem: stem.to_owned(),
-            evidence,
-            primary_centres: centres(&pc),
-            stereo_centres: centres(&sc),
-            pairs,
+            evidence: found.evidence,
+            primary_centres: centres(&found.primary),
+            stereo_centres: centres(&found.stereo),
+            pairs: found.pairs,
         },
+        detections: found.detections,
     })
 }
 
@@ -451,9 +310,8 @@ pub fn run(args: &StereoArgs) -> Result<()> {
     let detector = load_detector(pipeline, args.model.as_deref(), &overrides)?;
     let keep = keep_rule(&detector, args.min_confidence)?;
     let d = rig.pivot_distance_m;
+    // Only for checking the options here: the locator sets the sweep ranges from the reach.
     let (near, far) = args.reach_m.unwrap_or((d + 0.2, d + 2.0));
-    let windows = MatchingWindows::for_rig(&rig, near, far, args.margin_px)
-        .context("bad --reach-m or --margin-px")?;
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create {}", args.out.display()))?;
     let refinement = (!args.no_refine)
@@ -498,21 +356,24 @@ pub fn run(args: &StereoArgs) -> Result<()> {
         pass.validate()
             .context("bad --match-leftovers or --match-leftovers-min-ncc")?;
     }
-    let how = Locating {
-        rig: &rig,
-        windows: &windows,
+    let settings = StereoSettings {
+        method: args.method,
+        reach_m: args.reach_m,
+        margin_px: args.margin_px,
         evidence,
         leftovers,
-        method: args.method,
         refinement,
     };
+    let locator = StereoLocator::new(detector, keep, rig, settings)
+        .context("bad --reach-m or --margin-px")?;
+    let (rig, windows, detector) = (locator.rig(), locator.windows(), locator.detector());
     let pool = thread_pool(args.threads.map(|n| n as usize))?;
     let runs: Vec<FrameRun> = pool.install(|| {
         dataset
             .frames()
             .par_iter()
             .map(|stem| -> Result<FrameRun> {
-                let run = run_frame(stem, (&dataset, &stereo), &detector, keep, &how)?;
+                let run = run_frame(stem, (&dataset, &stereo), &locator)?;
                 let mut record =
                     detector.frame_record(stem, true, &run.detections, pomona::KeepRule::All);
                 record.pipeline = STEREO_RECORD_PIPELINE.to_owned();
@@ -550,7 +411,7 @@ pub fn run(args: &StereoArgs) -> Result<()> {
     if let Some(path) = &args.report {
         let outcomes: Vec<StereoFrameOutcome> = runs.into_iter().map(|r| r.outcome).collect();
         let report = StereoReport::measure(
-            &rig,
+            rig,
             args.method,
             (refinement.is_some(), !evidence.is_off()),
             (&dataset, &stereo),
@@ -572,22 +433,5 @@ mod tests {
         for bad in ["0.5", "2,0.5", "0,1", "x,1", "1,inf"] {
             assert!(parse_reach(bad).is_err(), "{bad}");
         }
-    }
-
-    #[test]
-    fn located_detections_take_the_depth_scaled_radius() {
-        let camera = pomona_core::PinholeCamera::new(640, 480, 500.0, 500.0, 320.0, 240.0).unwrap();
-        let rig = RotatedStereo::new(0.07, 0.3, camera).unwrap();
-        let mut a = Detection::new(Point3::new(0.0, 0.0, 9.0), 2.0);
-        a.center_px = Some(Point2::new(300.0, 200.0));
-        a.radius_px = Some(20.0);
-        a.confidence = Some(0.9);
-        let mut b = Detection::new(Point3::new(0.0, 0.0, 9.0), 4.0);
-        b.confidence = Some(0.6);
-        let d = located(&rig, Point3::new(0.1, 0.0, 1.0), &a, &b, 20.0);
-        assert_eq!(d.center_m, Point3::new(0.1, 0.0, 1.0));
-        assert!((d.diameter_m.unwrap() - 0.08).abs() < 1e-12);
-        assert_eq!((d.score, d.confidence), (3.0, Some(0.6)));
-        assert_eq!(d.center_px, a.center_px);
     }
 }

@@ -16,13 +16,12 @@
 use std::collections::{BTreeMap, HashSet};
 
 use anyhow::{Context, Result};
-use pomona_arm::{EvidenceOutcome, PairScore, RefinementOutcome, RotatedStereo};
+use pomona::{LocatedPair, StereoMethod};
+use pomona_arm::{EvidenceOutcome, RefinementOutcome, RotatedStereo};
 use pomona_core::nalgebra::{Point2, Point3};
 use pomona_core::{quantile, FrameTruth, ImageCircle, PinholeCamera};
 use pomona_io::Dataset;
 use serde::Serialize;
-
-use crate::commands::stereo::StereoMethod;
 
 /// Edges of the depth bins of the 3D error table, metres.
 pub const DEPTH_BIN_EDGES_M: [f64; 6] = [0.0, 0.5, 0.8, 1.1, 1.4, f64::INFINITY];
@@ -42,25 +41,6 @@ pub struct StereoFrameOutcome {
     pub stereo_centres: Vec<Point2<f64>>,
     /// Matched pairs that were located.
     pub pairs: Vec<LocatedPair>,
-}
-
-/// A matched pair and where it was located.
-#[derive(Debug, Clone)]
-pub struct LocatedPair {
-    /// Primary circle centre.
-    pub primary_px: Point2<f64>,
-    /// Stereo circle centre (the fruit's identity in the stereo view).
-    pub stereo_circle_px: Point2<f64>,
-    /// The stereo pixel the fruit was located with (refined or the circle centre).
-    pub stereo_px: Point2<f64>,
-    /// The refinement's outcome (`None` without `--refine`).
-    pub refinement: Option<RefinementOutcome>,
-    /// The located centre, primary camera frame.
-    pub center_m: Point3<f64>,
-    /// The matching evidence's score of the pair (`None` when the evidence is off).
-    pub evidence: Option<PairScore>,
-    /// Whether the pass over the leftover circles made the pair (not the relaxation).
-    pub from_leftovers: bool,
 }
 
 /// How many located pairs the appearance refinement moved and why the others kept their

@@ -65,6 +65,7 @@
 //! detector on both shots of a [`RotatedStereo`] rig, matched and located with the defaults of
 //! `pomona stereo` ([`StereoSettings`]), each located fruit a [`Detection`] in the primary
 //! camera frame; [`StereoFrame`] also says which circles were paired and how.
+//! `examples/locate_stereo.rs` locates the fruit of a `pomona synth --stereo` dataset.
 //!
 //! ## What a detection holds
 //! See [`Detection`]: `center_m` (camera frame: x right, y down, z forward), `score` (raw

@@ -8,6 +8,8 @@
 //! (color-contour's own circle, a sphere projected, a box's inscribed circle, or a small fixed
 //! circle when the method gives no size), a dot at the centre and a label `score | ⌀ mm`. Frames without colour are drawn on their depth as grey.
 //! Tracks (`pomona track --overlay`): the tracker's circle red, the target's truth circle green.
+//! Stereo frames (`pomona stereo --overlay`): the two shots side by side, each view's circles,
+//! and a line per located pair.
 //! Drawing uses `plotters`' bitmap backend on the image buffer and DejaVu Sans compiled into the
 //! binary (via `ab_glyph`), as `pomona-eval`'s PR plots do, so no system font is needed.
 
@@ -99,7 +101,7 @@ pub fn draw_overlay(
     let size = (image.width(), image.height());
     draw_on(image, title, |root| {
         for fruit in truth.map(|t| t.fruits.as_slice()).unwrap_or_default() {
-            draw_truth(root, camera, fruit, min_visibility)?;
+            draw_truth(root, camera, fruit, min_visibility, 0.0)?;
         }
         let det_style = ("sans-serif", 13).into_font().color(&DETECTION);
         for d in detections {
@@ -185,12 +187,14 @@ fn draw_title(root: &Area<'_>, title: &str) -> Result<()> {
     Ok(())
 }
 
-/// One truth fruit: cross, circle, and box when it has no 3D centre (see the module docs).
+/// One truth fruit: cross, circle, and box when it has no 3D centre (see the module docs),
+/// `dx` pixels to the right of where `camera` sees it.
 fn draw_truth(
     root: &Area<'_>,
     camera: &PinholeCamera,
     fruit: &FruitTruth,
     min_visibility: f64,
+    dx: f64,
 ) -> Result<()> {
     let ignored = fruit.visibility.is_some_and(|v| v < min_visibility);
     let color = if ignored { TRUTH_IGNORED } else { TRUTH };
@@ -204,7 +208,7 @@ fn draw_truth(
         .and_then(|c| camera.project(&c))
         .or(circle.map(|c| c.center_px));
     if let Some(p) = center {
-        let (x, y) = (to_px(p.x), to_px(p.y));
+        let (x, y) = (to_px(p.x + dx), to_px(p.y));
         let arm = 5;
         for seg in [[(x - arm, y), (x + arm, y)], [(x, y - arm), (x, y + arm)]] {
             root.draw(&PathElement::new(seg.to_vec(), color.stroke_width(width)))
@@ -212,15 +216,15 @@ fn draw_truth(
         }
     }
     if let Some(c) = circle {
-        let (x, y) = (to_px(c.center_px.x), to_px(c.center_px.y));
+        let (x, y) = (to_px(c.center_px.x + dx), to_px(c.center_px.y));
         let r = to_px(c.radius_px).max(2);
         root.draw(&Circle::new((x, y), r, color.stroke_width(width)))
             .map_err(draw_err)?;
     }
     if let (Some(b), None) = (&fruit.bbox_px, fruit.center_m) {
         let rect = [
-            (to_px(b.xmin), to_px(b.ymin)),
-            (to_px(b.xmax), to_px(b.ymax)),
+            (to_px(b.xmin + dx), to_px(b.ymin)),
+            (to_px(b.xmax + dx), to_px(b.ymax)),
         ];
         root.draw(&Rectangle::new(rect, color.stroke_width(width)))
             .map_err(draw_err)?;
@@ -282,6 +286,103 @@ pub fn write_overlay(
     title: &str,
 ) -> Result<()> {
     let img = draw_overlay(image, camera, truth, detections, min_visibility, title)?;
+    pomona_io::write_color_png(path, &img)?;
+    Ok(())
+}
+
+/// Colour of a pair made by the pass over the relaxation's leftovers.
+const LEFTOVER_PAIR: RGBColor = RGBColor(255, 170, 0);
+/// Colour of a circle that no pair uses.
+const UNPAIRED: RGBColor = RGBColor(235, 235, 235);
+
+/// The two shots of a stereo frame side by side (primary left, stereo right): each view's truth
+/// circles (green, as [`draw_overlay`]), its circles (white when unpaired), and a line from each
+/// located pair's primary circle to its stereo circle (red from the relaxation, orange from the
+/// pass over its leftovers) labelled with the located depth; written as a PNG (`pomona stereo
+/// --overlay`).
+///
+/// # Errors
+/// Images of different sizes, drawing errors and the PNG writer's errors naming `path`.
+pub fn write_stereo_overlay(
+    path: &Path,
+    (primary, stereo): (&ColorImage, &ColorImage),
+    camera: &PinholeCamera,
+    truth: (Option<&FrameTruth>, Option<&FrameTruth>),
+    found: &pomona::StereoFrame,
+    title: &str,
+) -> Result<()> {
+    let (w, h) = (primary.width(), primary.height());
+    if (stereo.width(), stereo.height()) != (w, h) {
+        bail!(
+            "drawing the stereo overlay: the views are {w}×{h} and {}×{}",
+            stereo.width(),
+            stereo.height()
+        );
+    }
+    let mut both = Vec::with_capacity(6 * (w * h) as usize);
+    for (a, b) in primary
+        .as_rgb()
+        .chunks_exact(3 * w as usize)
+        .zip(stereo.as_rgb().chunks_exact(3 * w as usize))
+    {
+        both.extend_from_slice(a);
+        both.extend_from_slice(b);
+    }
+    let canvas = ColorImage::from_rgb(2 * w, h, both)
+        .map_err(|e| anyhow!("drawing the stereo overlay: {e}"))?;
+    // The stereo view is drawn a view's width to the right.
+    let shift = f64::from(w);
+    let img = draw_on(&canvas, title, |root| {
+        for (view, dx) in [(truth.0, 0.0), (truth.1, shift)] {
+            for fruit in view.map(|t| t.fruits.as_slice()).unwrap_or_default() {
+                draw_truth(root, camera, fruit, 0.0, dx)?;
+            }
+        }
+        let paired = |view: usize, i: usize| {
+            found.pairs.iter().any(|p| {
+                if view == 0 {
+                    p.primary == i
+                } else {
+                    p.stereo == i
+                }
+            })
+        };
+        for (view, detections, dx) in [(0, &found.primary, 0.0), (1, &found.stereo, shift)] {
+            for (i, d) in detections.iter().enumerate() {
+                let (Some(c), Some(r)) = (d.center_px, d.radius_px) else {
+                    continue;
+                };
+                let color = if paired(view, i) { DETECTION } else { UNPAIRED };
+                draw_ring(root, (to_px(c.x + dx), to_px(c.y)), to_px(r).max(2), color)?;
+            }
+        }
+        let style = ("sans-serif", 13).into_font().color(&BLACK);
+        for pair in &found.pairs {
+            let color = if pair.from_leftovers {
+                LEFTOVER_PAIR
+            } else {
+                DETECTION
+            };
+            let from = (to_px(pair.primary_px.x), to_px(pair.primary_px.y));
+            let to = (
+                to_px(pair.stereo_circle_px.x + shift),
+                to_px(pair.stereo_circle_px.y),
+            );
+            root.draw(&PathElement::new(vec![from, to], color.stroke_width(1)))
+                .map_err(draw_err)?;
+            let label = format!("{:.2} m", pair.center_m.z);
+            let (tw, th) = root.estimate_text_size(&label, &style).map_err(draw_err)?;
+            let (tx, ty) = (from.0 + 4, from.1 + 4);
+            root.draw(&Rectangle::new(
+                [(tx - 2, ty - 1), (tx + tw as i32 + 2, ty + th as i32 + 1)],
+                WHITE.mix(0.7).filled(),
+            ))
+            .map_err(draw_err)?;
+            root.draw(&Text::new(label, (tx, ty), style.clone()))
+                .map_err(draw_err)?;
+        }
+        Ok(())
+    })?;
     pomona_io::write_color_png(path, &img)?;
     Ok(())
 }

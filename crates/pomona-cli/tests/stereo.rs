@@ -153,6 +153,29 @@ fn stereo_locates_every_fruit_from_the_two_colour_shots() {
         ]);
         assert!(eval.status.success(), "{}", stderr(&eval));
     }
+    // --overlay: both shots side by side per frame, paired circles in red.
+    let overlays = dir.path().join("overlays");
+    let out = stereo(
+        &ds,
+        &det,
+        &[
+            "--reach-m",
+            "0.6,2.0",
+            "--overlay",
+            overlays.to_str().unwrap(),
+        ],
+    );
+    assert!(out.status.success(), "{}", stderr(&out));
+    for frame in 0..2 {
+        let png = overlays.join(format!("{frame:06}.png"));
+        // The reader checks the size: both 320 × 240 shots side by side.
+        let image = pomona_io::read_color_image(&png, (640, 240)).unwrap();
+        let red = image
+            .pixels()
+            .filter(|&[r, g, b]| r > 200 && g < 60 && b < 60)
+            .count();
+        assert!(red > 50, "frame {frame}: {red} red pixels");
+    }
 }
 
 /// The row gate keeps every pair of discs drawn where the rig puts them (their rows agree to a

@@ -49,6 +49,7 @@ use rayon::prelude::*;
 use crate::commands::stereo_report::{StereoFrameOutcome, StereoReport};
 use crate::detection_run::{keep_rule, load_detector, thread_pool};
 use crate::number_pair::parse_number_pair;
+use crate::overlay::write_stereo_overlay;
 
 /// The pipeline whose circles are matched.
 pub const STEREO_PIPELINE: &str = "color-contour";
@@ -167,6 +168,11 @@ pub struct StereoArgs {
     /// disparity along the epipolar line, pixels.
     #[arg(long, value_name = "PX", default_value_t = PairEvidence::default().appearance.search_px)]
     pub match_search_px: f64,
+    /// Draw each frame's two shots side by side into DIR/<frame>.png: both views' truth circles
+    /// (green), their circles (white when unpaired) and a line per located pair (red from the
+    /// relaxation, orange from the pass over its leftovers) labelled with its depth.
+    #[arg(long, value_name = "DIR")]
+    pub overlay: Option<PathBuf>,
     /// Also measure matching and 3D error against the truth of both views; write them here.
     #[arg(long, value_name = "R.json")]
     pub report: Option<PathBuf>,
@@ -248,8 +254,14 @@ struct FrameRun {
     outcome: StereoFrameOutcome,
 }
 
-/// Locates the fruit of frame `stem` (its two colour views) with `locator`.
-fn run_frame(stem: &str, views: (&Dataset, &Dataset), locator: &StereoLocator) -> Result<FrameRun> {
+/// Locates the fruit of frame `stem` (its two colour views) with `locator`; draws them into
+/// `overlay/<stem>.png` when given.
+fn run_frame(
+    stem: &str,
+    views: (&Dataset, &Dataset),
+    locator: &StereoLocator,
+    overlay: Option<&Path>,
+) -> Result<FrameRun> {
     let load = |dataset: &Dataset| -> Result<ColorImage> {
         let where_ = || format!("frame {stem} of {}", dataset.root().display());
         dataset
@@ -264,6 +276,17 @@ fn run_frame(stem: &str, views: (&Dataset, &Dataset), locator: &StereoLocator) -
             views.0.root().display()
         )
     })?;
+    if let Some(dir) = overlay {
+        let truth = (views.0.load_truth(stem)?, views.1.load_truth(stem)?);
+        write_stereo_overlay(
+            &dir.join(format!("{stem}.png")),
+            (&images.0, &images.1),
+            &locator.rig().camera,
+            (truth.0.as_ref(), truth.1.as_ref()),
+            &found,
+            &format!("{stem}: {} located", found.detections.len()),
+        )?;
+    }
     let centres = |d: &[Detection]| d.iter().filter_map(|d| d.center_px).collect::<Vec<_>>();
     Ok(FrameRun {
         outcome: StereoFrameOutcome {
@@ -312,8 +335,9 @@ pub fn run(args: &StereoArgs) -> Result<()> {
     let d = rig.pivot_distance_m;
     // Only for checking the options here: the locator sets the sweep ranges from the reach.
     let (near, far) = args.reach_m.unwrap_or((d + 0.2, d + 2.0));
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("cannot create {}", args.out.display()))?;
+    for dir in std::iter::once(&args.out).chain(&args.overlay) {
+        std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    }
     let refinement = (!args.no_refine)
         .then(|| -> Result<DisparityRefinement> {
             let r = DisparityRefinement {
@@ -373,7 +397,7 @@ pub fn run(args: &StereoArgs) -> Result<()> {
             .frames()
             .par_iter()
             .map(|stem| -> Result<FrameRun> {
-                let run = run_frame(stem, (&dataset, &stereo), &locator)?;
+                let run = run_frame(stem, (&dataset, &stereo), &locator, args.overlay.as_deref())?;
                 let mut record =
                     detector.frame_record(stem, true, &run.detections, pomona::KeepRule::All);
                 record.pipeline = STEREO_RECORD_PIPELINE.to_owned();

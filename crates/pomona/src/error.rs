@@ -98,6 +98,14 @@ pub enum Error {
         /// Why not (out of range, or the model has no calibration).
         reason: String,
     },
+    /// [`crate::StereoLocator`] needs a detector that gives image circles (`color-contour`).
+    #[error(
+        "stereo needs a `color-contour` detector (its image circles are matched), not `{pipeline}`"
+    )]
+    StereoDetector {
+        /// The detector's pipeline.
+        pipeline: &'static str,
+    },
     /// Stereo matching or locating refused its settings or images ([`crate::StereoLocator`]).
     #[error("stereo: {0}")]
     Stereo(#[from] pomona_arm::ArmError),

@@ -153,13 +153,19 @@ impl StereoLocator {
     /// detections need image circles), keeping what `keep` keeps.
     ///
     /// # Errors
-    /// [`Error::Stereo`] for a reach or margin the rig cannot use, or settings out of range.
+    /// [`Error::StereoDetector`] for a detector of another pipeline; [`Error::Stereo`] for a
+    /// reach or margin the rig cannot use, or settings out of range.
     pub fn new(
         detector: Detector,
         keep: KeepRule,
         rig: RotatedStereo,
         mut settings: StereoSettings,
     ) -> Result<Self, Error> {
+        if detector.pipeline() != pomona_colorcontour::PIPELINE_NAME {
+            return Err(Error::StereoDetector {
+                pipeline: detector.pipeline(),
+            });
+        }
         let d = rig.pivot_distance_m;
         let (near, far) = settings.reach_m.unwrap_or((d + 0.2, d + 2.0));
         let windows = MatchingWindows::for_rig(&rig, near, far, settings.margin_px)?;
@@ -404,7 +410,7 @@ mod tests {
     }
 
     #[test]
-    fn a_reach_the_rig_cannot_use_is_refused() {
+    fn a_reach_the_rig_cannot_use_and_a_detector_without_circles_are_refused() {
         let detector = Detector::builtin("color-contour").unwrap();
         let settings = StereoSettings {
             reach_m: Some((2.0, 1.0)),
@@ -412,6 +418,19 @@ mod tests {
         };
         let refused = StereoLocator::new(detector, KeepRule::All, rig(), settings);
         assert!(matches!(refused, Err(Error::Stereo(_))), "{refused:?}");
+        // A detector without image circles cannot be matched.
+        let depth_only = Detector::builtin("shape-fit").unwrap();
+        let refused =
+            StereoLocator::new(depth_only, KeepRule::All, rig(), StereoSettings::default());
+        assert!(
+            matches!(
+                refused,
+                Err(Error::StereoDetector {
+                    pipeline: "shape-fit"
+                })
+            ),
+            "{refused:?}"
+        );
     }
 
     #[test]

@@ -18,6 +18,7 @@ mod py_detector;
 mod py_error;
 mod py_evaluate;
 mod py_failures_list;
+mod py_stereo;
 mod py_synth;
 mod py_tracker;
 
@@ -32,6 +33,7 @@ fn _pomona(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<py_dataset::Dataset>()?;
     m.add_class::<py_tracker::Tracker>()?;
     m.add_class::<py_tracker::Track>()?;
+    m.add_class::<py_stereo::StereoLocator>()?;
     m.add_function(wrap_pyfunction!(pipelines, m)?)?;
     m.add_function(wrap_pyfunction!(py_synth::synth, m)?)?;
     m.add_function(wrap_pyfunction!(py_evaluate::evaluate, m)?)?;

@@ -17,7 +17,8 @@ a calibrated confidence: exactly what ``pomona detect`` writes, computed by the 
 rules of ``pomona detect`` for a runner of your own. ``Tracker`` follows one fruit from frame to
 frame while the arm closes in (seed 004's approach tracker, as ``pomona track``):
 ``Tracker().start(x, y, radius)`` from a detection's ``center_px`` and ``radius_px``, then
-``track.update(rgb)`` with every frame.
+``track.update(rgb)`` with every frame. ``StereoLocator`` locates fruit from the two colour
+shots of a rotating camera, without depth (seed 004's stereo, as ``pomona stereo``).
 """
 
 from __future__ import annotations
@@ -29,6 +30,7 @@ from pomona._pomona import (
     Dataset,
     Detector,
     PomonaError,
+    StereoLocator,
     Track,
     Tracker,
     __version__,
@@ -42,6 +44,7 @@ __all__ = [
     "Dataset",
     "Detector",
     "PomonaError",
+    "StereoLocator",
     "Track",
     "Tracker",
     "__version__",

@@ -69,6 +69,25 @@ class Tracker:
     def model_id(self) -> str: ...
     def start(self, x: float, y: float, radius: float) -> Track: ...
 
+class StereoLocator:
+    """Seed 004's stereo from the two colour shots of a rotating camera (``pomona stereo``)."""
+
+    def __init__(
+        self,
+        *,
+        camera: Mapping[str, float],
+        beta_deg: float,
+        pivot_m: float,
+        model: Optional[StrPath] = None,
+        set: Optional[Mapping[str, Any]] = None,
+        method: str = "paper",
+        min_confidence: Optional[float] = None,
+        reach_m: Optional[tuple[float, float]] = None,
+    ) -> None: ...
+    def locate(
+        self, primary: npt.NDArray[np.uint8], stereo: npt.NDArray[np.uint8]
+    ) -> list[dict[str, Any]]: ...
+
 class Track:
     """One fruit being followed; ``update`` it with every colour frame."""
 

@@ -115,9 +115,15 @@ impl LeftoverPairing {
                 *u = true;
             }
         }
+        let in_window = |p: &ImageCircle, s: &ImageCircle| {
+            (windows.min_disparity_px..=windows.max_disparity_px)
+                .contains(&(p.center_px.x - s.center_px.x))
+        };
         let mut candidates: Vec<(f64, usize, usize)> = Vec::new();
         for (l, p) in primary.iter().enumerate() {
-            if primary_used[l] || !stereo_used.contains(&false) {
+            // The sweep only when some unpaired stereo circle could be the partner.
+            let open = |(r, s): (usize, &ImageCircle)| !stereo_used[r] && in_window(p, s);
+            if primary_used[l] || !stereo.iter().enumerate().any(open) {
                 continue;
             }
             let Some((ncc, at)) = self.appearance.best_along_ray(
@@ -135,11 +141,7 @@ impl LeftoverPairing {
             }
             for (r, s) in stereo.iter().enumerate() {
                 let away = distance_radii(&at, s);
-                let disparity = p.center_px.x - s.center_px.x;
-                if !stereo_used[r]
-                    && away <= self.max_distance_radii
-                    && (windows.min_disparity_px..=windows.max_disparity_px).contains(&disparity)
-                {
+                if open((r, s)) && away <= self.max_distance_radii {
                     candidates.push((away, l, r));
                 }
             }

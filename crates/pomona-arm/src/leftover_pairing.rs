@@ -116,8 +116,7 @@ impl LeftoverPairing {
             }
         }
         let in_window = |p: &ImageCircle, s: &ImageCircle| {
-            (windows.min_disparity_px..=windows.max_disparity_px)
-                .contains(&(p.center_px.x - s.center_px.x))
+            windows.admits_disparity(p.center_px.x - s.center_px.x)
         };
         let mut candidates: Vec<(f64, usize, usize)> = Vec::new();
         for (l, p) in primary.iter().enumerate() {

@@ -60,10 +60,13 @@ impl MatchingWindows {
     ) -> Option<f64> {
         let dx = primary.x - stereo.x;
         let dy = (stereo.y - primary.y).abs();
-        (dx >= self.min_disparity_px
-            && dx <= self.max_disparity_px
-            && dy <= self.max_vertical_offset_px)
-            .then_some(dx)
+        (self.admits_disparity(dx) && dy <= self.max_vertical_offset_px).then_some(dx)
+    }
+
+    /// Whether the disparity `dx` (pixels) lies in the Eq. 10 disparity window, whatever the
+    /// rows.
+    pub fn admits_disparity(&self, dx: f64) -> bool {
+        dx >= self.min_disparity_px && dx <= self.max_disparity_px
     }
 
     /// The windows of `rig` for fruit at hub distances in `[near_m, far_m]`, each widened by

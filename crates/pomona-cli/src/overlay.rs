@@ -256,18 +256,32 @@ fn draw_detection(
         Some(dm) => format!("{:.2} | ⌀{:.0} mm", d.score, dm * 1e3),
         None => format!("{:.2}", d.score),
     };
-    let (tw, th) = root
-        .estimate_text_size(&label, det_style)
-        .map_err(draw_err)?;
+    // Centred above the circle, kept inside the image.
+    draw_label(root, label, det_style, |(tw, th)| {
+        (
+            (x - tw / 2).clamp(0, (w as i32 - tw).max(0)),
+            (y - r - th - 3).clamp(0, (h as i32 - th).max(0)),
+        )
+    })
+}
+
+/// `label` in `style` on a pale box, its top left corner where `place` puts it given the text's
+/// size (width, height).
+fn draw_label(
+    root: &Area<'_>,
+    label: String,
+    style: &TextStyle<'_>,
+    place: impl FnOnce((i32, i32)) -> (i32, i32),
+) -> Result<()> {
+    let (tw, th) = root.estimate_text_size(&label, style).map_err(draw_err)?;
     let (tw, th) = (tw as i32, th as i32);
-    let tx = (x - tw / 2).clamp(0, (w as i32 - tw).max(0));
-    let ty = (y - r - th - 3).clamp(0, (h as i32 - th).max(0));
+    let (tx, ty) = place((tw, th));
     root.draw(&Rectangle::new(
         [(tx - 2, ty - 1), (tx + tw + 2, ty + th + 1)],
         WHITE.mix(0.7).filled(),
     ))
     .map_err(draw_err)?;
-    root.draw(&Text::new(label, (tx, ty), det_style.clone()))
+    root.draw(&Text::new(label, (tx, ty), style.clone()))
         .map_err(draw_err)?;
     Ok(())
 }
@@ -371,15 +385,7 @@ pub fn write_stereo_overlay(
             root.draw(&PathElement::new(vec![from, to], color.stroke_width(1)))
                 .map_err(draw_err)?;
             let label = format!("{:.2} m", pair.center_m.z);
-            let (tw, th) = root.estimate_text_size(&label, &style).map_err(draw_err)?;
-            let (tx, ty) = (from.0 + 4, from.1 + 4);
-            root.draw(&Rectangle::new(
-                [(tx - 2, ty - 1), (tx + tw as i32 + 2, ty + th as i32 + 1)],
-                WHITE.mix(0.7).filled(),
-            ))
-            .map_err(draw_err)?;
-            root.draw(&Text::new(label, (tx, ty), style.clone()))
-                .map_err(draw_err)?;
+            draw_label(root, label, &style, |_| (from.0 + 4, from.1 + 4))?;
         }
         Ok(())
     })?;

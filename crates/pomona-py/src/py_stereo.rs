@@ -42,15 +42,7 @@ impl StereoLocator {
         let camera = camera_from_dict(camera)?.camera;
         let rig = RotatedStereo::new(beta_deg.to_radians(), pivot_m, camera)
             .map_err(|e| to_py(format!("rig: {e}")))?;
-        let method = match method {
-            "paper" => StereoMethod::Paper,
-            "triangulate" => StereoMethod::Triangulate,
-            other => {
-                return Err(to_py(format!(
-                    "method must be \"paper\" or \"triangulate\", not {other:?}"
-                )))
-            }
-        };
+        let method: StereoMethod = method.parse().map_err(|e| to_py(format!("method: {e}")))?;
         let mut builder = pomona::Detector::builder("color-contour").map_err(to_py)?;
         if let Some(path) = model {
             builder = builder.model_file(path);

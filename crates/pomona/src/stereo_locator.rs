@@ -34,6 +34,19 @@ pub enum StereoMethod {
     Triangulate,
 }
 
+impl std::str::FromStr for StereoMethod {
+    type Err = String;
+
+    /// `paper` or `triangulate` (the names `pomona stereo --method` and the Python package take).
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "paper" => Ok(Self::Paper),
+            "triangulate" => Ok(Self::Triangulate),
+            _ => Err(format!("need `paper` or `triangulate`, got `{s}`")),
+        }
+    }
+}
+
 impl StereoMethod {
     /// Locates the fruit seen at `primary` and `stereo` with this method.
     ///
@@ -73,6 +86,24 @@ pub struct StereoSettings {
     /// Sub-pixel refinement of each pair's stereo-view centre; `None`: the circle centres, as
     /// in the seed.
     pub refinement: Option<DisparityRefinement>,
+}
+
+impl StereoSettings {
+    /// The working volume's hub distances for `rig`: `reach_m`, or pivot + 0.2 m to
+    /// pivot + 2.0 m.
+    pub fn reach_for(reach_m: Option<(f64, f64)>, rig: &RotatedStereo) -> (f64, f64) {
+        let d = rig.pivot_distance_m;
+        reach_m.unwrap_or((d + 0.2, d + 2.0))
+    }
+
+    /// The distances from the primary lens the appearance sweeps cover for that reach: the hub
+    /// lies `d` behind the lens on its axis, so each hub distance less `d` (the nearest at least
+    /// 5 cm).
+    pub fn sweep_range_m(reach_m: Option<(f64, f64)>, rig: &RotatedStereo) -> (f64, f64) {
+        let (near, far) = Self::reach_for(reach_m, rig);
+        let d = rig.pivot_distance_m;
+        ((near - d).max(0.05), far - d)
+    }
 }
 
 impl Default for StereoSettings {
@@ -166,11 +197,9 @@ impl StereoLocator {
                 pipeline: detector.pipeline(),
             });
         }
-        let d = rig.pivot_distance_m;
-        let (near, far) = settings.reach_m.unwrap_or((d + 0.2, d + 2.0));
+        let (near, far) = StereoSettings::reach_for(settings.reach_m, &rig);
         let windows = MatchingWindows::for_rig(&rig, near, far, settings.margin_px)?;
-        // Hub distances to distances from the lens (the hub lies `d` behind it on the axis).
-        let range = ((near - d).max(0.05), far - d);
+        let range = StereoSettings::sweep_range_m(settings.reach_m, &rig);
         if let Some(check) = settings.evidence.better_elsewhere.as_mut() {
             check.distance_range_m = range;
         }

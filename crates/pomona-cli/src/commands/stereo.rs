@@ -66,7 +66,7 @@ pub struct StereoArgs {
     #[arg(long, value_name = "DETDIR")]
     pub out: PathBuf,
     /// How a matched pair becomes a 3D point.
-    #[arg(long, value_name = "paper|triangulate", default_value = "paper", value_parser = parse_method)]
+    #[arg(long, value_name = "paper|triangulate", default_value = "paper", value_parser = str::parse::<StereoMethod>)]
     pub method: StereoMethod,
     /// color-contour model file (default: the built-in model).
     #[arg(long, value_name = "M")]
@@ -179,16 +179,6 @@ pub struct StereoArgs {
     /// Worker threads (default: all cores); never changes the output.
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=1024))]
     pub threads: Option<u64>,
-}
-
-/// `--method`: `paper` (the seed's rotated-camera depth, Eq. 18) or `triangulate` (calibrated
-/// triangulation, the midpoint of the two rays).
-fn parse_method(s: &str) -> Result<StereoMethod, String> {
-    match s {
-        "paper" => Ok(StereoMethod::Paper),
-        "triangulate" => Ok(StereoMethod::Triangulate),
-        _ => Err(format!("need `paper` or `triangulate`, got `{s}`")),
-    }
 }
 
 /// A number, or `None` for `off` (`--refine-fruit-chroma`, `--refine-whole-patch-min-ncc`);
@@ -332,9 +322,6 @@ pub fn run(args: &StereoArgs) -> Result<()> {
         .collect();
     let detector = load_detector(pipeline, args.model.as_deref(), &overrides)?;
     let keep = keep_rule(&detector, args.min_confidence)?;
-    let d = rig.pivot_distance_m;
-    // Only for checking the options here: the locator sets the sweep ranges from the reach.
-    let (near, far) = args.reach_m.unwrap_or((d + 0.2, d + 2.0));
     for dir in std::iter::once(&args.out).chain(&args.overlay) {
         std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
     }
@@ -353,8 +340,7 @@ pub fn run(args: &StereoArgs) -> Result<()> {
             Ok(r)
         })
         .transpose()?;
-    // Hub distances to distances from the lens (the hub lies `d` behind it on the axis).
-    let distance_range_m = ((near - d).max(0.05), far - d);
+    let distance_range_m = StereoSettings::sweep_range_m(args.reach_m, &rig);
     let evidence = PairEvidence {
         max_row_residual_px: args.match_max_row_px,
         better_elsewhere: args.match_better_elsewhere.0.map(|margin| BetterElsewhere {
@@ -426,7 +412,7 @@ pub fn run(args: &StereoArgs) -> Result<()> {
             String::new()
         },
         rig.beta_rad.to_degrees(),
-        d,
+        rig.pivot_distance_m,
         windows.min_disparity_px,
         windows.max_disparity_px,
         windows.max_vertical_offset_px,

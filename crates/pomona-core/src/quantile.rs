@@ -47,5 +47,9 @@ mod tests {
         assert_eq!(quantile(&v, 2.0), Some(40.0));
         assert_eq!(quantile(&v, -1.0), Some(0.0));
         assert_eq!(median(&mut []), None);
+        // The stereo report's own quantile, which this one replaced, asserted these.
+        assert_eq!(quantile(&[], 0.5), None);
+        assert_eq!(quantile(&[1.0, 2.0, 4.0], 0.5), Some(2.0));
+        assert_eq!(quantile(&[1.0, 3.0], 0.5), Some(2.0));
     }
 }

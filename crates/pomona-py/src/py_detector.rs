@@ -72,6 +72,23 @@ impl Detector {
     }
 }
 
+/// The detector of `pipeline`: the built-in model or the file `model`, with the overrides of
+/// `set` (a dict of dotted keys). Shared by `Detector` and `StereoLocator`.
+pub(crate) fn load_detector(
+    pipeline: &str,
+    model: Option<PathBuf>,
+    set: Option<&Bound<'_, PyDict>>,
+) -> PyResult<pomona::Detector> {
+    let mut builder = pomona::Detector::builder(pipeline).map_err(to_py)?;
+    if let Some(path) = model {
+        builder = builder.model_file(path);
+    }
+    builder
+        .overrides(overrides_from(set)?)
+        .build()
+        .map_err(to_py)
+}
+
 #[pymethods]
 impl Detector {
     #[new]
@@ -81,13 +98,8 @@ impl Detector {
         model: Option<PathBuf>,
         set: Option<&Bound<'_, PyDict>>,
     ) -> PyResult<Self> {
-        let mut builder = pomona::Detector::builder(pipeline).map_err(to_py)?;
-        if let Some(path) = model {
-            builder = builder.model_file(path);
-        }
-        builder = builder.overrides(overrides_from(set)?);
         Ok(Self {
-            inner: builder.build().map_err(to_py)?,
+            inner: load_detector(pipeline, model, set)?,
         })
     }
 

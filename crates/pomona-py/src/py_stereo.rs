@@ -9,7 +9,8 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use crate::frame_arrays::{camera_from_dict, color_from_array};
-use crate::json_bridge::{overrides_from, to_python};
+use crate::json_bridge::to_python;
+use crate::py_detector::load_detector;
 use crate::py_error::to_py;
 
 /// Locates fruit from the two shots of one rig: the camera turned by ``±beta_deg`` about a hub
@@ -43,14 +44,7 @@ impl StereoLocator {
         let rig = RotatedStereo::new(beta_deg.to_radians(), pivot_m, camera)
             .map_err(|e| to_py(format!("rig: {e}")))?;
         let method: StereoMethod = method.parse().map_err(|e| to_py(format!("method: {e}")))?;
-        let mut builder = pomona::Detector::builder("color-contour").map_err(to_py)?;
-        if let Some(path) = model {
-            builder = builder.model_file(path);
-        }
-        let detector = builder
-            .overrides(overrides_from(set)?)
-            .build()
-            .map_err(to_py)?;
+        let detector = load_detector("color-contour", model, set)?;
         let keep = detector.keep_rule_for(min_confidence).map_err(to_py)?;
         let settings = StereoSettings {
             method,

@@ -34,7 +34,7 @@
 //! appearance to match), the best score is below `min_ncc`, the peak lies on the edge of the
 //! search range, or the warped patch leaves the stereo image.
 
-use nalgebra::{Point2, Point3, Unit, Vector3};
+use nalgebra::{Isometry3, Point2, Point3, Unit, Vector3};
 use pomona_core::ColorImage;
 
 use crate::{ArmError, RotatedStereo};
@@ -71,6 +71,11 @@ pub struct DisparityRefinement {
     /// alone ignores a white-balance change between the shots). `None`: no second try. In
     /// `[-1, 1]`.
     pub whole_patch_min_ncc: Option<f64>,
+    /// A fruit near the stereo image's border is matched on the patch pixels that land inside
+    /// it over the whole sweep, when they are at least this fraction of the patch; `None`: the
+    /// whole patch must land inside at the peak (the earlier rule, which kept the circle
+    /// centres for every fruit cut by the border). In `(0, 1]`.
+    pub min_inside_fraction: Option<f64>,
 }
 
 impl Default for DisparityRefinement {
@@ -90,6 +95,7 @@ impl Default for DisparityRefinement {
             min_patch_std: 2.0,
             fruit_chroma_radius: Some(0.1),
             whole_patch_min_ncc: Some(0.5),
+            min_inside_fraction: Some(0.25),
         }
     }
 }
@@ -105,7 +111,8 @@ pub enum FallbackReason {
     LowNcc,
     /// The best score lies on the edge of the search range (no peak inside it).
     PeakAtEdge,
-    /// The warped patch leaves the stereo image at every hypothesis near the peak.
+    /// The warped patch leaves the stereo image at every hypothesis near the peak, or too
+    /// little of it stays inside over the sweep (`min_inside_fraction`).
     OutsideImage,
 }
 
@@ -212,6 +219,11 @@ impl DisparityRefinement {
                 return bad("fruit_chroma_radius", radius, "must be finite and positive");
             }
         }
+        if let Some(fraction) = self.min_inside_fraction {
+            if !(fraction > 0.0 && fraction <= 1.0) {
+                return bad("min_inside_fraction", fraction, "must be in (0, 1]");
+            }
+        }
         if !(self.min_patch_std.is_finite() && self.min_patch_std >= 0.0) {
             return bad(
                 "min_patch_std",
@@ -308,28 +320,44 @@ impl DisparityRefinement {
         if !(px_per_w.is_finite() && px_per_w > 0.0) {
             return fallback(FallbackReason::NoStartingPoint, None);
         }
+        let steps = (self.search_px / self.step_px).floor() as i64;
+        let w_at = |k: f64| w0 + k * self.step_px / px_per_w;
+        let patch = match self.min_inside_fraction {
+            Some(fraction) => {
+                let whole = patch.len();
+                let patch = inside_over_sweep(
+                    rig,
+                    patch,
+                    &axis,
+                    sin_alpha,
+                    (w_at(-steps as f64), w_at(steps as f64)),
+                );
+                if patch.len() < 9 || (patch.len() as f64) < fraction * whole as f64 {
+                    return fallback(FallbackReason::OutsideImage, None);
+                }
+                patch
+            }
+            None => patch,
+        };
         let template: Vec<[f64; 3]> = patch.iter().map(|p| p.rgb).collect();
         // The patch's own colour, for the colour check of every hypothesis.
         let template_chroma = mean_chroma(&template);
-        let steps = (self.search_px / self.step_px).floor() as i64;
-        let w_at = |k: f64| w0 + k * self.step_px / px_per_w;
-        let scores: Vec<Option<f64>> = (-steps..=steps)
-            .map(|k| {
-                let w = w_at(k as f64);
-                if w <= 0.0 {
-                    return None;
-                }
-                let centre = Point3::from(axis.into_inner() / w);
-                self.score(
-                    rig,
-                    stereo,
-                    (&patch, &template, template_chroma),
-                    &axis,
-                    &centre,
-                    sin_alpha / w,
-                )
-            })
-            .collect();
+        let score_k = |k: i64| {
+            let w = w_at(k as f64);
+            if w <= 0.0 {
+                return None;
+            }
+            let centre = Point3::from(axis.into_inner() / w);
+            self.score(
+                rig,
+                stereo,
+                (&patch, &template, template_chroma),
+                &axis,
+                &centre,
+                sin_alpha / w,
+            )
+        };
+        let scores: Vec<Option<f64>> = (-steps..=steps).map(score_k).collect();
         let Some((best, best_ncc)) = scores
             .iter()
             .enumerate()
@@ -551,19 +579,9 @@ impl DisparityRefinement {
         radius_m: f64,
     ) -> Option<f64> {
         let stereo_from_camera = rig.stereo_from_camera();
-        let rho = centre.coords.norm();
-        let c2 = rho * rho - radius_m * radius_m;
         let mut sampled = Vec::with_capacity(patch.len());
         for p in patch {
-            let b = p.ray.dot(&centre.coords);
-            let disc = b * b - c2;
-            let t = if disc >= 0.0 {
-                b - disc.sqrt()
-            } else {
-                rho / p.ray.dot(axis)
-            };
-            let point = Point3::from(p.ray.into_inner() * t);
-            let px = rig.camera.project(&(stereo_from_camera * point))?;
+            let px = warp(rig, &stereo_from_camera, p, axis, centre, radius_m)?;
             sampled.push(bilinear(stereo, &px)?);
         }
         if let Some(limit) = self.fruit_chroma_radius {
@@ -579,6 +597,61 @@ impl DisparityRefinement {
         }
         ncc(template, &sampled)
     }
+}
+
+/// Where the primary patch pixel `p` lands in the stereo view under the sphere hypothesis
+/// (`centre` on `axis`, radius `radius_m`): cast onto the sphere (a pixel that misses it onto the
+/// plane through the centre facing the lens), moved by the rig (`stereo_from_camera`, its
+/// [`RotatedStereo::stereo_from_camera`]) and projected.
+fn warp(
+    rig: &RotatedStereo,
+    stereo_from_camera: &Isometry3<f64>,
+    p: &PatchPixel,
+    axis: &Unit<Vector3<f64>>,
+    centre: &Point3<f64>,
+    radius_m: f64,
+) -> Option<Point2<f64>> {
+    let rho = centre.coords.norm();
+    let b = p.ray.dot(&centre.coords);
+    let disc = b * b - (rho * rho - radius_m * radius_m);
+    let t = if disc >= 0.0 {
+        b - disc.sqrt()
+    } else {
+        rho / p.ray.dot(axis)
+    };
+    let point = Point3::from(p.ray.into_inner() * t);
+    rig.camera.project(&(stereo_from_camera * point))
+}
+
+/// The patch pixels that stay where the stereo image can be sampled (bilinear) at both ends of
+/// the sweep — inverse distances `w_ends` of the sphere centre on `axis`, angular radius
+/// `asin(sin_alpha)` — so that every hypothesis is scored on the same pixels.
+fn inside_over_sweep(
+    rig: &RotatedStereo,
+    mut patch: Vec<PatchPixel>,
+    axis: &Unit<Vector3<f64>>,
+    sin_alpha: f64,
+    w_ends: (f64, f64),
+) -> Vec<PatchPixel> {
+    let (width, height) = (f64::from(rig.camera.width), f64::from(rig.camera.height));
+    let stereo_from_camera = rig.stereo_from_camera();
+    let samplable =
+        |q: Point2<f64>| q.x >= 0.0 && q.y >= 0.0 && q.x < width - 1.0 && q.y < height - 1.0;
+    patch.retain(|p| {
+        [w_ends.0, w_ends.1].into_iter().all(|w| {
+            w > 0.0
+                && warp(
+                    rig,
+                    &stereo_from_camera,
+                    p,
+                    axis,
+                    &Point3::from(axis.into_inner() / w),
+                    sin_alpha / w,
+                )
+                .is_some_and(samplable)
+        })
+    });
+    patch
 }
 
 /// Spacing of the first, coarse pass of [`DisparityRefinement::best_along_ray`], stereo pixels.
@@ -855,7 +928,68 @@ mod tests {
         min_patch_std: 2.0,
         fruit_chroma_radius: None,
         whole_patch_min_ncc: None,
+        min_inside_fraction: None,
     };
+
+    #[test]
+    fn a_fruit_cut_by_the_stereo_image_border_is_matched_on_what_is_inside() {
+        // A fruit whose stereo-view disc crosses the left border (centre half a radius inside),
+        // wholly in the primary view.
+        let rig = rig();
+        let centre = (0..400)
+            .map(|mm| Point3::new(-0.25 + f64::from(mm) * 1e-3, 0.01, 0.9))
+            .min_by(|a, b| {
+                let off = |c: &Point3<f64>| {
+                    let (_, s) = rig.project_pair(c).unwrap();
+                    (s.x - 0.5 * radius_px(&rig, c)).abs()
+                };
+                off(a).total_cmp(&off(b))
+            })
+            .unwrap();
+        let (rig, primary, stereo) = views(&centre, true);
+        let (p, s) = rig.project_pair(&centre).unwrap();
+        let r = radius_px(&rig, &centre);
+        assert!(p.x > 1.5 * r && s.x < 0.6 * r, "{p} {s} {r}");
+        let circle = Point2::new(s.x + 1.5, s.y);
+        let whole_patch_inside = DisparityRefinement {
+            min_inside_fraction: None,
+            ..DisparityRefinement::default()
+        };
+        let outcome = whole_patch_inside
+            .refine(&rig, (&primary, &stereo), &p, r, &circle)
+            .unwrap();
+        assert!(
+            fell_back(&outcome, FallbackReason::OutsideImage),
+            "{outcome:?}"
+        );
+        let outcome = DisparityRefinement::default()
+            .refine(&rig, (&primary, &stereo), &p, r, &circle)
+            .unwrap();
+        let error_px = (outcome.stereo_center_px(&circle) - s).norm();
+        assert!(
+            matches!(outcome, RefinementOutcome::Refined { .. }) && error_px < 0.3,
+            "{outcome:?}: {error_px} px"
+        );
+        // Too little of the patch left inside keeps the circle centres.
+        let strict = DisparityRefinement {
+            min_inside_fraction: Some(0.9),
+            ..DisparityRefinement::default()
+        };
+        let outcome = strict
+            .refine(&rig, (&primary, &stereo), &p, r, &circle)
+            .unwrap();
+        assert!(
+            fell_back(&outcome, FallbackReason::OutsideImage),
+            "{outcome:?}"
+        );
+        for bad in [0.0, 1.5, f64::NAN] {
+            let params = DisparityRefinement {
+                min_inside_fraction: Some(bad),
+                ..DisparityRefinement::default()
+            };
+            assert!(params.validate().is_err(), "{bad}");
+        }
+    }
 
     #[test]
     fn fruit_pixels_alone_recover_the_disparity_and_never_match_another_colour() {

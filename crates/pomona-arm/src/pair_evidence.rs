@@ -83,6 +83,7 @@ impl Default for PairEvidence {
             appearance: DisparityRefinement {
                 fruit_chroma_radius: None,
                 whole_patch_min_ncc: None,
+                min_inside_fraction: None,
                 ..DisparityRefinement::default()
             },
         }

@@ -123,6 +123,11 @@ pub struct StereoArgs {
     /// with this NCC floor before keeping the circle centres; `off`: no second try.
     #[arg(long, value_name = "NCC|off", value_parser = parse_or_off, default_value = "0.5")]
     pub refine_whole_patch_min_ncc: OrOff,
+    /// Refinement: a fruit near the stereo image's border is matched on the patch pixels that
+    /// stay inside the image over the whole sweep, when they are at least this fraction of the
+    /// patch; `off`: the whole patch must stay inside (the circle centres are kept otherwise).
+    #[arg(long, value_name = "FRACTION|off", value_parser = parse_or_off, default_value = "0.25")]
+    pub refine_min_inside: OrOff,
     /// Matching (beyond the seed): remove candidate pairs whose stereo row lies more than PX
     /// from the row that the primary row and the two columns predict (the epipolar constraint;
     /// Eq. 10 only bounds the row offset by its largest value anywhere in the image). Default:
@@ -334,6 +339,7 @@ pub fn run(args: &StereoArgs) -> Result<()> {
                 min_ncc: args.refine_min_ncc,
                 fruit_chroma_radius: args.refine_fruit_chroma.0,
                 whole_patch_min_ncc: args.refine_whole_patch_min_ncc.0,
+                min_inside_fraction: args.refine_min_inside.0,
                 ..DisparityRefinement::default()
             };
             r.validate().context("bad --refine-* option")?;

@@ -805,6 +805,20 @@ mod tests {
         image
     }
 
+    /// Asserts that `outcome` refined the stereo centre to within `max_px` of `truth_px`.
+    fn assert_refined_near(
+        outcome: &RefinementOutcome,
+        circle_px: &Point2<f64>,
+        truth_px: &Point2<f64>,
+        max_px: f64,
+    ) {
+        let error_px = (outcome.stereo_center_px(circle_px) - truth_px).norm();
+        assert!(
+            matches!(outcome, RefinementOutcome::Refined { .. }) && error_px < max_px,
+            "{outcome:?}: {error_px} px"
+        );
+    }
+
     /// Whether `outcome` kept the circle centres for `why`.
     fn fell_back(outcome: &RefinementOutcome, why: FallbackReason) -> bool {
         matches!(outcome, RefinementOutcome::Fallback { reason, .. } if *reason == why)
@@ -965,11 +979,7 @@ mod tests {
         let outcome = DisparityRefinement::default()
             .refine(&rig, (&primary, &stereo), &p, r, &circle)
             .unwrap();
-        let error_px = (outcome.stereo_center_px(&circle) - s).norm();
-        assert!(
-            matches!(outcome, RefinementOutcome::Refined { .. }) && error_px < 0.3,
-            "{outcome:?}: {error_px} px"
-        );
+        assert_refined_near(&outcome, &circle, &s, 0.3);
         // Too little of the patch left inside keeps the circle centres.
         let strict = DisparityRefinement {
             min_inside_fraction: Some(0.9),
@@ -1051,11 +1061,7 @@ mod tests {
         let outcome = DisparityRefinement::default()
             .refine(&rig, (&primary, &stereo), &p, r, &circle)
             .unwrap();
-        let error_px = (outcome.stereo_center_px(&circle) - s).norm();
-        assert!(
-            matches!(outcome, RefinementOutcome::Refined { .. }) && error_px < 0.3,
-            "{outcome:?}: {error_px} px"
-        );
+        assert_refined_near(&outcome, &circle, &s, 0.3);
     }
 
     #[test]

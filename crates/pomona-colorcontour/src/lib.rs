@@ -45,6 +45,7 @@ mod circle_merging;
 mod circle_pruning;
 mod contour;
 mod contour_circles;
+mod disc_share;
 mod distance_transform;
 mod edge_scan;
 mod hough_circles;

@@ -7,6 +7,7 @@ use pomona_core::nalgebra::Point2;
 use pomona_core::{Detection, PixelBox, RgbdFrame};
 use pomona_pipeline::{PipelineError, Stage};
 
+use crate::disc_share::disc_share;
 use crate::{
     close_mask, contour_arcs, hough_circles, hysteresis_mask, merge_arcs, prune_overlapping,
     quantise_probability, ray_circles, smooth_mask, sphere_from_depth, sphere_from_size,
@@ -223,39 +224,15 @@ impl Stage<&[bool], Vec<ContourCircle>> for HoughCircleStage {
 /// Fraction of the circle's pixels (a grid of at most about 400 inside the image) that are
 /// fruit-coloured.
 fn color_purity(fruit: &[bool], width: usize, height: usize, c: &ContourCircle) -> f64 {
-    let r = c.radius_px;
-    let step = (r / 10.0).max(1.0);
-    let steps = (r / step).ceil() as i64;
-    // A grid point's pixel column depends on its column of the grid only, and its row on its
-    // row: round each once (`None` outside the image).
-    let pixel = |center: f64, k: i64, size: usize| {
-        let v = (center + k as f64 * step).round();
-        (v >= 0.0 && v < size as f64).then_some(v as usize)
-    };
-    let columns: Vec<Option<usize>> = (-steps..=steps)
-        .map(|i| pixel(c.center_px.x, i, width))
-        .collect();
-    let (mut inside, mut hits) = (0usize, 0usize);
-    for j in -steps..=steps {
-        let Some(y) = pixel(c.center_px.y, j, height) else {
-            continue;
-        };
-        let dy = j as f64 * step;
-        for (i, x) in (-steps..=steps).zip(&columns) {
-            let dx = i as f64 * step;
-            let Some(x) = *x else { continue };
-            if dx * dx + dy * dy > r * r {
-                continue;
-            }
-            inside += 1;
-            hits += usize::from(fruit[y * width + x]);
-        }
-    }
-    if inside == 0 {
-        0.0
-    } else {
-        hits as f64 / inside as f64
-    }
+    let step = (c.radius_px / 10.0).max(1.0);
+    let half_steps = (c.radius_px / step).ceil() as i64;
+    disc_share(
+        c.center_px,
+        c.radius_px,
+        (step, half_steps),
+        (width, height),
+        |x, y| fruit[y * width + x],
+    )
 }
 
 /// From circles to detections: support check, size check, score, overlap pruning, 3D.

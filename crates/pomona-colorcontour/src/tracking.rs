@@ -54,6 +54,7 @@ use pomona_core::ColorImage;
 use pomona_pipeline::{PipelineError, StageTimings};
 use serde::{Deserialize, Serialize};
 
+use crate::disc_share::disc_share;
 use crate::{
     circle_from_boundaries, most_consistent_circle, scan_four_directions, spiral_points,
     ColorContourDetector, ColorContourParams, ColorContourStageParams, EdgeScanParams, HSigmaLut,
@@ -244,28 +245,14 @@ impl FruitPixels<'_> {
     /// from the points of a [`FRUIT_SHARE_GRID`]² grid over its bounding square that lie in it
     /// and in the image (0 when none does).
     fn fruit_share(&self, center: Point2<f64>, radius: f64) -> f64 {
-        let half = f64::from(FRUIT_SHARE_GRID / 2);
-        let step = radius / half;
-        let (mut fruit, mut inside) = (0u32, 0u32);
-        for j in 0..FRUIT_SHARE_GRID {
-            for i in 0..FRUIT_SHARE_GRID {
-                let (dx, dy) = ((f64::from(i) - half) * step, (f64::from(j) - half) * step);
-                if dx * dx + dy * dy > radius * radius {
-                    continue;
-                }
-                let (x, y) = ((center.x + dx).round(), (center.y + dy).round());
-                let Some(value) = self.value(x as i64, y as i64) else {
-                    continue; // outside the image: neither fruit nor background
-                };
-                inside += 1;
-                fruit += u32::from(value >= self.threshold);
-            }
-        }
-        if inside == 0 {
-            0.0
-        } else {
-            f64::from(fruit) / f64::from(inside)
-        }
+        let half_steps = FRUIT_SHARE_GRID / 2;
+        disc_share(
+            center,
+            radius,
+            (radius / f64::from(half_steps), i64::from(half_steps)),
+            (self.image.width() as usize, self.image.height() as usize),
+            |x, y| self.is_fruit(x as i64, y as i64),
+        )
     }
 }
 

@@ -30,9 +30,13 @@
 //! * The refined correspondence is the stereo pixel of the sphere centre at the peak: Eq. 18 or
 //!   triangulation of it with the primary circle centre returns that centre.
 //!
+//! * A fruit near the stereo image's border is matched on the patch pixels that stay inside the
+//!   stereo image over the whole sweep (`min_inside_fraction`), so that every hypothesis is
+//!   scored on the same pixels.
+//!
 //! The circle centres are kept ([`RefinementOutcome::Fallback`]) when the patch is flat (no
 //! appearance to match), the best score is below `min_ncc`, the peak lies on the edge of the
-//! search range, or the warped patch leaves the stereo image.
+//! search range, or too little of the warped patch stays inside the stereo image.
 
 use nalgebra::{Isometry3, Point2, Point3, Unit, Vector3};
 use pomona_core::ColorImage;
@@ -85,7 +89,10 @@ impl Default for DisparityRefinement {
     /// a patch inside the rim, 0.8 r, matched worse than the circles), the colour selection and
     /// the floor on the same seed over eight rigs (levers 0.3–1.2 m, β = 2–8°); docs/results.md
     /// measures them on seed 1. When they fall back, the whole patch is tried at NCC ≥ 0.5 (the
-    /// earlier default, every pixel with that floor, chosen on the same seed-2 rigs).
+    /// earlier default, every pixel with that floor, chosen on the same seed-2 rigs). A fruit
+    /// at the stereo image's border is matched when a quarter of its patch stays inside (chosen
+    /// among 0.25 and 0.5 on the seed-2 rigs; docs/results.md, "Fruit at the stereo image's
+    /// border").
     fn default() -> Self {
         Self {
             patch_scale: 1.2,

@@ -72,7 +72,8 @@ pub struct PairEvidence {
 impl Default for PairEvidence {
     /// Off: no row gate, no floor, no cost; the appearance sweep of the default refinement
     /// (patch 1.2 r, ±6 px) over every pixel of the patch, as the evidence was measured (the
-    /// refinement's fruit-colour selection came later and was not measured here).
+    /// refinement's fruit-colour selection came later and was not measured here; its border
+    /// trim was, and changed nothing but one more wrong pair on the seed-2 rigs).
     fn default() -> Self {
         Self {
             max_row_residual_px: None,

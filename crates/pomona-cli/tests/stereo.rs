@@ -57,7 +57,7 @@ fn truth(centres: &[Point3<f64>]) -> FrameTruth {
         .enumerate()
         .map(|(i, c)| {
             serde_json::json!({"id": format!("f{i}"), "kind": "orange",
-                "center_m": [c.x, c.y, c.z], "diameter_m": 2.0 * RADIUS_M})
+                "center_m": [c.x, c.y, c.z], "diameter_m": 2.0 * RADIUS_M, "visibility": 1.0})
         })
         .collect();
     serde_json::from_value(serde_json::json!({"complete": true, "fruits": fruits})).unwrap()
@@ -143,6 +143,13 @@ fn stereo_locates_every_fruit_from_the_two_colour_shots() {
         assert_eq!(report["matching"]["recall"], 1.0);
         assert!(report["exact"]["max_error_um"].as_f64().unwrap() < 1.0);
         assert_eq!(report["exact"]["fruit"], 5);
+        // Every fruit lies beyond 0.8 m, wholly visible: all in the last visibility band.
+        let bands = report["centre_error"]["by_visibility"].as_array().unwrap();
+        let counts: Vec<u64> = bands.iter().map(|b| b["n"].as_u64().unwrap()).collect();
+        assert_eq!(counts, [0, 0, 0, 5], "{report}");
+        let along = bands[3]["along_ray_median_mm"].as_f64().unwrap();
+        let median = bands[3]["median_mm"].as_f64().unwrap();
+        assert!(along.abs() <= median && median < 30.0, "{along} {median}");
         // The primary truth scores the files: every fruit found (matched in 3D).
         let eval = pomona(&[
             "eval",

@@ -27,6 +27,8 @@ use serde::Serialize;
 pub const DEPTH_BIN_EDGES_M: [f64; 6] = [0.0, 0.5, 0.8, 1.1, 1.4, f64::INFINITY];
 /// The depth from which the headline 3D error is taken (seed 004 target: ≤ 15 mm there).
 pub const FAR_DEPTH_M: f64 = 0.8;
+/// Edges of the visibility bands of the 3D error table (the truth's visible share of a fruit).
+pub const VISIBILITY_BIN_EDGES: [f64; 5] = [0.0, 0.6, 0.8, 0.95, f64::INFINITY];
 
 /// What the stereo run found in one frame, for the report.
 #[derive(Debug, Clone)]
@@ -204,6 +206,23 @@ pub struct DepthBin {
     pub p90_mm: Option<f64>,
 }
 
+/// 3D centre error of correctly matched fruit at z ≥ [`FAR_DEPTH_M`] in one visibility band:
+/// occluded fruit and fully visible ones are located with opposite biases along the ray.
+#[derive(Debug, Clone, Serialize)]
+pub struct VisibilityBin {
+    /// Lower edge of the truth's visibility (inclusive).
+    pub from: f64,
+    /// Upper edge (exclusive; `null` for no limit).
+    pub to: Option<f64>,
+    /// Fruit in the band.
+    pub n: usize,
+    /// Median error, millimetres.
+    pub median_mm: Option<f64>,
+    /// Median signed error along the primary camera's ray through the truth centre,
+    /// millimetres: positive when the fruit is located too far.
+    pub along_ray_median_mm: Option<f64>,
+}
+
 /// 3D centre errors.
 #[derive(Debug, Clone, Serialize)]
 pub struct CentreError {
@@ -217,6 +236,9 @@ pub struct CentreError {
     pub median_far_mm: Option<f64>,
     /// By depth band ([`DEPTH_BIN_EDGES_M`]).
     pub by_depth: Vec<DepthBin>,
+    /// Fruit at z ≥ [`FAR_DEPTH_M`] whose truth has a visibility, by visibility band
+    /// ([`VISIBILITY_BIN_EDGES`]).
+    pub by_visibility: Vec<VisibilityBin>,
 }
 
 /// Pixel errors of the correctly matched centres against the truth centres projected through
@@ -386,6 +408,19 @@ impl StereoReport {
                 f(b.p90_mm, 1)
             ));
         }
+        s.push_str(&format!(
+            "\n| visibility (z ≥ {FAR_DEPTH_M} m) | n | median mm | along the ray mm (+ too far) |\n|---|---|---|---|\n"
+        ));
+        for b in &self.centre_error.by_visibility {
+            let to = b.to.map_or_else(|| "1".to_owned(), |t| format!("{t:.2}"));
+            s.push_str(&format!(
+                "| {:.2}–{to} | {} | {} | {} |\n",
+                b.from,
+                b.n,
+                f(b.median_mm, 1),
+                f(b.along_ray_median_mm, 1)
+            ));
+        }
         s
     }
 }
@@ -454,6 +489,9 @@ struct Tally {
     exact_failed: usize,
     /// (truth depth m, 3D centre error mm) of correctly matched fruit.
     errors_by_depth: Vec<(f64, f64)>,
+    /// (truth visibility, signed error along the ray mm, 3D centre error mm) of correctly
+    /// matched fruit at z ≥ [`FAR_DEPTH_M`] whose truth has a visibility.
+    errors_by_visibility: Vec<(f64, f64, f64)>,
     /// (primary centre error, signed disparity error) of correctly matched fruit, pixels.
     pixel_errors: Vec<(f64, f64)>,
 }
@@ -486,6 +524,11 @@ impl Tally {
             .collect();
         self.matching.both_detected += both.len();
         let centre_of = truth_centres(tp);
+        let visibility_of: BTreeMap<&str, f64> = tp
+            .fruits
+            .iter()
+            .filter_map(|f| Some((f.id.as_str(), f.visibility?)))
+            .collect();
         let mut paired = HashSet::new();
         // Per fruit id: in a pair with another fruit, in a pair with a false detection.
         let mut fates = BTreeMap::<String, (bool, bool)>::new();
@@ -541,8 +584,15 @@ impl Tally {
                 self.matching.repeated += 1;
             }
             if let (true, Some(truth)) = (first, centre_of.get(a.as_str())) {
-                self.errors_by_depth
-                    .push((truth.z, (located - truth).norm() * 1e3));
+                let error_mm = (located - truth).norm() * 1e3;
+                self.errors_by_depth.push((truth.z, error_mm));
+                if let (true, Some(&visibility)) =
+                    (truth.z >= FAR_DEPTH_M, visibility_of.get(a.as_str()))
+                {
+                    let along_mm = (located - truth).dot(&truth.coords.normalize()) * 1e3;
+                    self.errors_by_visibility
+                        .push((visibility, along_mm, error_mm));
+                }
                 if let Some((ta, tb)) = rig.project_pair(truth) {
                     let disparity = (p.x - s.x) - (ta.x - tb.x);
                     self.pixel_errors.push(((p - ta).norm(), disparity));
@@ -638,6 +688,23 @@ impl Tally {
                 }
             })
             .collect();
+        let by_visibility = VISIBILITY_BIN_EDGES
+            .windows(2)
+            .map(|w| {
+                let band: Vec<&(f64, f64, f64)> = self
+                    .errors_by_visibility
+                    .iter()
+                    .filter(|e| e.0 >= w[0] && e.0 < w[1])
+                    .collect();
+                VisibilityBin {
+                    from: w[0],
+                    to: w[1].is_finite().then_some(w[1]),
+                    n: band.len(),
+                    median_mm: quantile(&sorted(band.iter().map(|e| e.2).collect()), 0.5),
+                    along_ray_median_mm: quantile(&sorted(band.iter().map(|e| e.1).collect()), 0.5),
+                }
+            })
+            .collect();
         StereoReport {
             method,
             refinement: None,
@@ -658,6 +725,7 @@ impl Tally {
                 n_far: far.len(),
                 median_far_mm: quantile(&far, 0.5),
                 by_depth,
+                by_visibility,
             },
             pixel_error: PixelError {
                 n: pixel.len(),

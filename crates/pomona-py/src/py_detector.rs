@@ -72,21 +72,18 @@ impl Detector {
     }
 }
 
-/// The detector of `pipeline`: the built-in model or the file `model`, with the overrides of
-/// `set` (a dict of dotted keys). Shared by `Detector` and `StereoLocator`.
+/// The detector of `pipeline`: the built-in model or the file `model`, with `overrides`.
+/// Shared by `Detector` and `StereoLocator`.
 pub(crate) fn load_detector(
     pipeline: &str,
     model: Option<PathBuf>,
-    set: Option<&Bound<'_, PyDict>>,
+    overrides: Vec<pomona::ParamOverride>,
 ) -> PyResult<pomona::Detector> {
     let mut builder = pomona::Detector::builder(pipeline).map_err(to_py)?;
     if let Some(path) = model {
         builder = builder.model_file(path);
     }
-    builder
-        .overrides(overrides_from(set)?)
-        .build()
-        .map_err(to_py)
+    builder.overrides(overrides).build().map_err(to_py)
 }
 
 #[pymethods]
@@ -99,7 +96,7 @@ impl Detector {
         set: Option<&Bound<'_, PyDict>>,
     ) -> PyResult<Self> {
         Ok(Self {
-            inner: load_detector(pipeline, model, set)?,
+            inner: load_detector(pipeline, model, overrides_from(set)?)?,
         })
     }
 

@@ -9,14 +9,15 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use crate::frame_arrays::{camera_from_dict, color_from_array};
-use crate::json_bridge::to_python;
+use crate::json_bridge::{overrides_from, to_python};
 use crate::py_detector::load_detector;
 use crate::py_error::to_py;
 
 /// Locates fruit from the two shots of one rig: the camera turned by ``±beta_deg`` about a hub
 /// ``pivot_m`` behind its lens (the ``rig.json`` of ``pomona synth --stereo``: ``beta_rad`` and
 /// minus ``pivot_m[2]``). ``camera``: a dict with the keys of ``camera.json``; ``model``,
-/// ``set``: the ``color-contour`` model and overrides, as ``Detector``; ``method``:
+/// ``set``: the ``color-contour`` model and overrides, as ``Detector`` (its ray and Hough
+/// circles start off, as in ``pomona stereo``; ``set`` can turn them on); ``method``:
 /// ``"paper"`` (Eq. 18) or ``"triangulate"``; ``min_confidence``: as ``Detector.detect``
 /// (``None``: the model's operating confidence); ``reach_m``: ``(near, far)`` hub distances of
 /// the working volume (``None``: pivot + 0.2 to pivot + 2.0 m).
@@ -44,7 +45,8 @@ impl StereoLocator {
         let rig = RotatedStereo::new(beta_deg.to_radians(), pivot_m, camera)
             .map_err(|e| to_py(format!("rig: {e}")))?;
         let method: StereoMethod = method.parse().map_err(|e| to_py(format!("method: {e}")))?;
-        let detector = load_detector("color-contour", model, set)?;
+        let overrides = pomona::StereoLocator::detector_overrides(overrides_from(set)?);
+        let detector = load_detector("color-contour", model, overrides)?;
         let keep = detector.keep_rule_for(min_confidence).map_err(to_py)?;
         let settings = StereoSettings {
             method,

@@ -76,7 +76,9 @@ fn bench(c: &mut Criterion) {
         .build()
         .unwrap_or_else(|e| panic!("{e}"));
     for (name, settings) in settings {
-        let detector = Detector::builtin("color-contour").unwrap_or_else(|e| panic!("{e}"));
+        let detector = Detector::builder("color-contour")
+            .and_then(|b| b.overrides(StereoLocator::detector_overrides([])).build())
+            .unwrap_or_else(|e| panic!("{e}"));
         let keep = detector
             .keep_rule_for(None)
             .unwrap_or_else(|e| panic!("{e}"));

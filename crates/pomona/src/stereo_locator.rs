@@ -1,8 +1,9 @@
 //! Fruit in 3D from the two colour shots of seed 004's rotating camera (§4.1–4.2), without any
 //! depth image: what `pomona stereo` runs on each frame, for a robot program.
 //!
-//! Per pair of shots ([`StereoLocator::locate`]): a `color-contour` [`Detector`] finds circles
-//! in both colour images (kept by the [`KeepRule`]); the circles are matched by the seed's
+//! Per pair of shots ([`StereoLocator::locate`]): a `color-contour` [`Detector`] (built with
+//! [`StereoLocator::detector_overrides`]) finds circles in both colour images (kept by the
+//! [`KeepRule`]); the circles are matched by the seed's
 //! relaxation within the Eq. 10 windows of the rig and the working volume, with the evidence
 //! [`PairEvidence`] adds and, after it, the pass over the circles it leaves unpaired
 //! ([`LeftoverPairing`]); each pair's stereo-view centre is refined by appearance
@@ -22,7 +23,7 @@ use pomona_core::nalgebra::{Point2, Point3};
 use pomona_core::{ColorImage, DepthImage, Detection, ImageCircle, RgbdFrame};
 use serde::Serialize;
 
-use crate::{Detector, Error, KeepRule};
+use crate::{Detector, Error, KeepRule, ParamOverride};
 
 /// How a matched pair becomes a 3D point.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -218,6 +219,18 @@ impl StereoLocator {
             windows,
             settings,
         })
+    }
+
+    /// The overrides a stereo locator's detector is built with: the color-contour detector's
+    /// extra circle sources (ray and Hough circles) off — they centre pieces of a fruit, and
+    /// differently in the two views (docs/results.md, "Hough circles from the outline") — then
+    /// `user`'s, which can turn them on again.
+    pub fn detector_overrides(user: impl IntoIterator<Item = ParamOverride>) -> Vec<ParamOverride> {
+        pomona_colorcontour::EXTRA_CIRCLE_SOURCE_KEYS
+            .into_iter()
+            .map(|key| ParamOverride::new(key, serde_json::Value::Null))
+            .chain(user)
+            .collect()
     }
 
     /// The detector both views go through.
@@ -460,6 +473,23 @@ mod tests {
             ),
             "{refused:?}"
         );
+    }
+
+    #[test]
+    fn the_detector_overrides_turn_the_extra_circle_sources_off_before_the_users() {
+        let user = ParamOverride::new("params.hough_circles", serde_json::json!({}));
+        let all = StereoLocator::detector_overrides([user.clone()]);
+        let keys: Vec<&str> = all.iter().map(|o| o.key.as_str()).collect();
+        assert_eq!(
+            keys,
+            [
+                "params.ray_circles",
+                "params.hough_circles",
+                "params.hough_circles"
+            ]
+        );
+        assert!(all[..2].iter().all(|o| o.value.is_null()));
+        assert_eq!(all[2], user);
     }
 
     #[test]

@@ -320,11 +320,7 @@ pub fn run(args: &StereoArgs) -> Result<()> {
     let rig = read_rig(&args.data, &dataset)?;
     let registry = pomona::pipelines();
     let pipeline = pomona::find_pipeline(&registry, STEREO_PIPELINE)?;
-    let overrides: Vec<pomona::ParamOverride> = pomona_colorcontour::EXTRA_CIRCLE_SOURCE_KEYS
-        .into_iter()
-        .map(|key| pomona::ParamOverride::new(key, serde_json::Value::Null))
-        .chain(args.set.iter().cloned())
-        .collect();
+    let overrides = StereoLocator::detector_overrides(args.set.iter().cloned());
     let detector = load_detector(pipeline, args.model.as_deref(), &overrides)?;
     let keep = keep_rule(&detector, args.min_confidence)?;
     for dir in std::iter::once(&args.out).chain(&args.overlay) {

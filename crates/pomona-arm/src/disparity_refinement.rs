@@ -30,6 +30,12 @@
 //! * The refined correspondence is the stereo pixel of the sphere centre at the peak: Eq. 18 or
 //!   triangulation of it with the primary circle centre returns that centre.
 //!
+//! * With the fruit's pixels, a hypothesis is scored only on the samples that land on
+//!   something as colourful as the fruit (`sample_saturation_margin`): saturation, 1 − min/max
+//!   of R, G, B, no lower than the patch's median less a margin. Leaves in front and the
+//!   background are duller than a coloured fruit, and a specular highlight whitens it; all three
+//!   move differently from the fruit's surface between the views, and scored they pulled
+//!   half-hidden fruit towards their occluders and fully visible ones away from the lens.
 //! * A fruit near the stereo image's border is matched on the patch pixels that stay inside the
 //!   stereo image over the whole sweep (`min_inside_fraction`), so that every hypothesis is
 //!   scored on the same pixels.
@@ -80,6 +86,13 @@ pub struct DisparityRefinement {
     /// whole patch must land inside at the peak (the earlier rule, which kept the circle
     /// centres for every fruit cut by the border). In `(0, 1]`.
     pub min_inside_fraction: Option<f64>,
+    /// With `fruit_chroma_radius`: a hypothesis is scored only on the stereo samples whose
+    /// saturation (1 − min/max of R, G, B; samples darker than [`MIN_CHROMA_SUM`] have none)
+    /// is at least the patch's median saturation less this margin — the samples that land on
+    /// the fruit's surface and not on a leaf, the background or a specular highlight. A
+    /// hypothesis with fewer than nine such samples scores −1. `None`: every sample. In
+    /// `[0, 1]`.
+    pub sample_saturation_margin: Option<f64>,
 }
 
 impl Default for DisparityRefinement {
@@ -92,7 +105,9 @@ impl Default for DisparityRefinement {
     /// earlier default, every pixel with that floor, chosen on the same seed-2 rigs). A fruit
     /// at the stereo image's border is matched when a quarter of its patch stays inside (chosen
     /// among 0.25 and 0.5 on the seed-2 rigs; docs/results.md, "Fruit at the stereo image's
-    /// border").
+    /// border"). Samples duller than the fruit by more than 0.02 in saturation are left out of
+    /// the score (chosen among 0.01–0.04 on the seed-2 rigs and three other lights;
+    /// docs/results.md, "Only the fruit's surface scored").
     fn default() -> Self {
         Self {
             patch_scale: 1.2,
@@ -103,6 +118,7 @@ impl Default for DisparityRefinement {
             fruit_chroma_radius: Some(0.1),
             whole_patch_min_ncc: Some(0.5),
             min_inside_fraction: Some(0.25),
+            sample_saturation_margin: Some(0.02),
         }
     }
 }
@@ -231,6 +247,11 @@ impl DisparityRefinement {
                 return bad("min_inside_fraction", fraction, "must be in (0, 1]");
             }
         }
+        if let Some(margin) = self.sample_saturation_margin {
+            if !(0.0..=1.0).contains(&margin) {
+                return bad("sample_saturation_margin", margin, "must be in [0, 1]");
+            }
+        }
         if !(self.min_patch_std.is_finite() && self.min_patch_std >= 0.0) {
             return bad(
                 "min_patch_std",
@@ -346,9 +367,7 @@ impl DisparityRefinement {
             }
             None => patch,
         };
-        let template: Vec<[f64; 3]> = patch.iter().map(|p| p.rgb).collect();
-        // The patch's own colour, for the colour check of every hypothesis.
-        let template_chroma = mean_chroma(&template);
+        let template = self.template(&patch);
         let score_k = |k: i64| {
             let w = w_at(k as f64);
             if w <= 0.0 {
@@ -358,7 +377,7 @@ impl DisparityRefinement {
             self.score(
                 rig,
                 stereo,
-                (&patch, &template, template_chroma),
+                (&patch, &template),
                 &axis,
                 &centre,
                 sin_alpha / w,
@@ -454,21 +473,23 @@ impl DisparityRefinement {
         if !(px_per_w.is_finite() && px_per_w > 0.0) {
             return Ok(None);
         }
-        let template: Vec<[f64; 3]> = patch.iter().map(|p| p.rgb).collect();
-        let template_chroma = mean_chroma(&template);
+        let template = self.template(&patch);
         // The coarse pass scores every BEST_ALONG_RAY_COARSE_SUBSAMPLE-th pixel of the patch.
         let sparse: Vec<PatchPixel> = patch
             .iter()
             .step_by(BEST_ALONG_RAY_COARSE_SUBSAMPLE)
             .cloned()
             .collect();
-        let sparse_template: Vec<[f64; 3]> = sparse.iter().map(|p| p.rgb).collect();
-        let score_with = |pixels: &[PatchPixel], colours: &[[f64; 3]], w: f64| {
+        let sparse_template = Template {
+            colours: sparse.iter().map(|p| p.rgb).collect(),
+            ..template
+        };
+        let score_with = |pixels: &[PatchPixel], colours: &Template, w: f64| {
             let centre = Point3::from(axis.into_inner() / w);
             self.score(
                 rig,
                 stereo,
-                (pixels, colours, template_chroma),
+                (pixels, colours),
                 &axis,
                 &centre,
                 sin_alpha / w,
@@ -573,14 +594,34 @@ impl DisparityRefinement {
         pixels
     }
 
-    /// Zero-mean NCC of the patch (its pixels, their colours `template` and its mean
-    /// chromaticity, built once per pair) against the stereo image warped by the sphere hypothesis (`centre` on `axis`,
-    /// radius `radius_m`); `None` when the warp leaves the image or the warped samples are flat.
+    /// The colours every hypothesis is scored against, built once per pair: the patch's
+    /// colours, its mean chromaticity and, with `sample_saturation_margin`, the lowest sample
+    /// saturation scored.
+    fn template(&self, patch: &[PatchPixel]) -> Template {
+        let colours: Vec<[f64; 3]> = patch.iter().map(|p| p.rgb).collect();
+        let min_saturation = self
+            .fruit_chroma_radius
+            .and(self.sample_saturation_margin)
+            .and_then(|margin| {
+                let mut values: Vec<f64> = colours.iter().filter_map(saturation).collect();
+                values.sort_by(f64::total_cmp);
+                Some(values.get(values.len() / 2)? - margin)
+            });
+        Template {
+            chroma: mean_chroma(&colours),
+            colours,
+            min_saturation,
+        }
+    }
+
+    /// Zero-mean NCC of the patch (its pixels and its [`Template`]) against the stereo image
+    /// warped by the sphere hypothesis (`centre` on `axis`, radius `radius_m`); `None` when the
+    /// warp leaves the image or the warped samples are flat.
     fn score(
         &self,
         rig: &RotatedStereo,
         stereo: &ColorImage,
-        (patch, template, template_chroma): (&[PatchPixel], &[[f64; 3]], Option<[f64; 2]>),
+        (patch, template): (&[PatchPixel], &Template),
         axis: &Unit<Vector3<f64>>,
         centre: &Point3<f64>,
         radius_m: f64,
@@ -591,10 +632,26 @@ impl DisparityRefinement {
             let px = warp(rig, &stereo_from_camera, p, axis, centre, radius_m)?;
             sampled.push(bilinear(stereo, &px)?);
         }
+        let mut colours = std::borrow::Cow::Borrowed(&template.colours[..]);
+        if let Some(floor) = template.min_saturation {
+            // Only the samples on something as colourful as the fruit are scored.
+            let (kept_colours, kept_samples): (Vec<[f64; 3]>, Vec<[f64; 3]>) = template
+                .colours
+                .iter()
+                .zip(&sampled)
+                .filter(|(_, sample)| saturation(sample).is_some_and(|s| s >= floor))
+                .map(|(colour, sample)| (*colour, *sample))
+                .unzip();
+            if kept_samples.len() < 9 {
+                return Some(-1.0);
+            }
+            colours = std::borrow::Cow::Owned(kept_colours);
+            sampled = kept_samples;
+        }
         if let Some(limit) = self.fruit_chroma_radius {
             // Zero-mean NCC ignores each channel's level, so a smooth background can correlate
             // with the fruit's shading: fruit pixels must also land on the fruit's colour.
-            let agree = match (template_chroma, mean_chroma(&sampled)) {
+            let agree = match (template.chroma, mean_chroma(&sampled)) {
                 (Some(a), Some(b)) => (a[0] - b[0]).hypot(a[1] - b[1]) <= limit,
                 _ => false,
             };
@@ -602,8 +659,26 @@ impl DisparityRefinement {
                 return Some(-1.0);
             }
         }
-        ncc(template, &sampled)
+        ncc(&colours, &sampled)
     }
+}
+
+/// The colours a hypothesis is scored against (see [`DisparityRefinement::score`]).
+struct Template {
+    /// The patch pixels' colours, in patch order.
+    colours: Vec<[f64; 3]>,
+    /// Their mean chromaticity, for the colour check of every hypothesis.
+    chroma: Option<[f64; 2]>,
+    /// Samples less saturated than this are not scored (`sample_saturation_margin`).
+    min_saturation: Option<f64>,
+}
+
+/// Saturation `1 − min/max` of R, G, B; `None` for colours darker than [`MIN_CHROMA_SUM`],
+/// whose ratios are noise.
+fn saturation(rgb: &[f64; 3]) -> Option<f64> {
+    let max = rgb[0].max(rgb[1]).max(rgb[2]);
+    let min = rgb[0].min(rgb[1]).min(rgb[2]);
+    (rgb[0] + rgb[1] + rgb[2] >= MIN_CHROMA_SUM).then(|| 1.0 - min / max)
 }
 
 /// Where the primary patch pixel `p` lands in the stereo view under the sphere hypothesis
@@ -755,15 +830,25 @@ mod tests {
     use super::*;
     use crate::test_scenes::{backdrop_hit, radius_px, ray_to_fruit, rig, RADIUS_M};
 
-    /// A textured sphere at `centre` (primary frame) before a textured backdrop 2.5 m away,
-    /// ray-cast into the view whose frame is reached by `view_from_camera`, 3×3 supersampled.
-    /// The texture and shading are fixed on the surfaces, so both views see the same fruit;
-    /// without `sphere_texture` the fruit is one flat colour.
+    /// How the rendered fruit looks.
+    #[derive(Clone, Copy, PartialEq)]
+    enum Surface {
+        /// One flat colour.
+        Flat,
+        /// Texture and diffuse shading fixed on the surface: both views see the same fruit.
+        Textured,
+        /// Textured plus a white Blinn–Phong highlight of this strength (8-bit levels), which
+        /// moves over the surface with the viewpoint.
+        Glossy(f64),
+    }
+
+    /// A sphere at `centre` (primary frame) before a textured backdrop 2.5 m away, ray-cast
+    /// into the view whose frame is reached by `view_from_camera`, 3×3 supersampled.
     fn render(
         rig: &RotatedStereo,
         view_from_camera: &nalgebra::Isometry3<f64>,
         centre: &Point3<f64>,
-        sphere_texture: bool,
+        surface: Surface,
     ) -> ColorImage {
         let camera = &rig.camera;
         let camera_from_view = view_from_camera.inverse();
@@ -782,20 +867,22 @@ mod tests {
                     let colour = if let Some(t) = ray_to_fruit(&origin, &dir, centre) {
                         let hit = origin + dir * t;
                         let normal = (hit - centre) / RADIUS_M;
-                        let shade = 0.55
-                            + 0.45
-                                * normal
-                                    .dot(&Vector3::new(-0.3, -0.5, -0.8).normalize())
-                                    .max(0.0);
-                        if sphere_texture {
-                            let pattern = (hit.x * 500.0).sin() * (hit.y * 420.0).cos();
-                            [
-                                230.0 * shade + 20.0 * pattern,
-                                120.0 * shade + 15.0 * pattern,
-                                20.0,
-                            ]
-                        } else {
-                            [230.0, 120.0, 20.0]
+                        let towards_light = Vector3::new(-0.3, -0.5, -0.8).normalize();
+                        let shade = 0.55 + 0.45 * normal.dot(&towards_light).max(0.0);
+                        let pattern = (hit.x * 500.0).sin() * (hit.y * 420.0).cos();
+                        let textured = [
+                            230.0 * shade + 20.0 * pattern,
+                            120.0 * shade + 15.0 * pattern,
+                            20.0,
+                        ];
+                        match surface {
+                            Surface::Flat => [230.0, 120.0, 20.0],
+                            Surface::Textured => textured,
+                            Surface::Glossy(strength) => {
+                                let half = (towards_light - dir).normalize();
+                                let highlight = strength * normal.dot(&half).max(0.0).powi(20);
+                                textured.map(|c| c + highlight)
+                            }
                         }
                     } else {
                         let hit = backdrop_hit(&origin, &dir);
@@ -831,25 +918,17 @@ mod tests {
         matches!(outcome, RefinementOutcome::Fallback { reason, .. } if *reason == why)
     }
 
-    fn views(
-        centre: &Point3<f64>,
-        sphere_texture: bool,
-    ) -> (RotatedStereo, ColorImage, ColorImage) {
+    fn views(centre: &Point3<f64>, surface: Surface) -> (RotatedStereo, ColorImage, ColorImage) {
         let rig = rig();
-        let primary = render(
-            &rig,
-            &nalgebra::Isometry3::identity(),
-            centre,
-            sphere_texture,
-        );
-        let stereo = render(&rig, &rig.stereo_from_camera(), centre, sphere_texture);
+        let primary = render(&rig, &nalgebra::Isometry3::identity(), centre, surface);
+        let stereo = render(&rig, &rig.stereo_from_camera(), centre, surface);
         (rig, primary, stereo)
     }
 
     #[test]
     fn recovers_a_known_sub_pixel_disparity_error_of_the_circles() {
         for centre in [Point3::new(0.06, -0.02, 0.9), Point3::new(0.12, 0.03, 1.2)] {
-            let (rig, primary, stereo) = views(&centre, true);
+            let (rig, primary, stereo) = views(&centre, Surface::Textured);
             let (p, s) = rig.project_pair(&centre).unwrap();
             let r = radius_px(&rig, &centre);
             for shift in [-1.7, 0.6, 2.3] {
@@ -882,7 +961,7 @@ mod tests {
     #[test]
     fn the_whole_ray_finds_the_fruit_far_from_any_circle() {
         for centre in [Point3::new(0.06, -0.02, 0.9), Point3::new(-0.1, 0.03, 1.4)] {
-            let (rig, primary, stereo) = views(&centre, true);
+            let (rig, primary, stereo) = views(&centre, Surface::Textured);
             let (p, s) = rig.project_pair(&centre).unwrap();
             let r = radius_px(&rig, &centre);
             for refinement in [WHOLE_PATCH, DisparityRefinement::default()] {
@@ -897,7 +976,7 @@ mod tests {
         // A patch flatter than `min_patch_std` has nothing to match; a bad range or radius is
         // an error.
         let centre = Point3::new(0.06, -0.02, 0.9);
-        let (rig, primary, stereo) = views(&centre, false);
+        let (rig, primary, stereo) = views(&centre, Surface::Flat);
         let (p, _) = rig.project_pair(&centre).unwrap();
         let images = (&primary, &stereo);
         let flat = DisparityRefinement {
@@ -919,7 +998,7 @@ mod tests {
     #[test]
     fn the_colour_selection_keeps_the_fruit_and_drops_the_background() {
         let centre = Point3::new(0.06, -0.02, 0.9);
-        let (rig, primary, _) = views(&centre, true);
+        let (rig, primary, _) = views(&centre, Surface::Textured);
         let (p, _) = rig.project_pair(&centre).unwrap();
         let r = radius_px(&rig, &centre);
         let all = WHOLE_PATCH.patch(&rig, &primary, &p, r);
@@ -950,6 +1029,7 @@ mod tests {
         fruit_chroma_radius: None,
         whole_patch_min_ncc: None,
         min_inside_fraction: None,
+        sample_saturation_margin: None,
     };
 
     #[test]
@@ -967,7 +1047,7 @@ mod tests {
                 off(a).total_cmp(&off(b))
             })
             .unwrap();
-        let (rig, primary, stereo) = views(&centre, true);
+        let (rig, primary, stereo) = views(&centre, Surface::Textured);
         let (p, s) = rig.project_pair(&centre).unwrap();
         let r = radius_px(&rig, &centre);
         assert!(p.x > 1.5 * r && s.x < 0.6 * r, "{p} {s} {r}");
@@ -1011,7 +1091,7 @@ mod tests {
     #[test]
     fn fruit_pixels_alone_recover_the_disparity_and_never_match_another_colour() {
         let centre = Point3::new(0.06, -0.02, 0.9);
-        let (rig, primary, stereo) = views(&centre, true);
+        let (rig, primary, stereo) = views(&centre, Surface::Textured);
         let (p, s) = rig.project_pair(&centre).unwrap();
         let r = radius_px(&rig, &centre);
         for shift in [-1.7, 0.6, 2.3] {
@@ -1030,7 +1110,7 @@ mod tests {
             &rig,
             &rig.stereo_from_camera(),
             &Point3::new(5.0, 0.0, 1.0),
-            true,
+            Surface::Textured,
         );
         let outcome = DisparityRefinement::default()
             .refine(&rig, (&primary, &empty), &p, r, &s)
@@ -1042,11 +1122,46 @@ mod tests {
     }
 
     #[test]
+    fn scoring_only_the_fruits_surface_removes_the_pull_of_backdrop_and_highlight() {
+        // Samples that land on the backdrop beside the rim, or on a highlight that moves with
+        // the viewpoint, pull the peak by 0.09–0.25 px when they are scored; left out, the
+        // fruit's own surface places it within 0.07 px.
+        for centre in [
+            Point3::new(0.06, -0.02, 0.9),
+            Point3::new(-0.1, 0.03, 1.2),
+            Point3::new(0.0, 0.05, 0.7),
+        ] {
+            for surface in [Surface::Textured, Surface::Glossy(120.0)] {
+                let (rig, primary, stereo) = views(&centre, surface);
+                let (p, s) = rig.project_pair(&centre).unwrap();
+                let r = radius_px(&rig, &centre);
+                let circle = Point2::new(s.x + 1.5, s.y);
+                let error_px = |refinement: DisparityRefinement| {
+                    let outcome = refinement
+                        .refine(&rig, (&primary, &stereo), &p, r, &circle)
+                        .unwrap();
+                    assert!(matches!(outcome, RefinementOutcome::Refined { .. }));
+                    (outcome.stereo_center_px(&circle) - s).norm()
+                };
+                let surface_only = error_px(DisparityRefinement::default());
+                let every_sample = error_px(DisparityRefinement {
+                    sample_saturation_margin: None,
+                    ..DisparityRefinement::default()
+                });
+                assert!(
+                    surface_only < 0.07 && every_sample > 1.5 * surface_only,
+                    "{centre}: {surface_only} px, every sample {every_sample} px"
+                );
+            }
+        }
+    }
+
+    #[test]
     fn another_white_balance_falls_back_to_the_whole_patch() {
         // The second shot with other channel gains: the fruit's colour no longer agrees, but
         // zero-mean NCC per channel ignores gains, so the whole patch still matches.
         let centre = Point3::new(0.06, -0.02, 0.9);
-        let (rig, primary, mut stereo) = views(&centre, true);
+        let (rig, primary, mut stereo) = views(&centre, Surface::Textured);
         for v in 0..stereo.height() {
             for u in 0..stereo.width() {
                 let [r, g, b] = stereo.get(u, v).unwrap();
@@ -1074,7 +1189,7 @@ mod tests {
     #[test]
     fn an_off_centre_primary_circle_still_gets_the_fruit_depth() {
         let centre = Point3::new(-0.05, 0.04, 1.0);
-        let (rig, primary, stereo) = views(&centre, true);
+        let (rig, primary, stereo) = views(&centre, Surface::Textured);
         let (p, s) = rig.project_pair(&centre).unwrap();
         let r = radius_px(&rig, &centre);
         let off = Point2::new(p.x + 1.5, p.y - 1.0);
@@ -1097,7 +1212,7 @@ mod tests {
     #[test]
     fn falls_back_to_the_circles_when_the_appearance_does_not_match() {
         let centre = Point3::new(0.06, -0.02, 0.9);
-        let (rig, primary, stereo) = views(&centre, true);
+        let (rig, primary, stereo) = views(&centre, Surface::Textured);
         let (p, s) = rig.project_pair(&centre).unwrap();
         let r = radius_px(&rig, &centre);
         let refinement = DisparityRefinement::default();
@@ -1106,7 +1221,7 @@ mod tests {
             &rig,
             &rig.stereo_from_camera(),
             &Point3::new(-0.2, 0.1, 1.6),
-            true,
+            Surface::Textured,
         );
         let outcome = refinement
             .refine(&rig, (&primary, &other), &p, r, &s)
@@ -1135,7 +1250,7 @@ mod tests {
             patch_scale: 0.8,
             ..refinement
         };
-        let (rig, primary, stereo) = views(&centre, false);
+        let (rig, primary, stereo) = views(&centre, Surface::Flat);
         let outcome = flat.refine(&rig, (&primary, &stereo), &p, r, &s).unwrap();
         assert!(
             matches!(
@@ -1151,7 +1266,7 @@ mod tests {
 
     #[test]
     fn bad_parameters_and_image_sizes_are_errors() {
-        let (rig, primary, stereo) = views(&Point3::new(0.0, 0.0, 1.0), true);
+        let (rig, primary, stereo) = views(&Point3::new(0.0, 0.0, 1.0), Surface::Textured);
         let (p, s) = rig.project_pair(&Point3::new(0.0, 0.0, 1.0)).unwrap();
         let d = DisparityRefinement::default();
         for bad in [

@@ -128,6 +128,11 @@ pub struct StereoArgs {
     /// patch; `off`: the whole patch must stay inside (the circle centres are kept otherwise).
     #[arg(long, value_name = "FRACTION|off", value_parser = parse_or_off, default_value = "0.25")]
     pub refine_min_inside: OrOff,
+    /// Refinement, with the fruit's colour: score a hypothesis only on the stereo samples whose
+    /// saturation (1 − min/max of R, G, B) is at least the patch's median less D — the fruit's
+    /// surface, not leaves, background or a specular highlight; `off`: every sample.
+    #[arg(long, value_name = "D|off", value_parser = parse_or_off, default_value = "0.02")]
+    pub refine_saturation_margin: OrOff,
     /// Matching (beyond the seed): remove candidate pairs whose stereo row lies more than PX
     /// from the row that the primary row and the two columns predict (the epipolar constraint;
     /// Eq. 10 only bounds the row offset by its largest value anywhere in the image). Default:
@@ -336,6 +341,7 @@ pub fn run(args: &StereoArgs) -> Result<()> {
                 fruit_chroma_radius: args.refine_fruit_chroma.0,
                 whole_patch_min_ncc: args.refine_whole_patch_min_ncc.0,
                 min_inside_fraction: args.refine_min_inside.0,
+                sample_saturation_margin: args.refine_saturation_margin.0,
                 ..DisparityRefinement::default()
             };
             r.validate().context("bad --refine-* option")?;

@@ -197,6 +197,26 @@ pub struct StereoArgs {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct OrOff(pub Option<f64>);
 
+/// The refinement the `--refine*` options ask for (`None` with `--no-refine`).
+fn refinement(args: &StereoArgs) -> Result<Option<DisparityRefinement>> {
+    if args.no_refine {
+        return Ok(None);
+    }
+    let r = DisparityRefinement {
+        patch_scale: args.refine_patch_scale,
+        search_px: args.refine_search_px,
+        step_px: args.refine_step_px,
+        min_ncc: args.refine_min_ncc,
+        fruit_chroma_radius: args.refine_fruit_chroma.0,
+        whole_patch_min_ncc: args.refine_whole_patch_min_ncc.0,
+        min_inside_fraction: args.refine_min_inside.0,
+        sample_saturation_margin: args.refine_saturation_margin.0,
+        ..DisparityRefinement::default()
+    };
+    r.validate().context("bad --refine-* option")?;
+    Ok(Some(r))
+}
+
 fn parse_or_off(s: &str) -> Result<OrOff, String> {
     if s == "off" {
         return Ok(OrOff(None));
@@ -331,23 +351,7 @@ pub fn run(args: &StereoArgs) -> Result<()> {
     for dir in std::iter::once(&args.out).chain(&args.overlay) {
         std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
     }
-    let refinement = (!args.no_refine)
-        .then(|| -> Result<DisparityRefinement> {
-            let r = DisparityRefinement {
-                patch_scale: args.refine_patch_scale,
-                search_px: args.refine_search_px,
-                step_px: args.refine_step_px,
-                min_ncc: args.refine_min_ncc,
-                fruit_chroma_radius: args.refine_fruit_chroma.0,
-                whole_patch_min_ncc: args.refine_whole_patch_min_ncc.0,
-                min_inside_fraction: args.refine_min_inside.0,
-                sample_saturation_margin: args.refine_saturation_margin.0,
-                ..DisparityRefinement::default()
-            };
-            r.validate().context("bad --refine-* option")?;
-            Ok(r)
-        })
-        .transpose()?;
+    let refinement = refinement(args)?;
     let distance_range_m = StereoSettings::sweep_range_m(args.reach_m, &rig);
     let evidence = PairEvidence {
         max_row_residual_px: args.match_max_row_px,
@@ -444,6 +448,36 @@ pub fn run(args: &StereoArgs) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[derive(clap::Parser)]
+    struct Cli {
+        #[command(flatten)]
+        args: StereoArgs,
+    }
+
+    fn parse(extra: &[&str]) -> StereoArgs {
+        let base = ["pomona-stereo", "--data", "d", "--out", "o"];
+        <Cli as clap::Parser>::parse_from(base.iter().chain(extra)).args
+    }
+
+    #[test]
+    fn the_refine_options_default_to_the_librarys_refinement() {
+        // The flags' defaults are written as strings for `off`; they must stay the library's.
+        assert_eq!(
+            refinement(&parse(&[])).unwrap(),
+            Some(DisparityRefinement::default())
+        );
+        assert_eq!(refinement(&parse(&["--no-refine"])).unwrap(), None);
+        let off = refinement(&parse(&["--refine-saturation-margin", "off"]))
+            .unwrap()
+            .unwrap();
+        assert_eq!(off.sample_saturation_margin, None);
+        let err = refinement(&parse(&["--refine-saturation-margin", "1.5"])).unwrap_err();
+        assert!(
+            format!("{err:#}").contains("sample_saturation_margin"),
+            "{err:#}"
+        );
+    }
 
     #[test]
     fn reach_parses_and_rejects_bad_bands() {

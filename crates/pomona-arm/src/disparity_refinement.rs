@@ -628,26 +628,25 @@ impl DisparityRefinement {
     ) -> Option<f64> {
         let stereo_from_camera = rig.stereo_from_camera();
         let mut sampled = Vec::with_capacity(patch.len());
-        for p in patch {
+        // With a saturation floor, the template colours of the samples kept.
+        let mut kept_colours = Vec::new();
+        for (p, colour) in patch.iter().zip(&template.colours) {
             let px = warp(rig, &stereo_from_camera, p, axis, centre, radius_m)?;
-            sampled.push(bilinear(stereo, &px)?);
-        }
-        let mut colours = std::borrow::Cow::Borrowed(&template.colours[..]);
-        if let Some(floor) = template.min_saturation {
-            // Only the samples on something as colourful as the fruit are scored.
-            let (kept_colours, kept_samples): (Vec<[f64; 3]>, Vec<[f64; 3]>) = template
-                .colours
-                .iter()
-                .zip(&sampled)
-                .filter(|(_, sample)| saturation(sample).is_some_and(|s| s >= floor))
-                .map(|(colour, sample)| (*colour, *sample))
-                .unzip();
-            if kept_samples.len() < 9 {
-                return Some(-1.0);
+            let sample = bilinear(stereo, &px)?;
+            if let Some(floor) = template.min_saturation {
+                // Only the samples on something as colourful as the fruit are scored.
+                if !saturation(&sample).is_some_and(|s| s >= floor) {
+                    continue;
+                }
+                kept_colours.push(*colour);
             }
-            colours = std::borrow::Cow::Owned(kept_colours);
-            sampled = kept_samples;
+            sampled.push(sample);
         }
+        let colours = match template.min_saturation {
+            Some(_) if sampled.len() < 9 => return Some(-1.0),
+            Some(_) => &kept_colours[..],
+            None => &template.colours[..],
+        };
         if let Some(limit) = self.fruit_chroma_radius {
             // Zero-mean NCC ignores each channel's level, so a smooth background can correlate
             // with the fruit's shading: fruit pixels must also land on the fruit's colour.
@@ -659,7 +658,7 @@ impl DisparityRefinement {
                 return Some(-1.0);
             }
         }
-        ncc(&colours, &sampled)
+        ncc(colours, &sampled)
     }
 }
 

@@ -26,6 +26,7 @@
 //! Pieces of one fruit cut apart by a leaf in front can also be joined into one proposal
 //! (`join_pieces`, [`PieceJoining`], opt-in).
 
+use pomona_pipeline::FreeSpaceCheck;
 use serde::{Deserialize, Serialize};
 
 use crate::PieceJoining;
@@ -62,6 +63,13 @@ pub struct DepthProposalParams {
     /// precision at the operating point (docs/results.md, "Pieces of one fruit joined");
     /// `--set 'params.depth_proposals.join_pieces={"gap_radii":0.5}'` turns it on.
     pub join_pieces: Option<PieceJoining>,
+    /// The free-space check of the proposals' shapes, in place of the model's `free_space`
+    /// (`None`: the model's, what older model files mean). A proposal has no colour to say
+    /// it is fruit, only its geometry, so it is held to what an opaque solid shows: hardly
+    /// any depth reading behind its centre anywhere in the middle of its disc. The colour
+    /// path keeps the lenient check, whose room is for real sensors' mixed pixels at a
+    /// fruit's rim (see `pomona_pipeline::FreeSpaceCheck`).
+    pub free_space: Option<FreeSpaceCheck>,
 }
 
 impl Default for DepthProposalParams {
@@ -74,6 +82,12 @@ impl Default for DepthProposalParams {
             screen_min_score: Some(-1.0),
             screen_points: 64,
             join_pieces: None,
+            free_space: Some(FreeSpaceCheck {
+                max_see_through_share: Some(0.1),
+                see_through_radii: 0.5,
+                see_through_disc_fraction: 0.7,
+                ..FreeSpaceCheck::default()
+            }),
         }
     }
 }

@@ -137,7 +137,22 @@ impl ShapeFitParams {
     /// training and whenever a model becomes a detector, so that a
     /// `--set` or a hand-edited model file with, say, a negative depth limit or a posterior
     /// threshold of 2 is refused by name instead of quietly finding nothing.
-    pub fn problem(&self) -> Option<(&'static str, String)> {
+    pub fn problem(&self) -> Option<(String, String)> {
+        self.own_problem()
+            .map(|(name, why)| (name.to_owned(), why))
+            .or_else(|| {
+                // The proposals' own free-space check, when on.
+                let check = self.depth_proposals.free_space.filter(|c| c.enabled)?;
+                let (name, value, reason) = check.invalid_reason()?;
+                Some((
+                    format!("depth_proposals.{name}"),
+                    format!("{value} {reason}"),
+                ))
+            })
+    }
+
+    /// [`Self::problem`] but for the proposals' free-space check.
+    fn own_problem(&self) -> Option<(&'static str, String)> {
         let positive = |name: &'static str, v: f64| {
             (!(v.is_finite() && v > 0.0)).then(|| (name, format!("{v} must be finite and > 0")))
         };
@@ -567,15 +582,33 @@ mod tests {
             edit(&mut p);
             p.problem().map(|(name, _)| name)
         };
-        assert_eq!(named(|p| p.max_depth_m = -1.0), Some("max_depth_m"));
-        assert_eq!(named(|p| p.color.threshold = 2.0), Some("color.threshold"));
-        assert_eq!(named(|p| p.color.lut_bits = 30), Some("color.lut_bits"));
-        assert_eq!(named(|p| p.gpcd.max_points = 0), Some("gpcd.max_points"));
-        assert_eq!(named(|p| p.gpcd.d2_max_m = f64::NAN), Some("gpcd.d2_max_m"));
-        assert_eq!(named(|p| p.shapes.sphere_preference = -3.0), Some("shapes"));
+        assert_eq!(
+            named(|p| p.max_depth_m = -1.0),
+            Some("max_depth_m".to_owned())
+        );
+        assert_eq!(
+            named(|p| p.color.threshold = 2.0),
+            Some("color.threshold".to_owned())
+        );
+        assert_eq!(
+            named(|p| p.color.lut_bits = 30),
+            Some("color.lut_bits".to_owned())
+        );
+        assert_eq!(
+            named(|p| p.gpcd.max_points = 0),
+            Some("gpcd.max_points".to_owned())
+        );
+        assert_eq!(
+            named(|p| p.gpcd.d2_max_m = f64::NAN),
+            Some("gpcd.d2_max_m".to_owned())
+        );
+        assert_eq!(
+            named(|p| p.shapes.sphere_preference = -3.0),
+            Some("shapes".to_owned())
+        );
         assert_eq!(
             named(|p| p.depth_proposals.max_fruit_discs = 0.1),
-            Some("depth_proposals.min_fruit_discs")
+            Some("depth_proposals.min_fruit_discs".to_owned())
         );
         // Merging off (0 or less) is a setting, not an error.
         assert_eq!(named(|p| p.merge_radius_m = -1.0), None);

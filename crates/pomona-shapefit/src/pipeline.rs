@@ -388,7 +388,7 @@ impl Stages {
                 clusters = run_stage(screen, (frame, &cloud, clusters.as_slice()), t)?;
             }
             let shapes = run_stage(&self.shapes, (frame, &cloud, clusters.as_slice()), t)?;
-            candidates.extend(self.checks.admitted(frame, shapes, t)?);
+            candidates.extend(self.checks.admitted_proposals(frame, shapes, t)?);
         }
         let features = run_stage(&self.descriptor, (frame, &cloud, candidates.as_slice()), t)?;
         Ok(CandidateSet {

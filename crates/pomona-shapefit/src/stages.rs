@@ -410,6 +410,9 @@ impl Stage<Vec<Candidate>, Vec<Candidate>> for CurvatureStage {
 pub struct ShapeChecks {
     /// The free-space check, when switched on.
     pub free_space: Option<FreeSpaceStage>,
+    /// The free-space check of the depth proposals' shapes, when switched on
+    /// (`depth_proposals.free_space`, else the one above).
+    pub proposal_free_space: Option<FreeSpaceStage>,
     /// The curvature check, when the model has one.
     pub curvature: Option<CurvatureStage>,
 }
@@ -422,15 +425,20 @@ impl ShapeChecks {
     /// ([`ShapeFitParams::problem`], the checks' own included).
     pub fn of_params(params: &ShapeFitParams) -> Result<Self, PipelineError> {
         usable(params.problem())?;
+        let stage = |check: FreeSpaceCheck| check.enabled.then_some(FreeSpaceStage { check });
         Ok(Self {
-            free_space: params.free_space.enabled.then_some(FreeSpaceStage {
-                check: params.free_space,
-            }),
+            free_space: stage(params.free_space),
+            proposal_free_space: stage(
+                params
+                    .depth_proposals
+                    .free_space
+                    .unwrap_or(params.free_space),
+            ),
             curvature: params.curvature.map(|check| CurvatureStage { check }),
         })
     }
 
-    /// `shapes` less those the checks refuse.
+    /// `shapes` of the colour mask's clusters less those the checks refuse.
     ///
     /// # Errors
     /// Those of the stages (none at present).
@@ -440,7 +448,31 @@ impl ShapeChecks {
         shapes: Vec<Candidate>,
         t: &mut StageTimings,
     ) -> Result<Vec<Candidate>, PipelineError> {
-        let shapes = match &self.free_space {
+        self.admitted_after(self.free_space.as_ref(), frame, shapes, t)
+    }
+
+    /// `shapes` of the depth proposals less those the checks refuse (the proposals' own
+    /// free-space check).
+    ///
+    /// # Errors
+    /// Those of the stages (none at present).
+    pub fn admitted_proposals(
+        &self,
+        frame: &RgbdFrame,
+        shapes: Vec<Candidate>,
+        t: &mut StageTimings,
+    ) -> Result<Vec<Candidate>, PipelineError> {
+        self.admitted_after(self.proposal_free_space.as_ref(), frame, shapes, t)
+    }
+
+    fn admitted_after(
+        &self,
+        free_space: Option<&FreeSpaceStage>,
+        frame: &RgbdFrame,
+        shapes: Vec<Candidate>,
+        t: &mut StageTimings,
+    ) -> Result<Vec<Candidate>, PipelineError> {
+        let shapes = match free_space {
             Some(check) => run_stage(check, (frame, shapes), t)?,
             None => shapes,
         };
@@ -453,7 +485,7 @@ impl ShapeChecks {
 
 /// [`ShapeFitParams::problem`] — `(name under params., what is wrong)` — as an error naming
 /// the setting.
-pub(crate) fn usable(problem: Option<(&str, String)>) -> Result<(), PipelineError> {
+pub(crate) fn usable(problem: Option<(String, String)>) -> Result<(), PipelineError> {
     match problem {
         Some((name, reason)) => Err(PipelineError::InvalidParameter {
             name: format!("params.{name}"),

@@ -535,6 +535,13 @@ mod tests {
         assert!(fresh.free_space.enabled);
         let mut json = serde_json::to_value(&fresh).unwrap();
         assert!(json.as_object_mut().unwrap().remove("free_space").is_some());
+        // The proposals' own check, too (detection only: every built-in model file lacks it).
+        assert!(fresh.depth_proposals.free_space.is_some());
+        assert!(json["depth_proposals"]
+            .as_object_mut()
+            .unwrap()
+            .remove("free_space")
+            .is_some());
         let old: ShapeFitParams = serde_json::from_value(json).unwrap();
         assert_eq!(old, fresh);
     }
@@ -609,6 +616,14 @@ mod tests {
         assert_eq!(
             named(|p| p.depth_proposals.max_fruit_discs = 0.1),
             Some("depth_proposals.min_fruit_discs".to_owned())
+        );
+        assert_eq!(
+            named(|p| {
+                if let Some(check) = p.depth_proposals.free_space.as_mut() {
+                    check.see_through_disc_fraction = 0.0;
+                }
+            }),
+            Some("depth_proposals.free_space.see_through_disc_fraction".to_owned())
         );
         // Merging off (0 or less) is a setting, not an error.
         assert_eq!(named(|p| p.merge_radius_m = -1.0), None);

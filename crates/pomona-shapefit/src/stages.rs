@@ -608,6 +608,61 @@ mod tests {
     }
 
     #[test]
+    fn depth_proposals_face_the_stricter_free_space_check() {
+        // A 40 mm ball at 1 m (8 px image radius) whose disc reads its near side (0.97 m)
+        // except on a ring 0.4–0.7 of the radius out, where gaps show a wall at 1.5 m: the
+        // middle is opaque and the median leads, so the colour path's check admits it; a
+        // proposal, whose readings behind the centre may be a tenth of the disc, is refused.
+        let cam = PinholeCamera::new(80, 80, 200.0, 200.0, 39.5, 39.5).unwrap();
+        let raw: Vec<u16> = (0..6400)
+            .map(|i| {
+                let (u, v) = ((i % 80) as f64 - 39.5, (i / 80) as f64 - 39.5);
+                let rho = (u * u + v * v).sqrt() / 8.0;
+                if (0.4..0.7).contains(&rho) {
+                    1500
+                } else if rho < 1.0 {
+                    970
+                } else {
+                    1500
+                }
+            })
+            .collect();
+        let frame = RgbdFrame::new(
+            cam,
+            DepthImage::from_u16(80, 80, &raw, 0.001).unwrap(),
+            None,
+        )
+        .unwrap();
+        let ball = Candidate {
+            shape: pomona_consensus::Shape::Sphere(pomona_consensus::Sphere {
+                center: Point3::new(0.0, 0.0, 1.0),
+                radius_m: 0.04,
+            }),
+            pixels: Vec::new(),
+            points: Vec::new(),
+            normals: None,
+        };
+        let mut checks = ShapeChecks::of_params(&ShapeFitParams::default()).unwrap();
+        checks.curvature = None;
+        let mut t = StageTimings::default();
+        let colour = checks.admitted(&frame, vec![ball.clone()], &mut t).unwrap();
+        assert_eq!(colour, vec![ball.clone()]);
+        let proposed = checks
+            .admitted_proposals(&frame, vec![ball.clone()], &mut t)
+            .unwrap();
+        assert!(proposed.is_empty());
+        // Without a check of their own (older model files) proposals face the model's.
+        let mut params = ShapeFitParams::default();
+        params.depth_proposals.free_space = None;
+        let mut older = ShapeChecks::of_params(&params).unwrap();
+        older.curvature = None;
+        let proposed = older
+            .admitted_proposals(&frame, vec![ball.clone()], &mut t)
+            .unwrap();
+        assert_eq!(proposed, vec![ball]);
+    }
+
+    #[test]
     fn the_screen_keeps_the_clusters_its_classifier_scores_high_enough() {
         // A 40×40 tilted plane at about 1 m, cut into two clusters.
         let cam = PinholeCamera::new(40, 40, 100.0, 100.0, 20.0, 20.0).unwrap();

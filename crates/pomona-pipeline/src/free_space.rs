@@ -122,6 +122,23 @@ impl FreeSpaceCheck {
         }
     }
 
+    /// The check for detections that no colour vouches for — shape-fit's depth proposals and
+    /// the colour-blind box detectors (`symmetry`, `viewer-pose`): at most a tenth of the
+    /// readings within 0.7 of the fruit's image radius may lie half a radius behind its
+    /// centre, where [`Self::default`] allows a fifth of those within 0.3 two radii behind. A
+    /// clump of leaves that a shape fits shows the background through gaps all over its disc;
+    /// an opaque fruit shows none. The default's room is for a colour-found fruit's real-sensor
+    /// mixed pixels; without colour, the geometry is all the evidence there is
+    /// (docs/results.md, "Depth proposals held to what an opaque solid shows").
+    pub fn strict() -> Self {
+        Self {
+            max_see_through_share: Some(0.1),
+            see_through_radii: 0.5,
+            see_through_disc_fraction: 0.7,
+            ..Self::default()
+        }
+    }
+
     /// Which setting is unusable (its key under `free_space`), its value and why, if one is:
     /// `min_lead_radii` must be finite, `disc_radius_fraction` finite and positive,
     /// `max_see_through_share` in `[0, 1]`, `see_through_radii` finite and non-negative and

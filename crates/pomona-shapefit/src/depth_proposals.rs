@@ -89,12 +89,7 @@ impl Default for DepthProposalParams {
             screen_min_score: Some(-1.0),
             screen_points: 64,
             join_pieces: None,
-            free_space: Some(FreeSpaceCheck {
-                max_see_through_share: Some(0.1),
-                see_through_radii: 0.5,
-                see_through_disc_fraction: 0.7,
-                ..FreeSpaceCheck::default()
-            }),
+            free_space: Some(FreeSpaceCheck::strict()),
         }
     }
 }

@@ -413,9 +413,12 @@ pub struct StageParams {
     #[serde(default = "CentreRefinementParams::disabled")]
     pub refinement: CentreRefinementParams,
     /// Merged detections whose centre the camera sees through are dropped (not in the seeds;
-    /// see [`FreeSpaceCheck`]). Detection-time only; absent in older models: on, with the
-    /// defaults (a geometric test, not learnt).
-    #[serde(default)]
+    /// see [`FreeSpaceCheck`]). Detection-time only; absent in older models: on, strict
+    /// ([`FreeSpaceCheck::strict`]: the detectors are colour-blind, so a detection's geometry
+    /// is its only evidence of an opaque fruit). A model file whose `free_space` lacks the
+    /// see-through keys gets the lenient ones of [`FreeSpaceCheck::default`] (the built-in
+    /// files carry the strict values).
+    #[serde(default = "FreeSpaceCheck::strict")]
     pub free_space: FreeSpaceCheck,
 }
 
@@ -437,7 +440,7 @@ impl StageParams {
                 ..CascadeParams::default()
             },
             refinement: CentreRefinementParams::default(),
-            free_space: FreeSpaceCheck::default(),
+            free_space: FreeSpaceCheck::strict(),
         }
     }
 
@@ -661,6 +664,39 @@ mod tests {
         );
         assert!(StageParams::symmetry().refinement.enabled);
         assert!(StageParams::viewer_pose().refinement.enabled);
+    }
+
+    #[test]
+    fn the_colour_blind_detectors_hold_detections_to_the_strict_free_space_check() {
+        assert_eq!(StageParams::symmetry().free_space, FreeSpaceCheck::strict());
+        assert_eq!(
+            StageParams::viewer_pose().free_space,
+            FreeSpaceCheck::strict()
+        );
+        // A file without the key gets it too; one whose `free_space` lacks the see-through
+        // keys gets the lenient defaults of the first version of that check.
+        let mut json = serde_json::to_value(StageParams::symmetry()).unwrap();
+        let fresh: StageParams = serde_json::from_value(json.clone()).unwrap();
+        assert_eq!(fresh.free_space, FreeSpaceCheck::strict());
+        json.as_object_mut().unwrap().remove("free_space");
+        let older: StageParams = serde_json::from_value(json.clone()).unwrap();
+        assert_eq!(older.free_space, FreeSpaceCheck::strict());
+        json["free_space"] = serde_json::json!(
+            {"enabled": true, "min_lead_radii": -1.5, "disc_radius_fraction": 0.5}
+        );
+        let partial: StageParams = serde_json::from_value(json).unwrap();
+        assert_eq!(partial.free_space, FreeSpaceCheck::default());
+        // The built-in files carry the strict values (added by hand to files whose classifiers
+        // and calibrations were fitted before: detection only, see the training example).
+        for text in [
+            include_str!("../models/symmetry.json"),
+            include_str!("../models/viewer-pose.json"),
+        ] {
+            let model: serde_json::Value = serde_json::from_str(text).unwrap();
+            let params: StageParams =
+                serde_json::from_value(model["stage_params"].clone()).unwrap();
+            assert_eq!(params.free_space, FreeSpaceCheck::strict());
+        }
     }
 
     #[test]

@@ -124,8 +124,8 @@ impl FreeSpaceCheck {
 
     /// The check for detections that no colour vouches for — shape-fit's depth proposals and
     /// the colour-blind box detectors (`symmetry`, `viewer-pose`): at most a tenth of the
-    /// readings within 0.7 of the fruit's image radius may lie half a radius behind its
-    /// centre, where [`Self::default`] allows a fifth of those within 0.3 two radii behind. A
+    /// readings within 0.7 of the fruit's image radius may lie a radius behind its centre,
+    /// where [`Self::default`] allows a fifth of those within 0.3 two radii behind. A
     /// clump of leaves that a shape fits shows the background through gaps all over its disc;
     /// an opaque fruit shows none. The default's room is for a colour-found fruit's real-sensor
     /// mixed pixels; without colour, the geometry is all the evidence there is
@@ -133,7 +133,7 @@ impl FreeSpaceCheck {
     pub fn strict() -> Self {
         Self {
             max_see_through_share: Some(0.1),
-            see_through_radii: 0.5,
+            see_through_radii: 1.0,
             see_through_disc_fraction: 0.7,
             ..Self::default()
         }

@@ -30,7 +30,7 @@
 //! the colour path's: with no colour to vouch for it, a proposal must look like an opaque solid,
 //! and a clump of leaves that a sphere fits shows the background through its gaps all over its
 //! disc. Proposals made about half of shape-fit's false detections at the operating confidence
-//! on `wide` test sets; on the 24 held-out ones the strict check removed 28 of the 131 and no
+//! on `wide` test sets; on the 24 held-out ones the strict check removed 27 of the 131 and no
 //! true detection (docs/results.md, "Depth proposals held to what an opaque solid shows").
 
 use pomona_pipeline::FreeSpaceCheck;

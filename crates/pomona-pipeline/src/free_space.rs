@@ -28,6 +28,12 @@
 //! two radii behind where it is (real `ak-apples`, 1.7 m). Leaf clumps that a sphere fits
 //! (their gaps show the background far behind) exceed it (docs/results.md, "See-through
 //! share").
+//!
+//! That room is for a fruit the colour found. A detection nothing but its geometry vouches for
+//! — a depth proposal of shape-fit, any detection of the colour-blind box detectors — is held
+//! to [`FreeSpaceCheck::strict`] instead: a tenth of the readings over 0.7 of its disc, one
+//! radius behind the centre (docs/results.md, "Depth proposals held to what an opaque solid
+//! shows").
 
 use pomona_core::nalgebra::Point3;
 use pomona_core::{Detection, RgbdFrame};

@@ -151,7 +151,8 @@ impl ShapeFitParams {
             })
     }
 
-    /// [`Self::problem`] but for the proposals' free-space check.
+    /// [`Self::problem`] less the proposals' free-space check, whose settings' names are
+    /// built at run time (`depth_proposals.` + the check's own).
     fn own_problem(&self) -> Option<(&'static str, String)> {
         let positive = |name: &'static str, v: f64| {
             (!(v.is_finite() && v > 0.0)).then(|| (name, format!("{v} must be finite and > 0")))

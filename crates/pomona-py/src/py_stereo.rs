@@ -20,7 +20,10 @@ use crate::py_error::to_py;
 /// circles start off, as in ``pomona stereo``; ``set`` can turn them on); ``method``:
 /// ``"paper"`` (Eq. 18) or ``"triangulate"``; ``min_confidence``: as ``Detector.detect``
 /// (``None``: the model's operating confidence); ``reach_m``: ``(near, far)`` hub distances of
-/// the working volume (``None``: pivot + 0.2 to pivot + 2.0 m).
+/// the working volume (``None``: pivot + 0.2 to pivot + 2.0 m); ``refine``: the sub-pixel
+/// refinement of each pair's stereo-view centre (``False``: the circle centres, as in the seed
+/// and ``pomona stereo --no-refine``); ``leftovers``: the pass that pairs the circles the
+/// relaxation leaves by appearance (``False``: none, as in the seed).
 #[pyclass(frozen, module = "pomona")]
 pub struct StereoLocator {
     inner: pomona::StereoLocator,
@@ -29,7 +32,7 @@ pub struct StereoLocator {
 #[pymethods]
 impl StereoLocator {
     #[new]
-    #[pyo3(signature = (*, camera, beta_deg, pivot_m, model = None, set = None, method = "paper", min_confidence = None, reach_m = None))]
+    #[pyo3(signature = (*, camera, beta_deg, pivot_m, model = None, set = None, method = "paper", min_confidence = None, reach_m = None, refine = true, leftovers = true))]
     #[allow(clippy::too_many_arguments)] // Python keyword arguments
     fn new(
         camera: &Bound<'_, PyAny>,
@@ -40,6 +43,8 @@ impl StereoLocator {
         method: &str,
         min_confidence: Option<f64>,
         reach_m: Option<(f64, f64)>,
+        refine: bool,
+        leftovers: bool,
     ) -> PyResult<Self> {
         let camera = camera_from_dict(camera)?.camera;
         let rig = RotatedStereo::new(beta_deg.to_radians(), pivot_m, camera)
@@ -48,11 +53,17 @@ impl StereoLocator {
         let overrides = pomona::StereoLocator::detector_overrides(overrides_from(set)?);
         let detector = load_detector("color-contour", model, overrides)?;
         let keep = detector.keep_rule_for(min_confidence).map_err(to_py)?;
-        let settings = StereoSettings {
+        let mut settings = StereoSettings {
             method,
             reach_m,
             ..StereoSettings::default()
         };
+        if !refine {
+            settings.refinement = None;
+        }
+        if !leftovers {
+            settings.leftovers = None;
+        }
         Ok(Self {
             inner: pomona::StereoLocator::new(detector, keep, rig, settings).map_err(to_py)?,
         })

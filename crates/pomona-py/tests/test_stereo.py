@@ -22,8 +22,9 @@ def in_stereo(p):
     return (math.cos(a) * x + math.sin(a) * z, y, -math.sin(a) * x + math.cos(a) * z - PIVOT_M)
 
 
-def shot(centres) -> np.ndarray:
-    """Each sphere as an orange disc of radius f·R/z on leaf green."""
+def shot(centres, shaded=False) -> np.ndarray:
+    """Each sphere as an orange disc of radius f·R/z on leaf green; ``shaded``: darker towards
+    its rim (lit from the camera), so that there is something for the refinement to match."""
     h, w = CAMERA["height"], CAMERA["width"]
     y, x = np.mgrid[0:h, 0:w]
     image = np.empty((h, w, 3), dtype=np.uint8)
@@ -31,7 +32,11 @@ def shot(centres) -> np.ndarray:
     for cx, cy, cz in centres:
         u = CAMERA["fx"] * cx / cz + CAMERA["cx"]
         v = CAMERA["fy"] * cy / cz + CAMERA["cy"]
-        image[np.hypot(x - u, y - v) <= CAMERA["fx"] * RADIUS_M / cz] = (235, 120, 15)
+        rho = np.hypot(x - u, y - v) / (CAMERA["fx"] * RADIUS_M / cz)
+        disc = rho <= 1.0
+        light = np.sqrt(np.clip(1.0 - rho**2, 0.0, 1.0)) if shaded else np.ones_like(rho)
+        for c, value in enumerate((235, 120, 15)):
+            image[..., c][disc] = (value * (0.4 + 0.6 * light[disc])).astype(np.uint8)
     return image
 
 
@@ -48,6 +53,21 @@ def test_two_shots_locate_each_fruit(method):
     for d in found:
         assert d["diameter_m"] == pytest.approx(2 * RADIUS_M, abs=0.02)
     assert "StereoLocator(beta_deg=6.000" in repr(locator)
+
+
+def test_the_seeds_matching_without_refinement_or_leftover_pass():
+    kwargs = dict(camera=CAMERA, beta_deg=BETA_DEG, pivot_m=PIVOT_M, method="triangulate")
+    primary, stereo = shot(FRUIT, True), shot([in_stereo(p) for p in FRUIT], True)
+    refined = pomona.StereoLocator(min_confidence=0.0, **kwargs).locate(primary, stereo)
+    seed = pomona.StereoLocator(
+        min_confidence=0.0, refine=False, leftovers=False, **kwargs
+    ).locate(primary, stereo)
+    assert len(seed) == len(FRUIT), seed
+    for truth in FRUIT:
+        assert min(math.dist(d["center_m"], truth) for d in seed) < 0.05, (truth, seed)
+    # Same circles, other depths: the refinement moves the stereo-view centres.
+    assert sorted(d["center_px"] for d in seed) == sorted(d["center_px"] for d in refined)
+    assert sorted(d["center_m"] for d in seed) != sorted(d["center_m"] for d in refined)
 
 
 def test_bad_input_is_refused_by_name():

@@ -83,6 +83,8 @@ class StereoLocator:
         method: str = "paper",
         min_confidence: Optional[float] = None,
         reach_m: Optional[tuple[float, float]] = None,
+        refine: bool = True,
+        leftovers: bool = True,
     ) -> None: ...
     def locate(
         self, primary: npt.NDArray[np.uint8], stereo: npt.NDArray[np.uint8]

@@ -390,19 +390,79 @@ mod tests {
 
     /// Each sphere's image as a filled orange disc of radius f·R/z on leaves.
     fn draw(camera: &PinholeCamera, centres: &[Point3<f64>]) -> ColorImage {
+        draw_lit(camera, centres, false)
+    }
+
+    /// The same, `shaded`: darker towards the rim (lit from the camera), so that the
+    /// refinement has an appearance to match (a flat disc gives it none and it falls back).
+    fn draw_lit(camera: &PinholeCamera, centres: &[Point3<f64>], shaded: bool) -> ColorImage {
         let mut image = ColorImage::filled(camera.width, camera.height, LEAF);
         for c in centres {
             let px = camera.project(c).unwrap();
             let r = camera.fx * RADIUS_M / c.z;
             for v in 0..camera.height {
                 for u in 0..camera.width {
-                    if (f64::from(u) - px.x).hypot(f64::from(v) - px.y) <= r {
-                        image.set(u, v, ORANGE);
+                    let rho = (f64::from(u) - px.x).hypot(f64::from(v) - px.y) / r;
+                    if rho <= 1.0 {
+                        let light = if shaded {
+                            0.4 + 0.6 * (1.0 - rho * rho).max(0.0).sqrt()
+                        } else {
+                            1.0
+                        };
+                        image.set(u, v, ORANGE.map(|c| (f64::from(c) * light) as u8));
                     }
                 }
             }
         }
         image
+    }
+
+    #[test]
+    fn the_refinement_moves_the_stereo_centres_of_shaded_fruit_and_none_keeps_the_circles() {
+        let rig = rig();
+        let fruit = [
+            Point3::new(-0.15, -0.05, 0.9),
+            Point3::new(0.05, 0.06, 1.0),
+            Point3::new(0.2, -0.08, 1.1),
+        ];
+        let there: Vec<Point3<f64>> = fruit.iter().map(|p| rig.stereo_from_camera() * p).collect();
+        let (a, b) = (
+            draw_lit(&rig.camera, &fruit, true),
+            draw_lit(&rig.camera, &there, true),
+        );
+        let locate = |refinement: Option<DisparityRefinement>| {
+            let settings = StereoSettings {
+                method: StereoMethod::Triangulate,
+                refinement,
+                ..StereoSettings::default()
+            };
+            let detector = Detector::builtin("color-contour").unwrap();
+            let locator = StereoLocator::new(detector, KeepRule::All, rig, settings).unwrap();
+            locator.locate(&a, &b).unwrap()
+        };
+        let refined = locate(Some(DisparityRefinement::default()));
+        let circles = locate(None);
+        assert_eq!(refined.pairs.len(), 3, "{:?}", refined.pairs);
+        assert_eq!(circles.pairs.len(), 3, "{:?}", circles.pairs);
+        for pair in &circles.pairs {
+            assert!(pair.refinement.is_none());
+            assert_eq!(pair.stereo_px, pair.stereo_circle_px);
+        }
+        let moved = refined
+            .pairs
+            .iter()
+            .filter(|p| matches!(p.refinement, Some(RefinementOutcome::Refined { .. })))
+            .filter(|p| p.stereo_px != p.stereo_circle_px)
+            .count();
+        assert!(moved > 0, "{:?}", refined.pairs);
+        for truth in &fruit {
+            let nearest = refined
+                .detections
+                .iter()
+                .map(|d| (d.center_m - truth).norm())
+                .fold(f64::INFINITY, f64::min);
+            assert!(nearest < 0.03, "{truth} missed by {nearest} m");
+        }
     }
 
     #[test]

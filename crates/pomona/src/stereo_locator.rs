@@ -388,48 +388,61 @@ mod tests {
         RotatedStereo::new(6f64.to_radians(), 0.3, camera).unwrap()
     }
 
-    /// Each sphere's image as a filled orange disc of radius f·R/z on leaves.
-    fn draw(camera: &PinholeCamera, centres: &[Point3<f64>]) -> ColorImage {
-        draw_lit(camera, centres, false)
+    /// Three fruit in the primary camera frame.
+    fn fruit() -> [Point3<f64>; 3] {
+        [
+            Point3::new(-0.15, -0.05, 0.9),
+            Point3::new(0.05, 0.06, 1.0),
+            Point3::new(0.2, -0.08, 1.1),
+        ]
     }
 
-    /// The same, `shaded`: darker towards the rim (lit from the camera), so that the
+    /// The primary and stereo shots of [`fruit`]: each sphere's image an orange disc of radius
+    /// f·R/z on leaves; `shaded`, darker towards the rim (lit from the camera), so that the
     /// refinement has an appearance to match (a flat disc gives it none and it falls back).
-    fn draw_lit(camera: &PinholeCamera, centres: &[Point3<f64>], shaded: bool) -> ColorImage {
-        let mut image = ColorImage::filled(camera.width, camera.height, LEAF);
-        for c in centres {
-            let px = camera.project(c).unwrap();
-            let r = camera.fx * RADIUS_M / c.z;
-            for v in 0..camera.height {
-                for u in 0..camera.width {
-                    let rho = (f64::from(u) - px.x).hypot(f64::from(v) - px.y) / r;
-                    if rho <= 1.0 {
-                        let light = if shaded {
-                            0.4 + 0.6 * (1.0 - rho * rho).max(0.0).sqrt()
-                        } else {
-                            1.0
-                        };
-                        image.set(u, v, ORANGE.map(|c| (f64::from(c) * light) as u8));
+    fn shots(rig: &RotatedStereo, shaded: bool) -> (ColorImage, ColorImage) {
+        let camera = &rig.camera;
+        let draw = |centres: &[Point3<f64>]| {
+            let mut image = ColorImage::filled(camera.width, camera.height, LEAF);
+            for c in centres {
+                let px = camera.project(c).unwrap();
+                let r = camera.fx * RADIUS_M / c.z;
+                for v in 0..camera.height {
+                    for u in 0..camera.width {
+                        let rho = (f64::from(u) - px.x).hypot(f64::from(v) - px.y) / r;
+                        if rho <= 1.0 {
+                            let light = if shaded {
+                                0.4 + 0.6 * (1.0 - rho * rho).max(0.0).sqrt()
+                            } else {
+                                1.0
+                            };
+                            image.set(u, v, ORANGE.map(|c| (f64::from(c) * light) as u8));
+                        }
                     }
                 }
             }
-        }
-        image
+            image
+        };
+        let there: Vec<Point3<f64>> = fruit()
+            .iter()
+            .map(|p| rig.stereo_from_camera() * p)
+            .collect();
+        (draw(&fruit()), draw(&there))
+    }
+
+    /// Distance from `truth` to the nearest located fruit, metres.
+    fn miss_m(found: &StereoFrame, truth: &Point3<f64>) -> f64 {
+        found
+            .detections
+            .iter()
+            .map(|d| (d.center_m - truth).norm())
+            .fold(f64::INFINITY, f64::min)
     }
 
     #[test]
     fn the_refinement_moves_the_stereo_centres_of_shaded_fruit_and_none_keeps_the_circles() {
         let rig = rig();
-        let fruit = [
-            Point3::new(-0.15, -0.05, 0.9),
-            Point3::new(0.05, 0.06, 1.0),
-            Point3::new(0.2, -0.08, 1.1),
-        ];
-        let there: Vec<Point3<f64>> = fruit.iter().map(|p| rig.stereo_from_camera() * p).collect();
-        let (a, b) = (
-            draw_lit(&rig.camera, &fruit, true),
-            draw_lit(&rig.camera, &there, true),
-        );
+        let (a, b) = shots(&rig, true);
         let locate = |refinement: Option<DisparityRefinement>| {
             let settings = StereoSettings {
                 method: StereoMethod::Triangulate,
@@ -455,12 +468,8 @@ mod tests {
             .filter(|p| p.stereo_px != p.stereo_circle_px)
             .count();
         assert!(moved > 0, "{:?}", refined.pairs);
-        for truth in &fruit {
-            let nearest = refined
-                .detections
-                .iter()
-                .map(|d| (d.center_m - truth).norm())
-                .fold(f64::INFINITY, f64::min);
+        for truth in &fruit() {
+            let nearest = miss_m(&refined, truth);
             assert!(nearest < 0.03, "{truth} missed by {nearest} m");
         }
     }
@@ -468,13 +477,7 @@ mod tests {
     #[test]
     fn two_shots_locate_each_fruit_in_the_primary_frame() {
         let rig = rig();
-        let fruit = [
-            Point3::new(-0.15, -0.05, 0.9),
-            Point3::new(0.05, 0.06, 1.0),
-            Point3::new(0.2, -0.08, 1.1),
-        ];
-        let there: Vec<Point3<f64>> = fruit.iter().map(|p| rig.stereo_from_camera() * p).collect();
-        let images = (draw(&rig.camera, &fruit), draw(&rig.camera, &there));
+        let images = shots(&rig, false);
         let detector = || Detector::builtin("color-contour").unwrap();
         for method in [StereoMethod::Paper, StereoMethod::Triangulate] {
             let settings = StereoSettings {
@@ -487,12 +490,8 @@ mod tests {
             assert!((range.0 - 0.2).abs() < 1e-12 && (range.1 - 2.0).abs() < 1e-12);
             let found = locator.locate(&images.0, &images.1).unwrap();
             assert_eq!(found.detections.len(), 3, "{method:?}: {:?}", found.pairs);
-            for truth in &fruit {
-                let nearest = found
-                    .detections
-                    .iter()
-                    .map(|d| (d.center_m - truth).norm())
-                    .fold(f64::INFINITY, f64::min);
+            for truth in &fruit() {
+                let nearest = miss_m(&found, truth);
                 assert!(nearest < 0.03, "{method:?}: {truth} missed by {nearest} m");
             }
             for (pair, detection) in found.pairs.iter().zip(&found.detections) {

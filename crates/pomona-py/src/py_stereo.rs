@@ -53,17 +53,14 @@ impl StereoLocator {
         let overrides = pomona::StereoLocator::detector_overrides(overrides_from(set)?);
         let detector = load_detector("color-contour", model, overrides)?;
         let keep = detector.keep_rule_for(min_confidence).map_err(to_py)?;
-        let mut settings = StereoSettings {
+        let defaults = StereoSettings::default();
+        let settings = StereoSettings {
             method,
             reach_m,
-            ..StereoSettings::default()
+            refinement: defaults.refinement.filter(|_| refine),
+            leftovers: defaults.leftovers.filter(|_| leftovers),
+            ..defaults
         };
-        if !refine {
-            settings.refinement = None;
-        }
-        if !leftovers {
-            settings.leftovers = None;
-        }
         Ok(Self {
             inner: pomona::StereoLocator::new(detector, keep, rig, settings).map_err(to_py)?,
         })

@@ -28,7 +28,7 @@ use pomona_learn::BatchedClassifier;
 use pomona_pipeline::{run_stage, DatasetFrames, FrameSource, ModelFile, Pipeline, StageTimings};
 use pomona_shapefit::stages::{
     BackProjectionStage, ClassifierStage, ColorMaskStage, DepthProposalStage, DescriptorStage,
-    ProposalScreenStage, RegionGrowingStage, ShapeChecks, ShapeStage,
+    ProposalScreenStage, RegionGrowingStage, ShapeChecks, ShapeSource, ShapeStage,
 };
 use pomona_shapefit::{Candidate, GpcdParams, ShapeFitPipeline, ShapeFitStageParams};
 
@@ -89,16 +89,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let checks = ShapeChecks::of_params(p)?;
     let admit = |frame: &pomona_core::RgbdFrame,
                  shapes: Vec<Candidate>,
-                 proposals: bool,
+                 source: ShapeSource,
                  refused: &mut Vec<Candidate>,
                  t: &mut StageTimings|
      -> Result<Vec<Candidate>, Box<dyn std::error::Error>> {
         let all = shapes.clone();
-        let kept = if proposals {
-            checks.admitted_proposals(frame, shapes, t)?
-        } else {
-            checks.admitted(frame, shapes, t)?
-        };
+        let kept = checks.admitted(source, frame, shapes, t)?;
         refused.extend(all.into_iter().filter(|c| !kept.contains(c)));
         Ok(kept)
     };
@@ -121,7 +117,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let cloud = run_stage(&BackProjectionStage, frame, &mut t)?;
         let mut refused = Vec::new();
         let colour_shapes = run_stage(&shapes, (frame, &cloud, clusters.as_slice()), &mut t)?;
-        let mut cands = admit(frame, colour_shapes, false, &mut refused, &mut t)?;
+        let mut cands = admit(
+            frame,
+            colour_shapes,
+            ShapeSource::ColourMask,
+            &mut refused,
+            &mut t,
+        )?;
         let first_proposal = cands.len();
         // Proposals before and after the screen.
         let in_range = ColorMaskStage::depth_range(p.max_depth_m).run_frame(frame)?;
@@ -129,7 +131,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let proposed = run_stage(&proposals, (frame, keep.as_slice()), &mut t)?;
         let screened = run_stage(&screen, (frame, &cloud, proposed.as_slice()), &mut t)?;
         let proposal_shapes = run_stage(&shapes, (frame, &cloud, screened.as_slice()), &mut t)?;
-        cands.extend(admit(frame, proposal_shapes, true, &mut refused, &mut t)?);
+        cands.extend(admit(
+            frame,
+            proposal_shapes,
+            ShapeSource::DepthProposal,
+            &mut refused,
+            &mut t,
+        )?);
         // Which cluster each candidate was fitted in (colour clusters, then screened proposals).
         let mut cluster_of = vec![usize::MAX; ids.len()];
         let mut proposal_of = vec![usize::MAX; ids.len()];

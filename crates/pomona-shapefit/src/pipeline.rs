@@ -19,7 +19,7 @@ use crate::curvature_check::rms;
 use crate::negative_selection::{cap_negatives, hardest_negatives};
 use crate::stages::{
     pixel_colors, usable, BackProjectionStage, ClassifierStage, ColorMaskStage, DepthProposalStage,
-    DescriptorStage, ProposalScreenStage, RegionGrowingStage, ShapeChecks, ShapeStage,
+    DescriptorStage, ProposalScreenStage, RegionGrowingStage, ShapeChecks, ShapeSource, ShapeStage,
 };
 use crate::{
     Candidate, CoaxialMergeParams, ColorBayes, ColorHistograms, ColorLut, GpcdParams, LabelRule,
@@ -380,7 +380,9 @@ impl Stages {
         let clusters = run_stage(&self.regions, (frame, keep.as_slice()), t)?;
         let cloud = run_stage(&BackProjectionStage, frame, t)?;
         let shapes = run_stage(&self.shapes, (frame, &cloud, clusters.as_slice()), t)?;
-        let mut candidates = self.checks.admitted(frame, shapes, t)?;
+        let mut candidates = self
+            .checks
+            .admitted(ShapeSource::ColourMask, frame, shapes, t)?;
         let first_proposal = candidates.len();
         if let Some(proposals) = proposals {
             let mut clusters = run_stage(proposals, (frame, keep.as_slice()), t)?;
@@ -388,7 +390,12 @@ impl Stages {
                 clusters = run_stage(screen, (frame, &cloud, clusters.as_slice()), t)?;
             }
             let shapes = run_stage(&self.shapes, (frame, &cloud, clusters.as_slice()), t)?;
-            candidates.extend(self.checks.admitted_proposals(frame, shapes, t)?);
+            candidates.extend(self.checks.admitted(
+                ShapeSource::DepthProposal,
+                frame,
+                shapes,
+                t,
+            )?);
         }
         let features = run_stage(&self.descriptor, (frame, &cloud, candidates.as_slice()), t)?;
         Ok(CandidateSet {

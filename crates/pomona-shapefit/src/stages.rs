@@ -402,6 +402,16 @@ impl Stage<Vec<Candidate>, Vec<Candidate>> for CurvatureStage {
     }
 }
 
+/// Where the cluster a shape was fitted to came from, which decides the free-space check the
+/// shape faces.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ShapeSource {
+    /// The colour mask's clusters: the model's `free_space`.
+    ColourMask,
+    /// The depth proposals: `depth_proposals.free_space`, else the model's.
+    DepthProposal,
+}
+
 /// The checks a loaded detector runs on the shapes before the descriptor, in its order: the
 /// free space, then the curvature. One place for which checks a model's parameters switch on,
 /// so that what inspects the detector's candidates (the `trace_lost_fruit` example) runs exactly
@@ -438,40 +448,22 @@ impl ShapeChecks {
         })
     }
 
-    /// `shapes` of the colour mask's clusters less those the checks refuse.
+    /// `shapes` fitted to clusters from `source` less those the checks refuse: the
+    /// free-space check of that source, then the curvature check.
     ///
     /// # Errors
     /// Those of the stages (none at present).
     pub fn admitted(
         &self,
+        source: ShapeSource,
         frame: &RgbdFrame,
         shapes: Vec<Candidate>,
         t: &mut StageTimings,
     ) -> Result<Vec<Candidate>, PipelineError> {
-        self.admitted_after(self.free_space.as_ref(), frame, shapes, t)
-    }
-
-    /// `shapes` of the depth proposals less those the checks refuse (the proposals' own
-    /// free-space check).
-    ///
-    /// # Errors
-    /// Those of the stages (none at present).
-    pub fn admitted_proposals(
-        &self,
-        frame: &RgbdFrame,
-        shapes: Vec<Candidate>,
-        t: &mut StageTimings,
-    ) -> Result<Vec<Candidate>, PipelineError> {
-        self.admitted_after(self.proposal_free_space.as_ref(), frame, shapes, t)
-    }
-
-    fn admitted_after(
-        &self,
-        free_space: Option<&FreeSpaceStage>,
-        frame: &RgbdFrame,
-        shapes: Vec<Candidate>,
-        t: &mut StageTimings,
-    ) -> Result<Vec<Candidate>, PipelineError> {
+        let free_space = match source {
+            ShapeSource::ColourMask => &self.free_space,
+            ShapeSource::DepthProposal => &self.proposal_free_space,
+        };
         let shapes = match free_space {
             Some(check) => run_stage(check, (frame, shapes), t)?,
             None => shapes,
@@ -645,10 +637,17 @@ mod tests {
         let mut checks = ShapeChecks::of_params(&ShapeFitParams::default()).unwrap();
         checks.curvature = None;
         let mut t = StageTimings::default();
-        let colour = checks.admitted(&frame, vec![ball.clone()], &mut t).unwrap();
+        let colour = checks
+            .admitted(ShapeSource::ColourMask, &frame, vec![ball.clone()], &mut t)
+            .unwrap();
         assert_eq!(colour, vec![ball.clone()]);
         let proposed = checks
-            .admitted_proposals(&frame, vec![ball.clone()], &mut t)
+            .admitted(
+                ShapeSource::DepthProposal,
+                &frame,
+                vec![ball.clone()],
+                &mut t,
+            )
             .unwrap();
         assert!(proposed.is_empty());
         // Without a check of their own (older model files) proposals face the model's.
@@ -657,7 +656,12 @@ mod tests {
         let mut older = ShapeChecks::of_params(&params).unwrap();
         older.curvature = None;
         let proposed = older
-            .admitted_proposals(&frame, vec![ball.clone()], &mut t)
+            .admitted(
+                ShapeSource::DepthProposal,
+                &frame,
+                vec![ball.clone()],
+                &mut t,
+            )
             .unwrap();
         assert_eq!(proposed, vec![ball]);
     }

@@ -634,36 +634,32 @@ mod tests {
             points: Vec::new(),
             normals: None,
         };
-        let mut checks = ShapeChecks::of_params(&ShapeFitParams::default()).unwrap();
-        checks.curvature = None;
-        let mut t = StageTimings::default();
-        let colour = checks
-            .admitted(ShapeSource::ColourMask, &frame, vec![ball.clone()], &mut t)
-            .unwrap();
-        assert_eq!(colour, vec![ball.clone()]);
-        let proposed = checks
-            .admitted(
-                ShapeSource::DepthProposal,
-                &frame,
-                vec![ball.clone()],
-                &mut t,
-            )
-            .unwrap();
-        assert!(proposed.is_empty());
+        // The checks `params` switch on, less the curvature check (the ball has no points).
+        let checks = |params: &ShapeFitParams| ShapeChecks {
+            curvature: None,
+            ..ShapeChecks::of_params(params).unwrap()
+        };
+        let admitted = |checks: &ShapeChecks, source| {
+            checks
+                .admitted(
+                    source,
+                    &frame,
+                    vec![ball.clone()],
+                    &mut StageTimings::default(),
+                )
+                .unwrap()
+        };
+        let fresh = checks(&ShapeFitParams::default());
+        assert_eq!(
+            admitted(&fresh, ShapeSource::ColourMask),
+            vec![ball.clone()]
+        );
+        assert!(admitted(&fresh, ShapeSource::DepthProposal).is_empty());
         // Without a check of their own (older model files) proposals face the model's.
         let mut params = ShapeFitParams::default();
         params.depth_proposals.free_space = None;
-        let mut older = ShapeChecks::of_params(&params).unwrap();
-        older.curvature = None;
-        let proposed = older
-            .admitted(
-                ShapeSource::DepthProposal,
-                &frame,
-                vec![ball.clone()],
-                &mut t,
-            )
-            .unwrap();
-        assert_eq!(proposed, vec![ball]);
+        let older = checks(&params);
+        assert_eq!(admitted(&older, ShapeSource::DepthProposal), vec![ball]);
     }
 
     #[test]

@@ -14,11 +14,13 @@
 //!   calibrated on held-out frames and an operating threshold, and the detector that reports it.
 //! * [`detect_and_evaluate`]: a detector run over labelled frames and scored against their truth.
 //! * [`FreeSpaceCheck`]: the geometric test any detector with depth can apply to a detection —
-//!   the camera must not see through the fruit's centre.
+//!   the camera must not see through the fruit's centre; [`CurvatureCheck`]: the seen surface
+//!   must bend away from the camera in both directions, as a solid's does and a leaf's does not.
 //! * [`FrameSource`]: labelled frames for training, loaded lazily from datasets
 //!   ([`DatasetFrames`]) or rendered on demand (`SyntheticFrames`, with the `synth` feature).
 
 mod calibration;
+mod curvature_check;
 mod detection_evaluation;
 mod detector;
 mod error;
@@ -34,6 +36,7 @@ mod untagged_fruit;
 pub use calibration::{
     load_detector, train_calibrated, CalibratedDetector, CalibratedTraining, CalibrationParams,
 };
+pub use curvature_check::{CurvatureCheck, CurvatureFilter, SeenCurvature};
 pub use detection_evaluation::{detect_and_evaluate, DetectionEvaluation};
 pub use detector::{complete_with_defaults, Detector, Pipeline, TrainOptions};
 pub use error::PipelineError;

@@ -8,7 +8,7 @@
 
 use pomona_consensus::WindowNormalParams;
 use pomona_learn::{MinMaxScaler, RbfSvm, SvmClassifier};
-use pomona_pipeline::FreeSpaceCheck;
+use pomona_pipeline::{CurvatureCheck, FreeSpaceCheck};
 use serde::{Deserialize, Serialize};
 
 use crate::error::{check_at_least, check_positive, SymmetryError};
@@ -420,6 +420,11 @@ pub struct StageParams {
     /// files carry the strict values).
     #[serde(default = "FreeSpaceCheck::strict")]
     pub free_space: FreeSpaceCheck,
+    /// Merged detections on a surface that does not bend away from the camera in both
+    /// directions (a leaf folded or flat) are dropped (not in the seeds; see
+    /// [`CurvatureCheck`]). Detection-time only; absent in older models: on, as the default.
+    #[serde(default)]
+    pub curvature: CurvatureCheck,
 }
 
 impl StageParams {
@@ -441,6 +446,7 @@ impl StageParams {
             },
             refinement: CentreRefinementParams::default(),
             free_space: FreeSpaceCheck::strict(),
+            curvature: CurvatureCheck::default(),
         }
     }
 
@@ -477,7 +483,11 @@ impl StageParams {
             "cascade.histogram.second_bins",
         ];
         validate_histogram(&self.cascade.histogram, names)?;
-        if let Some((name, value, reason)) = self.free_space.invalid_reason() {
+        if let Some((name, value, reason)) = self
+            .free_space
+            .invalid_reason()
+            .or_else(|| self.curvature.invalid_reason())
+        {
             return Err(SymmetryError::InvalidParameter {
                 name,
                 value,
@@ -700,6 +710,32 @@ mod tests {
     }
 
     #[test]
+    fn both_detectors_check_the_curvature_and_older_files_get_it() {
+        assert_eq!(StageParams::symmetry().curvature, CurvatureCheck::default());
+        assert_eq!(
+            StageParams::viewer_pose().curvature,
+            CurvatureCheck::default()
+        );
+        assert!(CurvatureCheck::default().enabled);
+        let mut json = serde_json::to_value(StageParams::viewer_pose()).unwrap();
+        json.as_object_mut().unwrap().remove("curvature");
+        let older: StageParams = serde_json::from_value(json.clone()).unwrap();
+        assert_eq!(older.curvature, CurvatureCheck::default());
+        json["curvature"] = serde_json::json!({"enabled": false});
+        let off: StageParams = serde_json::from_value(json).unwrap();
+        assert_eq!(off.curvature, CurvatureCheck::off());
+        for text in [
+            include_str!("../models/symmetry.json"),
+            include_str!("../models/viewer-pose.json"),
+        ] {
+            let model: serde_json::Value = serde_json::from_str(text).unwrap();
+            let params: StageParams =
+                serde_json::from_value(model["stage_params"].clone()).unwrap();
+            assert_eq!(params.curvature, CurvatureCheck::default());
+        }
+    }
+
+    #[test]
     fn bad_values_are_named() {
         let mut p = StageParams::symmetry();
         p.boxes.stride_m = 0.0;
@@ -712,5 +748,9 @@ mod tests {
         p.free_space.disc_radius_fraction = -1.0;
         let err = p.validate().unwrap_err().to_string();
         assert!(err.contains("free_space.disc_radius_fraction"), "{err}");
+        let mut p = StageParams::symmetry();
+        p.curvature.patch_radii = f64::NAN;
+        let err = p.validate().unwrap_err().to_string();
+        assert!(err.contains("curvature.patch_radii"), "{err}");
     }
 }

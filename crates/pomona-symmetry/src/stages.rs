@@ -4,7 +4,7 @@
 //! fixed-frame features of the cascade.
 
 use nalgebra::Point3;
-use pomona_pipeline::FreeSpaceFilter;
+use pomona_pipeline::{CurvatureFilter, FreeSpaceFilter};
 use rayon::prelude::*;
 
 use crate::{
@@ -27,6 +27,11 @@ pub struct Stages {
     /// Drops merged detections the camera sees through; a detection the refinement gave no
     /// diameter counts as a fruit a quarter of the box across.
     pub(crate) free_space: FreeSpaceFilter,
+    /// Drops merged detections on a surface that does not bend both ways; a detection the
+    /// refinement gave no diameter passes unjudged (no fruit radius to measure the patch and
+    /// the bend by; measuring it as a fruit a quarter or three eighths of the box across was no
+    /// better on the tuning sets).
+    pub(crate) curvature: CurvatureFilter,
 }
 
 impl Stages {
@@ -57,6 +62,10 @@ impl Stages {
             free_space: FreeSpaceFilter {
                 check: params.free_space,
                 fallback_radius_m: params.boxes.box_size_m / 4.0,
+            },
+            curvature: CurvatureFilter {
+                check: params.curvature,
+                fallback_radius_m: None,
             },
             boxes,
         })

@@ -36,10 +36,10 @@
 //! shows").
 
 use pomona_core::nalgebra::Point3;
-use pomona_core::{Detection, RgbdFrame};
+use pomona_core::RgbdFrame;
 use serde::{Deserialize, Serialize};
 
-use crate::{PipelineError, Stage};
+use crate::{DetectionFilter, FruitCheck};
 
 /// When a detection passes the free-space check, and how the seen surface is measured.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -287,37 +287,23 @@ impl FreeSpaceCheck {
     }
 }
 
+impl FruitCheck for FreeSpaceCheck {
+    const STAGE: &'static str = "free-space";
+
+    fn admits(&self, frame: &RgbdFrame, center_m: &Point3<f64>, radius_m: f64) -> bool {
+        FreeSpaceCheck::admits(self, frame, center_m, radius_m)
+    }
+}
+
 /// The check as a stage over a detector's output: detections the camera sees through are
-/// dropped. A detection without a diameter is measured as a fruit of `fallback_radius_m` (its
-/// disc and the radius its lead is counted in).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct FreeSpaceFilter {
-    /// The check and its limits.
-    pub check: FreeSpaceCheck,
-    /// Radius of a detection that carries no diameter, metres.
-    pub fallback_radius_m: f64,
-}
-
-impl<'a> Stage<(&'a RgbdFrame, Vec<Detection>), Vec<Detection>> for FreeSpaceFilter {
-    fn name(&self) -> &'static str {
-        "free-space"
-    }
-
-    fn run(
-        &self,
-        (frame, mut detections): (&'a RgbdFrame, Vec<Detection>),
-    ) -> Result<Vec<Detection>, PipelineError> {
-        self.check.retain_admitted(frame, &mut detections, |d| {
-            let radius_m = d.diameter_m.map_or(self.fallback_radius_m, |m| 0.5 * m);
-            (d.center_m, radius_m)
-        });
-        Ok(detections)
-    }
-}
+/// dropped (see [`DetectionFilter`]).
+pub type FreeSpaceFilter = DetectionFilter<FreeSpaceCheck>;
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::Stage;
+    use pomona_core::Detection;
     use pomona_core::{DepthImage, PinholeCamera};
 
     /// A 64×64 camera (focal 100 px) looking at a wall at `wall_m`, with a 40 mm ball at
@@ -455,7 +441,7 @@ mod tests {
         let frame = scene(1.0, false);
         let filter = FreeSpaceFilter {
             check: FreeSpaceCheck::default(),
-            fallback_radius_m: 0.03,
+            fallback_radius_m: Some(0.03),
         };
         let floating = Detection::new(Point3::new(0.0, 0.0, 0.8), 1.0);
         let behind_leaf = Detection {

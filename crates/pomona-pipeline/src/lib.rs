@@ -14,15 +14,17 @@
 //!   calibrated on held-out frames and an operating threshold, and the detector that reports it.
 //! * [`detect_and_evaluate`]: a detector run over labelled frames and scored against their truth.
 //! * [`FreeSpaceCheck`]: the geometric test any detector with depth can apply to a detection —
-//!   the camera must not see through the fruit's centre; [`CurvatureCheck`]: the seen surface
-//!   must bend away from the camera in both directions, as a solid's does and a leaf's does not.
+//!   the camera must not see through the fruit's centre; [`DoubleCurvatureCheck`]: the seen
+//!   surface must bend away from the camera in both directions, as a solid's does and a leaf's
+//!   does not; [`DetectionFilter`]: either as a stage over a detector's detections.
 //! * [`FrameSource`]: labelled frames for training, loaded lazily from datasets
 //!   ([`DatasetFrames`]) or rendered on demand (`SyntheticFrames`, with the `synth` feature).
 
 mod calibration;
-mod curvature_check;
 mod detection_evaluation;
+mod detection_filter;
 mod detector;
+mod double_curvature;
 mod error;
 mod frame_source;
 mod free_space;
@@ -36,9 +38,10 @@ mod untagged_fruit;
 pub use calibration::{
     load_detector, train_calibrated, CalibratedDetector, CalibratedTraining, CalibrationParams,
 };
-pub use curvature_check::{CurvatureCheck, CurvatureFilter, SeenCurvature};
 pub use detection_evaluation::{detect_and_evaluate, DetectionEvaluation};
+pub use detection_filter::{DetectionFilter, FruitCheck};
 pub use detector::{complete_with_defaults, Detector, Pipeline, TrainOptions};
+pub use double_curvature::{DoubleCurvatureCheck, DoubleCurvatureFilter, SeenCurvature};
 pub use error::PipelineError;
 pub use frame_source::{ChainedFrames, DatasetFrames, FrameSource, LabelledFrame};
 pub use free_space::{FreeSpaceCheck, FreeSpaceFilter, SeenSurface};

@@ -20,9 +20,9 @@
 //! free-space check (`FreeSpaceCheck::strict`, now the parameters' default); its three
 //! see-through values were added to their `free_space` by hand, a detection-only setting that
 //! no classifier reads. Refitting the calibrations with it was not measured (docs/results.md,
-//! "Depth proposals held to what an opaque solid shows"). The `curvature` block of
-//! `symmetry.json` (`CurvatureCheck`, on for `symmetry`, off for `viewer-pose`) was added the
-//! same way (docs/results.md, "A fruit bends both ways").
+//! "Depth proposals held to what an opaque solid shows"). The `double_curvature` block of
+//! `symmetry.json` (`DoubleCurvatureCheck`, on for `symmetry`, off for `viewer-pose`) was
+//! added the same way (docs/results.md, "A fruit bends both ways").
 //!
 //! Model size: each support vector is 168 numbers, and the `symmetry` model holds two SVMs (the
 //! main one and its cascade's fixed-frame one, see `CascadeParams`): the files are 5.1 and

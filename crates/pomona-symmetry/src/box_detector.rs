@@ -7,9 +7,10 @@
 //! (symmetry frame with `cascade.enabled` only: a fixed-frame SVM drops clearly negative boxes)
 //! → `reference-frame` → `features` → `classifier` (SVM decision value per box) → `merge`
 //! (3D NMS or mean shift) → `refine` (ours: sphere-fitted centre off the stride grid and a
-//! diameter, see [`crate::CentreRefinement`]) → `free-space` and `curvature` (ours: detections
-//! the camera sees through, or on a surface that does not bend both ways, are dropped; see
-//! [`pomona_pipeline::FreeSpaceCheck`] and [`pomona_pipeline::CurvatureCheck`]).
+//! diameter, see [`crate::CentreRefinement`]) → `free-space` and `double-curvature` (ours:
+//! detections the camera sees through, or on a surface that does not bend both ways, are
+//! dropped; see [`pomona_pipeline::FreeSpaceCheck`] and
+//! [`pomona_pipeline::DoubleCurvatureCheck`]).
 //!
 //! A detection's `symmetry_plane_normal` is the normal of its box's symmetry plane (symmetry
 //! frame only; fixed and viewer frames estimate no plane). No box detector estimates the fruit
@@ -136,7 +137,7 @@ impl BoxDetector {
         let positives = self.positive_boxes(&patches, timings)?;
         let detections = self.merged_detections(&cloud, &positives, timings)?;
         let detections = run_stage(&s.free_space, (frame, detections), timings)?;
-        let detections = run_stage(&s.curvature, (frame, detections), timings)?;
+        let detections = run_stage(&s.double_curvature, (frame, detections), timings)?;
         Ok(FrameResult {
             detections,
             pruning,

@@ -8,7 +8,7 @@
 
 use pomona_consensus::WindowNormalParams;
 use pomona_learn::{MinMaxScaler, RbfSvm, SvmClassifier};
-use pomona_pipeline::{CurvatureCheck, FreeSpaceCheck};
+use pomona_pipeline::{DoubleCurvatureCheck, FreeSpaceCheck};
 use serde::{Deserialize, Serialize};
 
 use crate::error::{check_at_least, check_positive, SymmetryError};
@@ -422,12 +422,12 @@ pub struct StageParams {
     pub free_space: FreeSpaceCheck,
     /// Merged detections on a surface that does not bend away from the camera in both
     /// directions (a leaf folded or flat) are dropped (not in the seeds; see
-    /// [`CurvatureCheck`]). Detection-time only; on for `symmetry` (the built-in file carries
+    /// [`DoubleCurvatureCheck`]). Detection-time only; on for `symmetry` (the built-in file carries
     /// it), off for `viewer-pose`, whose mean-shift centres on real apples often sit beside
     /// the fruit, where the patch sees leaves and neighbours (it lost 4 of 78 real
     /// `ak-apples` in leave-one-out); absent in older models: off, as they ran.
-    #[serde(default = "CurvatureCheck::off")]
-    pub curvature: CurvatureCheck,
+    #[serde(default = "DoubleCurvatureCheck::off")]
+    pub double_curvature: DoubleCurvatureCheck,
 }
 
 impl StageParams {
@@ -449,7 +449,7 @@ impl StageParams {
             },
             refinement: CentreRefinementParams::default(),
             free_space: FreeSpaceCheck::strict(),
-            curvature: CurvatureCheck::default(),
+            double_curvature: DoubleCurvatureCheck::default(),
         }
     }
 
@@ -460,7 +460,7 @@ impl StageParams {
             merge: MergeKind::MeanShift,
             cascade: CascadeParams::default(),
             refinement: CentreRefinementParams::default(),
-            curvature: CurvatureCheck::off(),
+            double_curvature: DoubleCurvatureCheck::off(),
             ..Self::symmetry()
         }
     }
@@ -490,7 +490,7 @@ impl StageParams {
         if let Some((name, value, reason)) = self
             .free_space
             .invalid_reason()
-            .or_else(|| self.curvature.invalid_reason())
+            .or_else(|| self.double_curvature.invalid_reason())
         {
             return Err(SymmetryError::InvalidParameter {
                 name,
@@ -714,32 +714,38 @@ mod tests {
     }
 
     #[test]
-    fn symmetry_checks_the_curvature_viewer_pose_and_older_files_do_not() {
-        assert_eq!(StageParams::symmetry().curvature, CurvatureCheck::default());
-        assert!(CurvatureCheck::default().enabled);
-        assert_eq!(StageParams::viewer_pose().curvature, CurvatureCheck::off());
+    fn symmetry_checks_the_double_curvature_viewer_pose_and_older_files_do_not() {
+        assert_eq!(
+            StageParams::symmetry().double_curvature,
+            DoubleCurvatureCheck::default()
+        );
+        assert!(DoubleCurvatureCheck::default().enabled);
+        assert_eq!(
+            StageParams::viewer_pose().double_curvature,
+            DoubleCurvatureCheck::off()
+        );
         let mut json = serde_json::to_value(StageParams::symmetry()).unwrap();
-        json.as_object_mut().unwrap().remove("curvature");
+        json.as_object_mut().unwrap().remove("double_curvature");
         let older: StageParams = serde_json::from_value(json.clone()).unwrap();
-        assert_eq!(older.curvature, CurvatureCheck::off());
-        json["curvature"] = serde_json::json!({"enabled": true});
+        assert_eq!(older.double_curvature, DoubleCurvatureCheck::off());
+        json["double_curvature"] = serde_json::json!({"enabled": true});
         let on: StageParams = serde_json::from_value(json).unwrap();
-        assert_eq!(on.curvature, CurvatureCheck::default());
+        assert_eq!(on.double_curvature, DoubleCurvatureCheck::default());
         // The built-in files: symmetry's carries the check (added by hand, detection only),
         // viewer-pose's does not.
         let curvature_of = |text: &str| {
             let model: serde_json::Value = serde_json::from_str(text).unwrap();
             serde_json::from_value::<StageParams>(model["stage_params"].clone())
                 .unwrap()
-                .curvature
+                .double_curvature
         };
         assert_eq!(
             curvature_of(include_str!("../models/symmetry.json")),
-            CurvatureCheck::default()
+            DoubleCurvatureCheck::default()
         );
         assert_eq!(
             curvature_of(include_str!("../models/viewer-pose.json")),
-            CurvatureCheck::off()
+            DoubleCurvatureCheck::off()
         );
     }
 
@@ -757,8 +763,8 @@ mod tests {
         let err = p.validate().unwrap_err().to_string();
         assert!(err.contains("free_space.disc_radius_fraction"), "{err}");
         let mut p = StageParams::symmetry();
-        p.curvature.patch_radii = f64::NAN;
+        p.double_curvature.patch_radii = f64::NAN;
         let err = p.validate().unwrap_err().to_string();
-        assert!(err.contains("curvature.patch_radii"), "{err}");
+        assert!(err.contains("double_curvature.patch_radii"), "{err}");
     }
 }

@@ -4,7 +4,7 @@
 //! fixed-frame features of the cascade.
 
 use nalgebra::Point3;
-use pomona_pipeline::{CurvatureFilter, FreeSpaceFilter};
+use pomona_pipeline::{DoubleCurvatureFilter, FreeSpaceFilter};
 use rayon::prelude::*;
 
 use crate::{
@@ -31,7 +31,7 @@ pub struct Stages {
     /// refinement gave no diameter passes unjudged (no fruit radius to measure the patch and
     /// the bend by; measuring it as a fruit a quarter or three eighths of the box across was no
     /// better on the tuning sets).
-    pub(crate) curvature: CurvatureFilter,
+    pub(crate) double_curvature: DoubleCurvatureFilter,
 }
 
 impl Stages {
@@ -61,10 +61,10 @@ impl Stages {
             refinement: CentreRefinement::new(params.refinement)?,
             free_space: FreeSpaceFilter {
                 check: params.free_space,
-                fallback_radius_m: params.boxes.box_size_m / 4.0,
+                fallback_radius_m: Some(params.boxes.box_size_m / 4.0),
             },
-            curvature: CurvatureFilter {
-                check: params.curvature,
+            double_curvature: DoubleCurvatureFilter {
+                check: params.double_curvature,
                 fallback_radius_m: None,
             },
             boxes,

@@ -1,8 +1,8 @@
-//! The curvature check: a fruit is a solid that bends away from the camera in every direction,
-//! a leaf is a sheet that bends in one at most. Around a detected fruit's centre the seen
-//! surface must therefore curve in both principal directions; a surface that is flat, folded
-//! along one line (a blade bent over its midrib, a curled leaf, the long side of a branch) or
-//! saddle-shaped is not the near side of a fruit.
+//! The double-curvature check: a fruit is a solid that bends away from the camera in every
+//! direction, a leaf is a sheet that bends in one at most. Around a detected fruit's centre the
+//! seen surface must therefore curve in both principal directions (be doubly curved); a
+//! surface that is flat, folded along one line (a blade bent over its midrib, a curled leaf,
+//! the long side of a branch) or saddle-shaped is not the near side of a fruit.
 //!
 //! Not in the seed papers: the box detectors' normal histograms describe a box's points but do
 //! not single out their flattest direction, and a large leaf bent round a fruit-sized arc gives
@@ -11,31 +11,35 @@
 //! geometry, not learnt, so it carries over to leaf shapes, cameras and light it never saw
 //! (docs/results.md, "A fruit bends both ways").
 //!
-//! How: the depth readings within [`CurvatureCheck::patch_radii`] fruit radii of the detection's
-//! centre are expressed in a frame whose third axis is the viewing ray through the centre, and
-//! a quadric height field `z = a·x² + b·x·y + c·y² + d·x + e·y + f` is fitted to them by least
-//! squares, twice more without the readings off the first fit by more than
-//! [`CurvatureCheck::trim_m`] or three times its robust residual scale, whichever is larger
-//! (leaves in front, the background beside the fruit; the scale keeps a noisy camera's fruit
-//! readings in). The
-//! eigenvalues of its Hessian are the surface's two principal curvatures seen along the ray
-//! (positive: bending away from the camera). The flattest of them, times the fruit's radius,
-//! is about 1.6 for a ball seen whole (the quadric follows the cap's steepening rim; 1 would
-//! be the curvature at the cap's middle), mostly 0.4–1.2 for the fruit of our generator's
-//! scenes, near 0 for a leaf's fold line and negative for a saddle; a detection passes when it is at least
-//! [`CurvatureCheck::min_relative_curvature`]. A detection with too few readings around it is
-//! admitted (no evidence against it).
+//! Shape-fit's `CurvatureCheck` asks a weaker question of a fitted shape's own inliers — is the
+//! shape clearly closer to them than their best plane? — which a leaf folded round a fruit-sized
+//! arc passes (a cylinder or sphere explains it far better than a plane). This one needs no
+//! fitted shape, only a centre and a radius, so it serves any detector with depth.
+//!
+//! How: the depth readings within [`DoubleCurvatureCheck::patch_radii`] fruit radii of the
+//! detection's centre are expressed in a frame whose third axis is the viewing ray through the
+//! centre, and a quadric height field `z = a·x² + b·x·y + c·y² + d·x + e·y + f` is fitted to
+//! them by least squares, twice more without the readings off the first fit by more than
+//! [`DoubleCurvatureCheck::trim_m`] or three times its robust residual scale, whichever is
+//! larger (leaves in front, the background beside the fruit; the scale keeps a noisy camera's
+//! fruit readings in). The eigenvalues of its Hessian are the surface's two principal
+//! curvatures seen along the ray (positive: bending away from the camera). The flattest of
+//! them, times the fruit's radius, is about 1.6 for a ball seen whole (the quadric follows the
+//! cap's steepening rim; 1 would be the curvature at the cap's middle), mostly 0.4–1.2 for the
+//! fruit of our generator's scenes, near 0 for a leaf's fold line and negative for a saddle; a
+//! detection passes when it is at least [`DoubleCurvatureCheck::min_relative_curvature`]. A
+//! detection with too few readings around it is admitted (no evidence against it).
 
 use pomona_core::nalgebra::{Matrix6, Point3, Unit, Vector3, Vector6};
-use pomona_core::{Detection, RgbdFrame};
+use pomona_core::RgbdFrame;
 use serde::{Deserialize, Serialize};
 
-use crate::{PipelineError, Stage};
+use crate::{DetectionFilter, FruitCheck};
 
-/// When a detection passes the curvature check, and over which readings it is measured.
+/// When a detection passes the double-curvature check, and over which readings it is measured.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
-pub struct CurvatureCheck {
+pub struct DoubleCurvatureCheck {
     /// Whether detections are checked at all.
     pub enabled: bool,
     /// Readings within this many fruit radii of the centre are fitted (default 1.4: the
@@ -63,7 +67,7 @@ pub struct CurvatureCheck {
     pub max_readings: usize,
 }
 
-impl Default for CurvatureCheck {
+impl Default for DoubleCurvatureCheck {
     fn default() -> Self {
         Self {
             enabled: true,
@@ -88,7 +92,7 @@ pub struct SeenCurvature {
     pub readings: usize,
 }
 
-impl CurvatureCheck {
+impl DoubleCurvatureCheck {
     /// The check switched off (every detection passes).
     pub fn off() -> Self {
         Self {
@@ -97,40 +101,44 @@ impl CurvatureCheck {
         }
     }
 
-    /// Which setting is unusable (its key under `curvature`), its value and why, if one is:
+    /// Which setting is unusable (its key under `double_curvature`), its value and why, if one is:
     /// `patch_radii` and `trim_m` must be finite and positive, `min_relative_curvature`
     /// finite, `trim_sigmas` finite and non-negative, `min_readings` at least 6 (the quadric's unknowns) and `max_readings` at least
     /// `min_readings`.
     pub fn invalid_reason(&self) -> Option<(&'static str, f64, &'static str)> {
         if !(self.patch_radii.is_finite() && self.patch_radii > 0.0) {
             Some((
-                "curvature.patch_radii",
+                "double_curvature.patch_radii",
                 self.patch_radii,
                 "must be finite and > 0",
             ))
         } else if !self.min_relative_curvature.is_finite() {
             Some((
-                "curvature.min_relative_curvature",
+                "double_curvature.min_relative_curvature",
                 self.min_relative_curvature,
                 "must be finite",
             ))
         } else if !(self.trim_m.is_finite() && self.trim_m > 0.0) {
-            Some(("curvature.trim_m", self.trim_m, "must be finite and > 0"))
+            Some((
+                "double_curvature.trim_m",
+                self.trim_m,
+                "must be finite and > 0",
+            ))
         } else if !(self.trim_sigmas.is_finite() && self.trim_sigmas >= 0.0) {
             Some((
-                "curvature.trim_sigmas",
+                "double_curvature.trim_sigmas",
                 self.trim_sigmas,
                 "must be finite and >= 0",
             ))
         } else if self.min_readings < 6 {
             Some((
-                "curvature.min_readings",
+                "double_curvature.min_readings",
                 self.min_readings as f64,
                 "must be at least 6",
             ))
         } else if self.max_readings < self.min_readings {
             Some((
-                "curvature.max_readings",
+                "double_curvature.max_readings",
                 self.max_readings as f64,
                 "must be at least min_readings",
             ))
@@ -299,41 +307,23 @@ fn quadric_at(coef: &Vector6<f64>, x: f64, y: f64) -> f64 {
     coef[0] * x * x + coef[1] * x * y + coef[2] * y * y + coef[3] * x + coef[4] * y + coef[5]
 }
 
+impl FruitCheck for DoubleCurvatureCheck {
+    const STAGE: &'static str = "double-curvature";
+
+    fn admits(&self, frame: &RgbdFrame, center_m: &Point3<f64>, radius_m: f64) -> bool {
+        DoubleCurvatureCheck::admits(self, frame, center_m, radius_m)
+    }
+}
+
 /// The check as a stage over a detector's output: detections on a surface that does not bend
-/// both ways are dropped. A detection without a diameter is measured as a fruit of
-/// `fallback_radius_m`, or admitted unjudged when that is `None`.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct CurvatureFilter {
-    /// The check and its limits.
-    pub check: CurvatureCheck,
-    /// Radius of a detection that carries no diameter, metres (`None`: such detections pass).
-    pub fallback_radius_m: Option<f64>,
-}
-
-impl<'a> Stage<(&'a RgbdFrame, Vec<Detection>), Vec<Detection>> for CurvatureFilter {
-    fn name(&self) -> &'static str {
-        "curvature"
-    }
-
-    fn run(
-        &self,
-        (frame, mut detections): (&'a RgbdFrame, Vec<Detection>),
-    ) -> Result<Vec<Detection>, PipelineError> {
-        if self.check.enabled {
-            detections.retain(|d| {
-                d.diameter_m
-                    .map(|m| 0.5 * m)
-                    .or(self.fallback_radius_m)
-                    .is_none_or(|radius_m| self.check.admits(frame, &d.center_m, radius_m))
-            });
-        }
-        Ok(detections)
-    }
-}
+/// both ways are dropped (see [`DetectionFilter`]).
+pub type DoubleCurvatureFilter = DetectionFilter<DoubleCurvatureCheck>;
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::Stage;
+    use pomona_core::Detection;
     use pomona_core::{DepthImage, PinholeCamera};
 
     /// A 128×128 camera (focal 200 px) looking at a wall at 1.2 m with `surface` drawn in front
@@ -365,7 +355,7 @@ mod tests {
     #[test]
     fn a_ball_bends_both_ways_by_its_radius() {
         let frame = scene(ball);
-        let check = CurvatureCheck::default();
+        let check = DoubleCurvatureCheck::default();
         let seen = check.seen_curvature(&frame, &CENTRE, 0.04).unwrap();
         // The ball's 25 /m, read high by a quadric that follows the steepening rim of the
         // cap (about 41 /m here); the same both ways.
@@ -385,16 +375,16 @@ mod tests {
         // the trim follows the residual scale, so the fruit's own readings stay in the fit,
         // where a fixed 6 mm trim drops more than a quarter of them.
         let noise = |x: f64, y: f64| 0.01 * ((x * 7919.0 + y * 104_729.0).sin() * 43_758.5).fract();
-        let clean = CurvatureCheck::default()
+        let clean = DoubleCurvatureCheck::default()
             .seen_curvature(&scene(ball), &CENTRE, 0.04)
             .unwrap();
         let frame = scene(|x, y| ball(x, y).map(|z| z + noise(x, y)));
-        let check = CurvatureCheck::default();
+        let check = DoubleCurvatureCheck::default();
         let seen = check.seen_curvature(&frame, &CENTRE, 0.04).unwrap();
         assert_eq!(seen.readings, clean.readings, "{seen:?} {clean:?}");
         assert!(seen.flattest_per_m > 30.0, "{seen:?}");
         assert!(check.admits(&frame, &CENTRE, 0.04));
-        let fixed = CurvatureCheck {
+        let fixed = DoubleCurvatureCheck {
             trim_sigmas: 0.0,
             ..check
         }
@@ -411,20 +401,20 @@ mod tests {
             let r2 = 0.04 * 0.04 - x * x;
             (r2 >= 0.0 && y.abs() < 0.08).then(|| 0.8 - r2.sqrt())
         });
-        let check = CurvatureCheck::default();
+        let check = DoubleCurvatureCheck::default();
         let seen = check.seen_curvature(&folded, &CENTRE, 0.04).unwrap();
         assert!(seen.flattest_per_m.abs() < 1.0, "{seen:?}");
         assert!(seen.steepest_per_m > 15.0, "{seen:?}");
         assert!(!check.admits(&folded, &CENTRE, 0.04));
         let flat = scene(|x, y| (x.abs() < 0.08 && y.abs() < 0.08).then_some(0.77));
         assert!(!check.admits(&flat, &CENTRE, 0.04));
-        assert!(CurvatureCheck::off().admits(&flat, &CENTRE, 0.04));
+        assert!(DoubleCurvatureCheck::off().admits(&flat, &CENTRE, 0.04));
     }
 
     #[test]
     fn a_saddle_is_refused() {
         let saddle = scene(|x, y| Some(0.77 + 10.0 * (x * x - y * y)));
-        let seen = CurvatureCheck::default()
+        let seen = DoubleCurvatureCheck::default()
             .seen_curvature(&saddle, &CENTRE, 0.04)
             .unwrap();
         assert!(
@@ -437,14 +427,14 @@ mod tests {
     fn a_leaf_in_front_of_part_of_a_ball_does_not_decide_it() {
         // A flat leaf 30 mm in front of the ball's near side covers its left third.
         let frame = scene(|x, y| if x < -0.015 { Some(0.73) } else { ball(x, y) });
-        assert!(CurvatureCheck::default().admits(&frame, &CENTRE, 0.04));
+        assert!(DoubleCurvatureCheck::default().admits(&frame, &CENTRE, 0.04));
     }
 
     #[test]
     fn without_readings_a_detection_is_admitted_unjudged() {
         let empty = scene(|_, _| None);
         // Far from the wall: nothing within 1.4 radii of a centre at 0.8 m.
-        let check = CurvatureCheck::default();
+        let check = DoubleCurvatureCheck::default();
         assert!(check.seen_curvature(&empty, &CENTRE, 0.04).is_none());
         assert!(check.admits(&empty, &CENTRE, 0.04));
         // A centre outside the view, or behind the camera.
@@ -460,8 +450,8 @@ mod tests {
         });
         let on_fold = Detection::new(CENTRE, 1.0);
         let elsewhere = Detection::new(Point3::new(0.0, 0.0, 2.0), 0.5);
-        let stage = CurvatureFilter {
-            check: CurvatureCheck::default(),
+        let stage = DoubleCurvatureFilter {
+            check: DoubleCurvatureCheck::default(),
             fallback_radius_m: Some(0.04),
         };
         let kept = stage
@@ -472,25 +462,28 @@ mod tests {
 
     #[test]
     fn bad_settings_are_named() {
-        let mut c = CurvatureCheck::default();
+        let mut c = DoubleCurvatureCheck::default();
         assert_eq!(c.invalid_reason(), None);
         c.patch_radii = 0.0;
         assert_eq!(
             c.invalid_reason().map(|r| r.0),
-            Some("curvature.patch_radii")
+            Some("double_curvature.patch_radii")
         );
-        let c = CurvatureCheck {
+        let c = DoubleCurvatureCheck {
             min_readings: 3,
-            ..CurvatureCheck::default()
+            ..DoubleCurvatureCheck::default()
         };
         assert_eq!(
             c.invalid_reason().map(|r| r.0),
-            Some("curvature.min_readings")
+            Some("double_curvature.min_readings")
         );
-        let c = CurvatureCheck {
+        let c = DoubleCurvatureCheck {
             trim_m: f64::NAN,
-            ..CurvatureCheck::default()
+            ..DoubleCurvatureCheck::default()
         };
-        assert_eq!(c.invalid_reason().map(|r| r.0), Some("curvature.trim_m"));
+        assert_eq!(
+            c.invalid_reason().map(|r| r.0),
+            Some("double_curvature.trim_m")
+        );
     }
 }

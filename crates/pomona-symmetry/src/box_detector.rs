@@ -23,7 +23,7 @@ use pomona_core::{Detection, RgbdFrame};
 use pomona_learn::{BatchedClassifier, ModelFile};
 use pomona_pipeline::{run_stage, Detector, PipelineError, StageTimings};
 
-use crate::cascade::Cascade;
+use crate::cascade::{box_score, Cascade};
 use crate::classify::Classify;
 use crate::merge::Merge;
 use crate::scene_cloud::CloudStage;
@@ -123,18 +123,22 @@ impl BoxDetector {
         cloud.set_normals(normals);
         let patches = run_stage(&BoxCut(&s.boxes), (&cloud, candidates.as_slice()), timings)?;
         let boxes = patches.len();
-        let patches = match (&self.cascade, &s.cascade_features) {
+        let (patches, cascade_scores) = match (&self.cascade, &s.cascade_features) {
             (Some(classifier), Some(features)) => {
                 let cascade = Cascade {
                     classifier,
                     features,
                     min_score: s.params.cascade.min_score,
                 };
-                run_stage(&cascade, patches, timings)?
+                let (patches, scores) = run_stage(&cascade, patches, timings)?;
+                (patches, scores.into_iter().map(Some).collect())
             }
-            _ => patches,
+            _ => {
+                let n = patches.len();
+                (patches, vec![None; n])
+            }
         };
-        let positives = self.positive_boxes(&patches, timings)?;
+        let positives = self.positive_boxes(&patches, &cascade_scores, timings)?;
         let detections = self.merged_detections(&cloud, &positives, timings)?;
         let detections = run_stage(&s.free_space, (frame, detections), timings)?;
         let detections = run_stage(&s.double_curvature, (frame, detections), timings)?;
@@ -167,11 +171,13 @@ impl BoxDetector {
         pruning
     }
 
-    /// Reference frame, features and decision value of every patch; the boxes scoring at least
-    /// `merging.min_score`.
+    /// Reference frame, features and score of every patch (the main SVM's decision value plus
+    /// `cascade.score_weight` × the cascade's, `cascade_scores`, one per patch); the boxes
+    /// scoring at least `merging.min_score`.
     fn positive_boxes(
         &self,
         patches: &[BoxPatch],
+        cascade_scores: &[Option<f64>],
         timings: &mut StageTimings,
     ) -> Result<Vec<ScoredBox>, PipelineError> {
         let s = &self.stages;
@@ -182,12 +188,13 @@ impl BoxDetector {
         };
         let scores = run_stage(&classify, features.as_slice(), timings)?;
         let min_score = s.params.merging.min_score;
+        let weight = s.params.cascade.score_weight;
         Ok(patches
             .iter()
             .zip(&frames)
-            .zip(&scores)
-            .filter_map(|((p, f), sc)| {
-                let score = (*sc)?;
+            .zip(scores.iter().zip(cascade_scores))
+            .filter_map(|((p, f), (main, cascade))| {
+                let score = box_score((*main)?, *cascade, weight);
                 (score >= min_score).then(|| ScoredBox {
                     center: p.center,
                     score,

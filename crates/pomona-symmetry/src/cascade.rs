@@ -1,7 +1,9 @@
 //! Stage `cascade` (ours, symmetry frame only, `cascade.enabled`): the symmetry-plane search is
 //! the costliest step, so each box is first described in the cheap fixed frame and scored by a
 //! second SVM trained alongside the main one; boxes below `cascade.min_score` are dropped before
-//! the search (see [`crate::CascadeParams`]).
+//! the search (see [`crate::CascadeParams`]). The decision values of the boxes that pass go on
+//! with them: a box's score adds `cascade.score_weight` times its cascade value to the main
+//! SVM's ([`box_score`]), in detection and in hard-negative mining alike.
 
 use nalgebra::Point3;
 use pomona_learn::BatchedClassifier;
@@ -12,29 +14,39 @@ use crate::classify::Classify;
 use crate::{BoxPatch, FeatureStage, FixedFrame, ReferenceFrame};
 
 /// Stage `cascade`: fixed-frame features and decision value per box; keeps the boxes scoring at
-/// least `min_score` (see [`crate::CascadeParams`]).
+/// least `min_score`, each with its decision value (see [`crate::CascadeParams`]).
 pub(crate) struct Cascade<'a> {
     pub(crate) classifier: &'a BatchedClassifier,
     pub(crate) features: &'a FeatureStage,
     pub(crate) min_score: f64,
 }
 
-impl Stage<Vec<BoxPatch>, Vec<BoxPatch>> for Cascade<'_> {
+impl Stage<Vec<BoxPatch>, (Vec<BoxPatch>, Vec<f64>)> for Cascade<'_> {
     fn name(&self) -> &'static str {
         "cascade"
     }
 
-    fn run(&self, patches: Vec<BoxPatch>) -> Result<Vec<BoxPatch>, PipelineError> {
-        Ok(self.gate(patches)?.into_iter().map(|(p, _)| p).collect())
+    fn run(&self, patches: Vec<BoxPatch>) -> Result<(Vec<BoxPatch>, Vec<f64>), PipelineError> {
+        Ok(self
+            .gate(patches)?
+            .into_iter()
+            .map(|(p, _, score)| (p, score))
+            .unzip())
     }
 }
 
+/// The score of a box: the main SVM's decision value plus `weight` times the cascade's (`None`
+/// without the cascade, which adds nothing).
+pub(crate) fn box_score(main: f64, cascade: Option<f64>, weight: f64) -> f64 {
+    main + cascade.map_or(0.0, |c| weight * c)
+}
+
 impl Cascade<'_> {
-    /// The patches that pass, in order, each with its fixed-frame features.
+    /// The patches that pass, in order, each with its fixed-frame features and decision value.
     pub(crate) fn gate(
         &self,
         patches: Vec<BoxPatch>,
-    ) -> Result<Vec<(BoxPatch, Vec<f64>)>, PipelineError> {
+    ) -> Result<Vec<(BoxPatch, Vec<f64>, f64)>, PipelineError> {
         let features: Vec<Option<Vec<f64>>> = patches
             .par_iter()
             .map(|p| {
@@ -52,9 +64,22 @@ impl Cascade<'_> {
             .zip(features)
             .zip(scores)
             .filter_map(|((p, f), s)| {
-                let f = f?;
-                s.is_some_and(|s| s >= self.min_score).then_some((p, f))
+                let (f, s) = (f?, s?);
+                (s >= self.min_score).then_some((p, f, s))
             })
             .collect())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::box_score;
+
+    #[test]
+    fn a_box_adds_the_weighted_cascade_value_when_there_is_one() {
+        assert_eq!(box_score(0.25, None, 1.0), 0.25);
+        assert_eq!(box_score(0.25, Some(-0.5), 0.0), 0.25);
+        assert_eq!(box_score(0.25, Some(-0.5), 1.0), -0.25);
+        assert_eq!(box_score(0.25, Some(1.0), 2.0), 2.25);
     }
 }

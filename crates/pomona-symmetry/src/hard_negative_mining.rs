@@ -21,7 +21,7 @@ use pomona_learn::BatchedClassifier;
 use pomona_pipeline::{FrameSource, PipelineError, Stage, TrainOptions};
 use rayon::prelude::*;
 
-use crate::cascade::Cascade;
+use crate::cascade::{box_score, Cascade};
 use crate::classify::Classify;
 use crate::training::{fit_classifier, SampleSets, TrainedModels};
 use crate::{BoxPatch, PruningMask, SceneCloud, Stages};
@@ -91,7 +91,7 @@ struct MinedBox {
     cascade_features: Option<Vec<f64>>,
 }
 
-/// A box scored by the detector path: centre, main decision value, features.
+/// A box scored by the detector path: centre, score, features.
 struct ScoredSample {
     center: Point3<f64>,
     score: f64,
@@ -99,8 +99,12 @@ struct ScoredSample {
     cascade_features: Option<Vec<f64>>,
 }
 
+/// A box's fixed-frame features and cascade decision value, when the cascade ran.
+type Cascaded = Option<(Vec<f64>, f64)>;
+
 /// Every box of `cloud` that the detector would score (same sliding box, pruning mask and
-/// cascade as [`BoxDetector::detect_frame`]), with its decision value, before merging.
+/// cascade as [`BoxDetector::detect_frame`]), with its score (the main decision value plus
+/// `cascade.score_weight` × the cascade's, as in detection), before merging.
 fn score_boxes(
     stages: &Stages,
     classifier: &BatchedClassifier,
@@ -109,7 +113,7 @@ fn score_boxes(
     mask: Option<&PruningMask>,
 ) -> Result<Vec<ScoredSample>, PipelineError> {
     let patches = stages.boxes.patches(cloud, mask);
-    let (patches, cascade_features): (Vec<BoxPatch>, Vec<Option<Vec<f64>>>) =
+    let (patches, cascaded): (Vec<BoxPatch>, Vec<Cascaded>) =
         match (cascade, &stages.cascade_features) {
             (Some(classifier), Some(features)) => Cascade {
                 classifier,
@@ -118,7 +122,7 @@ fn score_boxes(
             }
             .gate(patches)?
             .into_iter()
-            .map(|(p, f)| (p, Some(f)))
+            .map(|(p, f, score)| (p, Some((f, score))))
             .unzip(),
             _ => {
                 let n = patches.len();
@@ -128,17 +132,19 @@ fn score_boxes(
     let frames = stages.frames.frames(&patches);
     let features = stages.features.features(&patches, &frames);
     let scores = Classify { classifier }.run(&features)?;
+    let weight = stages.params.cascade.score_weight;
     Ok(patches
         .iter()
         .zip(features)
         .zip(scores)
-        .zip(cascade_features)
-        .filter_map(|(((p, f), s), cf)| {
+        .zip(cascaded)
+        .filter_map(|(((p, f), s), cascaded)| {
+            let (cascade_features, cascade_score) = cascaded.unzip();
             Some(ScoredSample {
                 center: p.center,
-                score: s?,
+                score: box_score(s?, cascade_score, weight),
                 features: f?,
-                cascade_features: cf,
+                cascade_features,
             })
         })
         .collect())

@@ -16,18 +16,13 @@
 //! holds every kind the scene generator makes, and the demo renders mixed fruit; the crate
 //! README gives the mixed-fruit and pepper-only figures behind this choice.
 //!
-//! `symmetry.json` is this recipe's output as it stands (rewritten on 6 December for the
-//! cascade's weighted score, `CascadeParams::score_weight`; docs/results.md, "Two classifiers,
-//! one score"). `viewer-pose.json` holds the classifier and calibration this wrote before the
-//! strict free-space check (`FreeSpaceCheck::strict`, now the parameters' default), with the
-//! check's three see-through values added to its `free_space` by hand, a detection-only setting
-//! that no classifier reads: rerun today the recipe reproduces that classifier bit for bit and
-//! refits the calibration on detections that passed the check (operating confidence 0.379
-//! instead of the shipped 0.201), which was not measured and is not shipped.
+//! Both files are this recipe's output as it stands: `symmetry.json` rewritten on 6 December for
+//! the cascade's weighted score (`CascadeParams::score_weight`), `viewer-pose.json` the same day
+//! for its new fixed-frame cascade (docs/results.md, "Two classifiers, one score").
 //!
-//! Model size: each support vector is 168 numbers, and the `symmetry` model holds two SVMs (the
-//! main one and its cascade's fixed-frame one, see `CascadeParams`): the files are 5.1 and
-//! 1.2 MB (`ModelFile::save` writes compact JSON). Rerun after changing the pipeline (about
+//! Model size: each support vector is 168 numbers, and each model holds two SVMs (the main one
+//! and its cascade's fixed-frame one, see `CascadeParams`): the files are 5.6 and 2.7 MB
+//! (`ModelFile::save` writes compact JSON). Rerun after changing the pipeline (about
 //! 8 minutes on 2 cores):
 //!
 //! ```sh

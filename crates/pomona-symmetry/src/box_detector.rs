@@ -4,7 +4,8 @@
 //! `highlight` (pruning mask, colour frames only) → `cloud` (points) → `sliding-box` (box
 //! candidates: early rejection and their pixels) → `normals` (only at those pixels) →
 //! `box-cut` (patches) → `cascade`
-//! (symmetry frame with `cascade.enabled` only: a fixed-frame SVM drops clearly negative boxes)
+//! (`cascade.enabled`, symmetry and viewer frames: a fixed-frame SVM drops clearly negative
+//! boxes and its value is added to the main SVM's)
 //! → `reference-frame` → `features` → `classifier` (SVM decision value per box) → `merge`
 //! (3D NMS or mean shift) → `refine` (ours: sphere-fitted centre off the stride grid and a
 //! diameter, see [`crate::CentreRefinement`]) → `free-space` and `double-curvature` (ours:

@@ -1,9 +1,11 @@
-//! Stage `cascade` (ours, symmetry frame only, `cascade.enabled`): the symmetry-plane search is
-//! the costliest step, so each box is first described in the cheap fixed frame and scored by a
-//! second SVM trained alongside the main one; boxes below `cascade.min_score` are dropped before
-//! the search (see [`crate::CascadeParams`]). The decision values of the boxes that pass go on
-//! with them: a box's score adds `cascade.score_weight` times its cascade value to the main
-//! SVM's ([`box_score`]), in detection and in hard-negative mining alike.
+//! Stage `cascade` (ours; symmetry and viewer frames, `cascade.enabled`): each box is first
+//! described in the cheap fixed frame and scored by a second SVM trained alongside the main one;
+//! boxes below `cascade.min_score` are dropped before their own frame, features and the main SVM
+//! (for the symmetry frame the plane search is the costliest step). The decision values of the
+//! boxes that pass go on with them: a box's score adds `cascade.score_weight` times its cascade
+//! value to the main SVM's ([`box_score`]), in detection and in hard-negative mining alike — two
+//! SVMs on two descriptions of the box rank fruit better than either (see
+//! [`crate::CascadeParams`]).
 
 use nalgebra::Point3;
 use pomona_learn::BatchedClassifier;

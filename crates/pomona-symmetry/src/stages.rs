@@ -1,7 +1,7 @@
 //! The stages a box detector is built from, shared by training and detection so that both cut,
 //! orient and describe boxes identically: highlight pruning, normals, the sliding box, the
-//! reference frame, the feature histograms, the centre refinement, and (symmetry frame with the cascade on) the
-//! fixed-frame features of the cascade.
+//! reference frame, the feature histograms, the centre refinement, and (symmetry or viewer frame
+//! with the cascade on) the fixed-frame features of the cascade.
 
 use nalgebra::Point3;
 use pomona_pipeline::{DoubleCurvatureFilter, FreeSpaceFilter};
@@ -21,7 +21,7 @@ pub struct Stages {
     pub(crate) boxes: SlidingBox,
     pub(crate) frames: FrameStage,
     pub(crate) features: FeatureStage,
-    /// Fixed-frame features, for the cascade (symmetry frame with `cascade.enabled`).
+    /// Fixed-frame features, for the cascade (symmetry or viewer frame with `cascade.enabled`).
     pub(crate) cascade_features: Option<FeatureStage>,
     pub(crate) refinement: CentreRefinement,
     /// Drops merged detections the camera sees through; a detection the refinement gave no
@@ -49,7 +49,7 @@ impl Stages {
             FrameKind::Viewer => Box::new(ViewerFrame),
         };
         let boxes = SlidingBox::new(params.boxes);
-        let cascade_features = (params.cascade.enabled && params.frame == FrameKind::Symmetry)
+        let cascade_features = (params.cascade.enabled && params.frame != FrameKind::Fixed)
             .then(|| FeatureStage::new(FrameKind::Fixed, boxes.half_m(), params.cascade.histogram));
         Ok(Self {
             cascade_features,

@@ -107,6 +107,11 @@ fn viewer_pose_pipeline_finds_peppers() {
     eprintln!("viewer-pose AP@50mm = {ap}");
     // Refined (with a learnt radius calibration), so detections carry diameters.
     assert!(model.stage_params["refinement"]["radius_calibration"].is_object());
+    // The fixed-frame cascade is trained for the viewer frame too, and scores detections.
+    assert!(model.stage_params["cascade"]["classifier"].is_object());
+    let mut timings = StageTimings::default();
+    detector.detect(&data().1[0].frame, &mut timings).unwrap();
+    assert!(timings.table().contains("cascade"), "{}", timings.table());
     assert!(ap >= 0.55, "AP@50mm = {ap}");
 }
 

@@ -2,7 +2,8 @@
 //! Dalal–Triggs and Felzenszwalb et al.).
 //!
 //! After the first fit, each round runs the detector's box-scoring path — same sliding box,
-//! highlight pruning mask and cascade as detection, up to the main SVM's decision value per box,
+//! highlight pruning mask and cascade as detection, up to each box's score (the main SVM's
+//! decision value plus `cascade.score_weight` × the cascade's, as detection ranks boxes),
 //! *before* merging (cheaper than merging and it yields every false box, not one per cluster) —
 //! on every training frame. Boxes scoring ≥ 0 whose centre is at least
 //! `training.negative_min_distance_m` from every truth fruit centre (every fruit, including those

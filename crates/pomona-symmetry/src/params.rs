@@ -343,10 +343,10 @@ pub struct CascadeParams {
     /// Weight of the cascade's decision value in a box's score: a box that reaches the main
     /// SVM scores `main + score_weight × cascade` (ours; 0 = the main SVM's value alone, as
     /// models from before this key load). The two SVMs judge different descriptions of the
-    /// box (symmetry frame, fixed frame), and a box the cascade only just lets through is less
-    /// likely a fruit than the main SVM alone says: on twelve tuning sets of our generator,
-    /// weight 1 with `min_score` −0.5 kept more fruit than threshold 0 and ranked them better
-    /// (docs/results.md, "Two classifiers, one score").
+    /// box (its own frame, symmetry or viewer; the fixed frame), and a box the cascade only just
+    /// lets through is less likely a fruit than the main SVM alone says: on twelve tuning sets
+    /// of our generator, weight 1 with `min_score` −0.5 kept more fruit than threshold 0 and
+    /// ranked them better (docs/results.md, "Two classifiers, one score").
     #[serde(default)]
     pub score_weight: f64,
     /// Bins of the cascade's fixed-frame features (the cascade's cost is mostly its SVM, in

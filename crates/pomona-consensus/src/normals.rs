@@ -282,6 +282,17 @@ pub struct WindowNormalParams {
     /// dominate the surface's shape.
     #[serde(default)]
     pub reference_focal_px: Option<f64>,
+    /// With `reference_focal_px`: scale the window only on cameras whose focal length is above
+    /// this, px; the others keep `half_window` as it is (default `None`, and in older files:
+    /// every camera is scaled). A model's classifier learnt the normals of its training
+    /// cameras' own windows; set to the finest training camera's focal length, the window is
+    /// left alone on every camera the model has seen and grows to the reference patch on finer
+    /// ones it has not. `symmetry` and `viewer-pose` use 615 px (the D435, the finest camera of
+    /// their built-in training frames): on a 1080p Azure Kinect the fixed 5×5 window spans
+    /// 8 mm of a fruit at 1.5 m, where registered depth is noise (docs/results.md,
+    /// "Normals on a finer camera than the training ones").
+    #[serde(default)]
+    pub scale_above_focal_px: Option<f64>,
     /// Pixels between the window's samples along each axis (default 1: every pixel of the
     /// window); `half_window` counts samples. [`WindowNormals::for_focal`] sets it when
     /// `keep_sample_count` is on and keeps it otherwise.
@@ -331,6 +342,7 @@ impl Default for WindowNormalParams {
             min_neighbors: 5,
             viewpoint: Point3::origin(),
             reference_focal_px: None,
+            scale_above_focal_px: None,
             sample_step_px: 1,
             keep_sample_count: false,
             reference_depth_m: None,
@@ -378,6 +390,9 @@ impl WindowNormalParams {
         if let Some(z) = self.reference_depth_m {
             crate::consensus::check_positive("reference_depth_m", z)?;
         }
+        if let Some(f) = self.scale_above_focal_px {
+            crate::consensus::check_positive("scale_above_focal_px", f)?;
+        }
         Ok(WindowNormals {
             params: self,
             reference: self,
@@ -404,7 +419,8 @@ impl WindowNormals {
     /// [`WindowNormalParams::reference_focal_px`] is set; unchanged otherwise, or when `fx_px`
     /// is not a positive number. With [`WindowNormalParams::keep_sample_count`] the samples are
     /// `s = ⌊fx_px / reference_focal_px⌋` pixels apart and the half window, counted in samples,
-    /// is scaled by the ratio over `s`.
+    /// is scaled by the ratio over `s`. With [`WindowNormalParams::scale_above_focal_px`],
+    /// cameras at or below that focal length are left unchanged.
     ///
     /// ```
     /// use pomona_consensus::WindowNormalParams;
@@ -435,8 +451,12 @@ impl WindowNormals {
     /// # Ok::<(), pomona_consensus::ConsensusError>(())
     /// ```
     pub fn for_focal(&self, fx_px: f64) -> Self {
+        let finer_than_floor = self
+            .reference
+            .scale_above_focal_px
+            .is_none_or(|floor| fx_px > floor);
         match self.reference.reference_focal_px {
-            Some(reference) if fx_px.is_finite() && fx_px > 0.0 => {
+            Some(reference) if fx_px.is_finite() && fx_px > 0.0 && finer_than_floor => {
                 let ratio = fx_px / reference;
                 let (half_window, sample_step_px) = self.scaled_window(ratio);
                 Self {
@@ -979,12 +999,32 @@ mod tests {
         for bad in [0.0, -1.0, f64::NAN] {
             assert_eq!(scaled.for_focal(bad), scaled, "fx {bad}");
         }
+        let floored = WindowNormalParams {
+            reference_focal_px: Some(365.0),
+            scale_above_focal_px: Some(615.0),
+            ..WindowNormalParams::default()
+        }
+        .check()
+        .unwrap();
+        for (fx, want) in [(220.0, 2), (365.0, 2), (615.0, 2), (917.0, 5)] {
+            assert_eq!(floored.for_focal(fx).params().half_window, want, "fx {fx}");
+        }
+        assert_eq!(
+            floored.for_focal(615.0),
+            floored,
+            "at the floor: as checked"
+        );
         for bad in [0.0, -3.0, f64::INFINITY] {
             let p = WindowNormalParams {
                 reference_focal_px: Some(bad),
                 ..WindowNormalParams::default()
             };
             assert!(p.check().is_err(), "{bad}");
+            let p = WindowNormalParams {
+                scale_above_focal_px: Some(bad),
+                ..WindowNormalParams::default()
+            };
+            assert!(p.check().is_err(), "floor {bad}");
         }
     }
 

@@ -399,6 +399,14 @@ impl CascadeClassifier {
     }
 }
 
+/// Focal length, px, whose 5×5 normal window the defaults reproduce on finer cameras: the
+/// Kinect v2's, the camera of most built-in training frames.
+const REFERENCE_FOCAL_PX: f64 = 365.0;
+
+/// Finest camera of the built-in training frames (the D435, 615 px): cameras up to it keep the
+/// window the classifiers were trained with.
+const FINEST_TRAINED_FOCAL_PX: f64 = 615.0;
+
 /// All stage parameters of a `symmetry` or `viewer-pose` detector.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct StageParams {
@@ -408,7 +416,11 @@ pub struct StageParams {
     pub merge: MergeKind,
     /// Highlight pruning.
     pub highlight: HighlightParams,
-    /// PCA normals over image windows (pomona-consensus).
+    /// PCA normals over image windows (pomona-consensus). The defaults keep the 5×5 window on
+    /// every camera up to the D435's 615 px and scale it to a Kinect v2's patch (365 px) on
+    /// finer ones (`reference_focal_px`, `keep_sample_count`, `scale_above_focal_px`): the
+    /// built-in models never saw such a camera, and a fixed window there reads a patch too
+    /// small for its depth noise. Older files, without these keys, keep the window everywhere.
     pub normals: WindowNormalParams,
     /// Sliding box.
     pub boxes: SlidingBoxParams,
@@ -455,7 +467,12 @@ impl StageParams {
             frame: FrameKind::Symmetry,
             merge: MergeKind::Nms,
             highlight: HighlightParams::default(),
-            normals: WindowNormalParams::default(),
+            normals: WindowNormalParams {
+                reference_focal_px: Some(REFERENCE_FOCAL_PX),
+                keep_sample_count: true,
+                scale_above_focal_px: Some(FINEST_TRAINED_FOCAL_PX),
+                ..WindowNormalParams::default()
+            },
             boxes: SlidingBoxParams::default(),
             symmetry: SymmetryPlaneParams::default(),
             histogram: HistogramParams::default(),
@@ -724,6 +741,18 @@ mod tests {
         assert!(StageParams::viewer_pose().refinement.enabled);
     }
 
+    /// The stage parameters of the built-in `symmetry` and `viewer-pose` files.
+    fn built_in_params() -> [StageParams; 2] {
+        [
+            include_str!("../models/symmetry.json"),
+            include_str!("../models/viewer-pose.json"),
+        ]
+        .map(|text| {
+            let model: serde_json::Value = serde_json::from_str(text).unwrap();
+            serde_json::from_value(model["stage_params"].clone()).unwrap()
+        })
+    }
+
     #[test]
     fn the_colour_blind_detectors_hold_detections_to_the_strict_free_space_check() {
         assert_eq!(StageParams::symmetry().free_space, FreeSpaceCheck::strict());
@@ -746,13 +775,7 @@ mod tests {
         assert_eq!(partial.free_space, FreeSpaceCheck::default());
         // The built-in files carry the strict values (added by hand to files whose classifiers
         // and calibrations were fitted before: detection only, see the training example).
-        for text in [
-            include_str!("../models/symmetry.json"),
-            include_str!("../models/viewer-pose.json"),
-        ] {
-            let model: serde_json::Value = serde_json::from_str(text).unwrap();
-            let params: StageParams =
-                serde_json::from_value(model["stage_params"].clone()).unwrap();
+        for params in built_in_params() {
             assert_eq!(params.free_space, FreeSpaceCheck::strict());
         }
     }
@@ -777,20 +800,34 @@ mod tests {
         assert_eq!(on.double_curvature, DoubleCurvatureCheck::default());
         // The built-in files: symmetry's carries the check (added by hand, detection only),
         // viewer-pose's does not.
-        let curvature_of = |text: &str| {
-            let model: serde_json::Value = serde_json::from_str(text).unwrap();
-            serde_json::from_value::<StageParams>(model["stage_params"].clone())
-                .unwrap()
-                .double_curvature
-        };
-        assert_eq!(
-            curvature_of(include_str!("../models/symmetry.json")),
-            DoubleCurvatureCheck::default()
-        );
-        assert_eq!(
-            curvature_of(include_str!("../models/viewer-pose.json")),
-            DoubleCurvatureCheck::off()
-        );
+        let [symmetry, viewer_pose] = built_in_params();
+        assert_eq!(symmetry.double_curvature, DoubleCurvatureCheck::default());
+        assert_eq!(viewer_pose.double_curvature, DoubleCurvatureCheck::off());
+    }
+
+    #[test]
+    fn the_normal_window_is_scaled_above_the_finest_training_camera_only() {
+        let normals = StageParams::symmetry().normals;
+        assert_eq!(normals.reference_focal_px, Some(365.0));
+        assert!(normals.keep_sample_count);
+        assert_eq!(normals.scale_above_focal_px, Some(615.0));
+        assert_eq!(StageParams::viewer_pose().normals, normals);
+        // Older files keep the fixed window on every camera.
+        let mut json = serde_json::to_value(StageParams::symmetry()).unwrap();
+        for key in [
+            "reference_focal_px",
+            "keep_sample_count",
+            "scale_above_focal_px",
+        ] {
+            json["normals"].as_object_mut().unwrap().remove(key);
+        }
+        let older: StageParams = serde_json::from_value(json).unwrap();
+        assert_eq!(older.normals, WindowNormalParams::default());
+        // Both built-in files carry the defaults (added by hand: their training cameras are all
+        // at or below the floor, so the classifiers are the ones trained before).
+        for params in built_in_params() {
+            assert_eq!(params.normals, normals);
+        }
     }
 
     #[test]

@@ -7,6 +7,9 @@
 //! plane-fit normal; the bench `normals` compares the two (42.5 ms vs 260 ms on a Kinect v2
 //! frame, one thread). Normals are only computed on a pixel lattice (every `pixel_lattice`-th
 //! row and column; the window itself still uses every pixel), since boxes read only those.
+//! The window is the one [`WindowNormals::for_focal`] gives the frame's camera: the same
+//! pixels on the cameras a model was trained on, grown to the same surface patch on finer
+//! ones when the parameters say so (`scale_above_focal_px`).
 //!
 //! Detection goes further (exact, ours): boxes are thinned to at most `max_points` pixels, so
 //! normals are estimated only at the pixels some box reads ([`NormalStage::points`], then
@@ -213,7 +216,7 @@ impl NormalStage {
             .step_by(g)
             .flat_map(|v| (0..w).step_by(g).map(move |u| v * w + u))
             .collect();
-        let normals = self.estimate(&scene.cloud, &pixels)?;
+        let normals = self.estimate(&scene.cloud, scene.camera.fx, &pixels)?;
         scene.normals = normals;
         Ok(scene)
     }
@@ -242,18 +245,20 @@ impl NormalStage {
             }
         }
         let idx: Vec<usize> = (0..n).filter(|&i| needed[i]).collect();
-        self.estimate(&scene.cloud, &idx)
+        self.estimate(&scene.cloud, scene.camera.fx, &idx)
     }
 
     /// Normals at `pixels` (in parallel chunks; the result does not depend on the thread count).
     fn estimate(
         &self,
         cloud: &PointCloud,
+        fx_px: f64,
         pixels: &[usize],
     ) -> Result<PixelNormals, SymmetryError> {
+        let window = self.normals.for_focal(fx_px);
         let found: Vec<Vec<Option<Unit<Vector3<f64>>>>> = pixels
             .par_chunks(2048)
-            .map(|chunk| self.normals.estimate_at(cloud, chunk))
+            .map(|chunk| window.estimate_at(cloud, chunk))
             .collect::<Result<_, _>>()?;
         Ok(PixelNormals::from_estimates(
             cloud.len(),
@@ -341,6 +346,34 @@ mod tests {
             assert!(expected.len() > 20, "{}", expected.len());
             assert_eq!(got, expected);
             assert!(estimated < full.normals().count());
+        }
+    }
+
+    #[test]
+    fn the_window_grows_only_on_cameras_finer_than_the_floor() {
+        let floored = crate::StageParams::symmetry().normals;
+        let fixed = NormalStage::new(WindowNormalParams::default(), 1).unwrap();
+        let scaled = NormalStage::new(floored, 1).unwrap();
+        let window = floored.check().unwrap();
+        for (camera, grows) in [
+            (CameraPreset::Sr4000, false),
+            (CameraPreset::KinectV2, false),
+            (CameraPreset::D435, false),
+            (CameraPreset::AzureKinect, true),
+        ] {
+            let spec = SceneSpec {
+                camera: camera.camera(),
+                noise: NoiseModel::Tof,
+                ..SceneSpec::default()
+            };
+            let scene = spec.sample_frame(3, 0).unwrap();
+            let frame = render(&scene, &spec.camera).unwrap().frame;
+            let kept = fixed.cloud(&frame).unwrap();
+            let got = scaled.cloud(&frame).unwrap();
+            let fx = spec.camera.fx;
+            assert_eq!(window.for_focal(fx) != window, grows, "{camera:?}");
+            let same = (0..got.len()).all(|i| got.normal(i) == kept.normal(i));
+            assert_eq!(same, !grows, "{camera:?}: normals as the fixed window's");
         }
     }
 }

@@ -184,7 +184,7 @@ impl DoubleCurvatureCheck {
         let mut fit = None;
         let mut trim_m = self.trim_m;
         let mut residuals = Vec::with_capacity(local.len());
-        for round in 0..3 {
+        for round in 0..FITS {
             let used = keep.iter().filter(|&&k| k).count();
             if used < self.min_readings {
                 break;
@@ -192,6 +192,11 @@ impl DoubleCurvatureCheck {
             let Some(coef) = quadric_fit(&local, &keep) else {
                 break;
             };
+            fit = Some((coef, used));
+            if round + 1 == FITS {
+                // The last fit decides; its residuals would trim nothing more.
+                break;
+            }
             residuals.clear();
             residuals.extend(
                 local
@@ -204,7 +209,6 @@ impl DoubleCurvatureCheck {
             for (k, r) in keep.iter_mut().zip(&residuals) {
                 *k = *r <= trim_m;
             }
-            fit = Some((coef, used));
         }
         let (coef, used) = fit?;
         // Hessian [[2a, b], [b, 2c]]: eigenvalues (a + c) ∓ √((a − c)² + b²).
@@ -276,6 +280,10 @@ impl DoubleCurvatureCheck {
                 .is_none_or(|seen| seen.flattest_per_m * radius_m >= self.min_relative_curvature)
     }
 }
+
+/// Quadric fits per patch: the first on every reading, two more on the readings it and then
+/// the second left within the trim.
+const FITS: usize = 3;
 
 /// Least-squares coefficients `(a, b, c, d, e, f)` of `z = a·x² + b·x·y + c·y² + d·x + e·y + f`
 /// over the `points` marked in `keep`; `None` when the normal equations are singular (the

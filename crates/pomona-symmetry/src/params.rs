@@ -832,29 +832,29 @@ mod tests {
 
     #[test]
     fn bad_values_are_named() {
+        // `p` refused by `validate`, with `name` in the message.
+        let refused_naming = |p: StageParams, name: &str| {
+            let err = p.validate().unwrap_err().to_string();
+            assert!(err.contains(name), "{err}");
+        };
         let mut p = StageParams::symmetry();
         p.boxes.stride_m = 0.0;
-        let err = p.validate().unwrap_err().to_string();
-        assert!(err.contains("boxes.stride_m"), "{err}");
+        refused_naming(p, "boxes.stride_m");
         let mut p = StageParams::symmetry();
         p.histogram.angle_bins = 0;
         assert!(p.validate().is_err());
         let mut p = StageParams::viewer_pose();
         p.free_space.disc_radius_fraction = -1.0;
-        let err = p.validate().unwrap_err().to_string();
-        assert!(err.contains("free_space.disc_radius_fraction"), "{err}");
+        refused_naming(p, "free_space.disc_radius_fraction");
         let mut p = StageParams::symmetry();
         p.double_curvature.patch_radii = f64::NAN;
-        let err = p.validate().unwrap_err().to_string();
-        assert!(err.contains("double_curvature.patch_radii"), "{err}");
+        refused_naming(p, "double_curvature.patch_radii");
         let mut p = StageParams::symmetry();
         p.cascade.score_weight = -1.0;
-        let err = p.validate().unwrap_err().to_string();
-        assert!(err.contains("cascade.score_weight"), "{err}");
+        refused_naming(p, "cascade.score_weight");
         let mut p = StageParams::symmetry();
         p.cascade.min_score = f64::NAN;
-        let err = p.validate().unwrap_err().to_string();
-        assert!(err.contains("cascade.min_score"), "{err}");
+        refused_naming(p, "cascade.min_score");
     }
 
     /// Both box pipelines score a box with both SVMs (`symmetry` lets more boxes through the

@@ -8,7 +8,9 @@
 //!
 //! Per counted fruit (visibility ≥ 0.5, as `pomona eval`): the fraction of its visible pixels in
 //! the colour mask, the largest fraction in one colour cluster / one proposed depth cluster /
-//! one screened proposal, the candidates fitted mostly on its pixels and their centre errors,
+//! one screened proposal (proposals include the clusters regrown from covered ones), and for a
+//! lost fruit the proposal holding most of it (its pixels, the fruit's share of them, the
+//! screen's score); the candidates fitted mostly on its pixels and their centre errors,
 //! the best score of a candidate within 50 mm, and whether a kept detection matches it. The
 //! stage a fruit is lost at is the first of: `mask+proposals` (no cluster holds ≥ 20 % of its
 //! pixels), `shape` (no candidate on it), `checks` (candidates on it, all refused by the
@@ -27,8 +29,9 @@ use pomona_consensus::Shape;
 use pomona_learn::BatchedClassifier;
 use pomona_pipeline::{run_stage, DatasetFrames, FrameSource, ModelFile, Pipeline, StageTimings};
 use pomona_shapefit::stages::{
-    BackProjectionStage, ClassifierStage, ColorMaskStage, DepthProposalStage, DescriptorStage,
-    ProposalScreenStage, RegionGrowingStage, ShapeChecks, ShapeSource, ShapeStage,
+    drop_pieces_of_colour_fruit, BackProjectionStage, ClassifierStage, ColorMaskStage,
+    DepthProposalStage, DepthProposals, DescriptorStage, ProposalScreenStage, RegionGrowingStage,
+    ShapeChecks, ShapeSource, ShapeStage,
 };
 use pomona_shapefit::{Candidate, GpcdParams, ShapeFitPipeline, ShapeFitStageParams};
 
@@ -128,16 +131,32 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         // Proposals before and after the screen.
         let in_range = ColorMaskStage::depth_range(p.max_depth_m).run_frame(frame)?;
         let all_depth = run_stage(&regions, (frame, in_range.as_slice()), &mut t)?;
-        let proposed = run_stage(&proposals, (frame, keep.as_slice()), &mut t)?;
-        let screened = run_stage(&screen, (frame, &cloud, proposed.as_slice()), &mut t)?;
-        let proposal_shapes = run_stage(&shapes, (frame, &cloud, screened.as_slice()), &mut t)?;
-        cands.extend(admit(
-            frame,
-            proposal_shapes,
-            ShapeSource::DepthProposal,
-            &mut refused,
-            &mut t,
-        )?);
+        // The proposals, then the clusters regrown from covered ones (as the detector runs
+        // them: each batch screened, fitted and checked, the regrown shapes that claim a colour
+        // path's fruit dropped); `proposed` and `screened` hold both batches.
+        let DepthProposals {
+            clusters: first,
+            regrown,
+        } = run_stage(&proposals, (frame, keep.as_slice()), &mut t)?;
+        let (mut proposed, mut screened) = (Vec::new(), Vec::new());
+        for (batch, is_regrown) in [(first, false), (regrown, true)] {
+            let kept = run_stage(&screen, (frame, &cloud, batch.as_slice()), &mut t)?;
+            let batch_shapes = run_stage(&shapes, (frame, &cloud, kept.as_slice()), &mut t)?;
+            let mut admitted = admit(
+                frame,
+                batch_shapes,
+                ShapeSource::DepthProposal,
+                &mut refused,
+                &mut t,
+            )?;
+            if is_regrown {
+                drop_pieces_of_colour_fruit(&cands[..first_proposal], &mut admitted);
+            }
+            cands.extend(admitted);
+            proposed.extend(batch);
+            screened.extend(kept);
+        }
+        let screen_scores = screen.scores(frame, &cloud, &proposed)?;
         // Which cluster each candidate was fitted in (colour clusters, then screened proposals).
         let mut cluster_of = vec![usize::MAX; ids.len()];
         let mut proposal_of = vec![usize::MAX; ids.len()];
@@ -300,6 +319,20 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 loc_errors.push(best);
             }
             if verbose || stage != "found" {
+                // The proposal holding most of the fruit: its size, the fruit's share of it and
+                // the screen's score.
+                let proposal = proposed
+                    .iter()
+                    .zip(&screen_scores)
+                    .map(|(c, &s)| (c.iter().filter(|&&i| ids[i] == id).count(), c.len(), s))
+                    .max_by_key(|&(on, _, _)| on)
+                    .filter(|&(on, _, _)| on > 0)
+                    .map_or(String::new(), |(on, len, s)| {
+                        format!(
+                            " | proposal {len} px, {:.2} fruit, screen {s:.2}",
+                            on as f64 / len as f64
+                        )
+                    });
                 let describe: Vec<String> = on_it
                     .iter()
                     .map(|&c| {
@@ -319,7 +352,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     })
                     .collect();
                 println!(
-                    "{} fruit {} {} vis {:.2} z {:.2} px {} | mask {:.2} colcl {:.2} depthcl {:.2} prop {:.2} scr {:.2} | near {} best {:.2} det {:.2} | {stage} | {}",
+                    "{} fruit {} {} vis {:.2} z {:.2} px {} | mask {:.2} colcl {:.2} depthcl {:.2} prop {:.2} scr {:.2} | near {} best {:.2} det {:.2}{proposal} | {stage} | {}",
                     lf.name,
                     f.id,
                     f.kind,

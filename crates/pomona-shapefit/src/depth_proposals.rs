@@ -77,6 +77,15 @@ pub struct DepthProposalParams {
     /// path keeps the lenient check, whose room is for real sensors' mixed pixels at a
     /// fruit's rim (see `pomona_pipeline::FreeSpaceCheck`).
     pub free_space: Option<FreeSpaceCheck>,
+    /// A depth cluster left to the colour path (`max_color_coverage`) can hold a fruit the
+    /// colour mask missed beside one it found — a green guava touching a yellow one, the two
+    /// one surface to region growing. With this on, the pixels outside the colour mask of every
+    /// such cluster are grown into clusters again and proposed under the same tests (and the
+    /// screen); a shape fitted to one counts only when its core and a colour-path shape's are
+    /// further apart than the larger radius (closer, it is a piece of that fruit: a leaf's
+    /// shadow or an unripe end). Detection only, like the rest of the proposals. Default on; `false` is the detector before (docs/results.md,
+    /// "Fruit the colour path's clusters swallowed").
+    pub regrow_covered: bool,
 }
 
 impl Default for DepthProposalParams {
@@ -90,6 +99,7 @@ impl Default for DepthProposalParams {
             screen_points: 64,
             join_pieces: None,
             free_space: Some(FreeSpaceCheck::strict()),
+            regrow_covered: true,
         }
     }
 }
@@ -101,6 +111,16 @@ impl DepthProposalParams {
             enabled: false,
             ..Self::default()
         }
+    }
+
+    /// Whether at least `max_color_coverage` of `cluster`'s pixels are in `color_mask`: the
+    /// colour path clustered that surface already.
+    pub fn covered(&self, cluster: &[usize], color_mask: &[bool]) -> bool {
+        let covered = cluster
+            .iter()
+            .filter(|&&i| color_mask.get(i).copied().unwrap_or(false))
+            .count();
+        covered as f64 >= self.max_color_coverage * cluster.len() as f64
     }
 
     /// Whether a depth-only `cluster` (pixel indices) is proposed: fewer than
@@ -115,14 +135,7 @@ impl DepthProposalParams {
         fx_px: f64,
         (min_radius_m, max_radius_m): (f64, f64),
     ) -> bool {
-        if cluster.is_empty() {
-            return false;
-        }
-        let covered = cluster
-            .iter()
-            .filter(|&&i| color_mask.get(i).copied().unwrap_or(false))
-            .count();
-        if covered as f64 >= self.max_color_coverage * cluster.len() as f64 {
+        if cluster.is_empty() || self.covered(cluster, color_mask) {
             return false;
         }
         let z_m = crate::region_growing::median_depth(depth_m, cluster);

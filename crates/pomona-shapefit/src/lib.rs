@@ -53,7 +53,7 @@ pub use pipeline::{ShapeFitDetector, ShapeFitPipeline, ShapeFitStageParams, PIPE
 pub use pomona_consensus::{fit_center_fixed_radius, RadiusCalibration, MIN_CALIBRATION_SAMPLES};
 /// Re-exported from pomona-core, where the one RGB → HSV conversion lives.
 pub use pomona_core::rgb_to_hsv;
-pub use region_growing::{grow_regions, MinFruitArea, RegionGrowingParams};
+pub use region_growing::{grow_regions, grow_regions_over, MinFruitArea, RegionGrowingParams};
 pub use size_prior::{
     SizePrior, SizePriorMode, DEPTH_MARGIN, ELONGATED_RATIO, MIN_VISIBLE_FRACTION, RADIUS_MARGIN,
 };

@@ -15,11 +15,13 @@ use pomona_pipeline::{
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
+use crate::candidate::claim_one_fruit;
 use crate::curvature_check::rms;
 use crate::negative_selection::{cap_negatives, hardest_negatives};
 use crate::stages::{
-    pixel_colors, usable, BackProjectionStage, ClassifierStage, ColorMaskStage, DepthProposalStage,
-    DescriptorStage, ProposalScreenStage, RegionGrowingStage, ShapeChecks, ShapeSource, ShapeStage,
+    drop_pieces_of_colour_fruit, pixel_colors, usable, BackProjectionStage, ClassifierStage,
+    ColorMaskStage, DepthProposalStage, DepthProposals, DescriptorStage, ProposalScreenStage,
+    RegionGrowingStage, ShapeChecks, ShapeSource, ShapeStage,
 };
 use crate::{
     Candidate, CoaxialMergeParams, ColorBayes, ColorHistograms, ColorLut, GpcdParams, LabelRule,
@@ -385,17 +387,24 @@ impl Stages {
             .admitted(ShapeSource::ColourMask, frame, shapes, t)?;
         let first_proposal = candidates.len();
         if let Some(proposals) = proposals {
-            let mut clusters = run_stage(proposals, (frame, keep.as_slice()), t)?;
-            if let Some(screen) = &self.screen {
-                clusters = run_stage(screen, (frame, &cloud, clusters.as_slice()), t)?;
+            let DepthProposals { clusters, regrown } =
+                run_stage(proposals, (frame, keep.as_slice()), t)?;
+            for (mut clusters, is_regrown) in [(clusters, false), (regrown, true)] {
+                if clusters.is_empty() {
+                    continue;
+                }
+                if let Some(screen) = &self.screen {
+                    clusters = run_stage(screen, (frame, &cloud, clusters.as_slice()), t)?;
+                }
+                let shapes = run_stage(&self.shapes, (frame, &cloud, clusters.as_slice()), t)?;
+                let mut admitted =
+                    self.checks
+                        .admitted(ShapeSource::DepthProposal, frame, shapes, t)?;
+                if is_regrown {
+                    drop_pieces_of_colour_fruit(&candidates[..first_proposal], &mut admitted);
+                }
+                candidates.extend(admitted);
             }
-            let shapes = run_stage(&self.shapes, (frame, &cloud, clusters.as_slice()), t)?;
-            candidates.extend(self.checks.admitted(
-                ShapeSource::DepthProposal,
-                frame,
-                shapes,
-                t,
-            )?);
         }
         let features = run_stage(&self.descriptor, (frame, &cloud, candidates.as_slice()), t)?;
         Ok(CandidateSet {
@@ -741,19 +750,6 @@ fn fit_rms_m(shape: &Shape, points: &[Point3<f64>]) -> Option<f64> {
     (!points.is_empty()).then(|| rms(points, |p| shape.signed_distance(p)))
 }
 
-/// Whether `p` lies inside the space `shape` claims: the sphere's ball, or the cylinder's
-/// radius around its axis within its extent padded by the radius.
-fn occupies(shape: &Shape, p: &Point3<f64>) -> bool {
-    match shape {
-        Shape::Sphere(s) => (p - s.center).norm() < s.radius_m,
-        Shape::Cylinder(c) => {
-            let along = (p - c.axis_point).dot(&c.axis);
-            let (lo, hi) = c.extent_m.unwrap_or((0.0, 0.0));
-            c.distance_to_axis(p) < c.radius_m && along > lo - c.radius_m && along < hi + c.radius_m
-        }
-    }
-}
-
 /// The union of two pieces of one long fruit: cylinders whose axes agree within
 /// `max_axis_angle_deg`, whose midpoints are within `max_axis_offset_radii` radii of each
 /// other's axis, and whose extents along the axis overlap or leave a gap of at most
@@ -817,7 +813,7 @@ fn merge_overlapping(
                 }
             }
             let ck = sk.center();
-            if (ck - ci).norm() < radius_m || occupies(sk, &ci) || occupies(si, &ck) {
+            if (ck - ci).norm() < radius_m || claim_one_fruit(sk, si) {
                 continue 'candidates;
             }
         }

@@ -138,6 +138,51 @@ pub fn grow_regions(
     clusters
 }
 
+/// [`grow_regions`] with the mask holding exactly `pixels` (row-major indices), computed on
+/// their bounding box and a one-pixel margin, so that its cost follows the pixels rather than
+/// the image: the same clusters in the same order. Indices outside the image are ignored.
+pub fn grow_regions_over(
+    width: usize,
+    height: usize,
+    fx_px: f64,
+    depth_m: &[f32],
+    pixels: &[usize],
+    params: &RegionGrowingParams,
+) -> Vec<Vec<usize>> {
+    let n = width * height;
+    let inside = || pixels.iter().copied().filter(|&i| i < n);
+    let (Some(lo), Some(hi)) = (inside().min(), inside().max()) else {
+        return Vec::new();
+    };
+    if depth_m.len() != n {
+        return Vec::new();
+    }
+    let (u0, u1) = inside().fold((width, 0), |(a, b), i| (a.min(i % width), b.max(i % width)));
+    let (u0, u1) = (u0.saturating_sub(1), (u1 + 1).min(width - 1));
+    let (v0, v1) = (
+        (lo / width).saturating_sub(1),
+        (hi / width + 1).min(height - 1),
+    );
+    let (w, h) = (u1 - u0 + 1, v1 - v0 + 1);
+    let to_box = |i: usize| (i / width - v0) * w + (i % width - u0);
+    let mut keep = vec![false; w * h];
+    for i in inside() {
+        keep[to_box(i)] = true;
+    }
+    let depth: Vec<f32> = (v0..=v1)
+        .flat_map(|v| depth_m[v * width + u0..=v * width + u1].iter().copied())
+        .collect();
+    grow_regions(w, h, fx_px, &depth, &keep, params)
+        .into_iter()
+        .map(|cluster| {
+            cluster
+                .into_iter()
+                .map(|j| (v0 + j / w) * width + u0 + j % w)
+                .collect()
+        })
+        .collect()
+}
+
 /// The connected components of the valid pixels: `label[i]` numbers pixel `i`'s component
 /// (`u32::MAX` for invalid pixels), components numbered in raster order of their first pixel;
 /// `sizes[c]` is component `c`'s pixel count.
@@ -319,6 +364,63 @@ mod tests {
             out.push(cluster);
         }
         out
+    }
+
+    #[test]
+    fn growing_over_a_pixel_list_is_growing_over_its_mask() {
+        // Random depth terraces and random pixel lists (dense blobs and scattered specks, some
+        // touching the image's border), under each way a cluster's size is limited and with a
+        // rim: the bounding-box computation gives the whole image's clusters.
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+        let (width, height) = (40, 30);
+        let settings = [
+            RegionGrowingParams {
+                min_pixels: 4,
+                reference_focal_px: 100.0,
+                ..RegionGrowingParams::default()
+            },
+            RegionGrowingParams {
+                min_fruit_area: Some(MinFruitArea {
+                    radius_m: 0.01,
+                    fraction: 0.5,
+                }),
+                ..RegionGrowingParams::default()
+            },
+            RegionGrowingParams {
+                min_pixels: 4,
+                reference_focal_px: 100.0,
+                rim_px: 2,
+                ..RegionGrowingParams::default()
+            },
+        ];
+        for trial in 0..60 {
+            let depth: Vec<f32> = (0..width * height)
+                .map(|_| 0.5 + 0.004 * rng.gen_range(0..3) as f32)
+                .collect();
+            let (cu, cv) = (rng.gen_range(0..width), rng.gen_range(0..height));
+            let reach = rng.gen_range(2..15) as i64;
+            let pixels: Vec<usize> = (0..width * height)
+                .filter(|&i| {
+                    let (du, dv) = (
+                        (i % width) as i64 - cu as i64,
+                        (i / width) as i64 - cv as i64,
+                    );
+                    du.abs().max(dv.abs()) <= reach && rng.gen_bool(0.8)
+                })
+                .collect();
+            let mut keep = vec![false; width * height];
+            for &i in &pixels {
+                keep[i] = true;
+            }
+            let params = &settings[trial % settings.len()];
+            assert_eq!(
+                grow_regions_over(width, height, 100.0, &depth, &pixels, params),
+                grow_regions(width, height, 100.0, &depth, &keep, params),
+                "trial {trial}"
+            );
+        }
+        assert!(grow_regions_over(4, 4, 100.0, &[0.5; 16], &[], &settings[0]).is_empty());
     }
 
     #[test]

@@ -10,9 +10,10 @@ use pomona_learn::BatchedClassifier;
 use pomona_pipeline::{run_stage, FreeSpaceCheck, PipelineError, Stage, StageTimings};
 use rayon::prelude::*;
 
+use crate::candidate::cores_within_larger_radius;
 use crate::{
-    gpcd, grow_regions, Candidate, ClusterLattice, ColorLut, CurvatureCheck, DepthProposalParams,
-    GpcdParams, PieceJoining, RegionGrowingParams, ShapeFitParams,
+    gpcd, grow_regions, grow_regions_over, Candidate, ClusterLattice, ColorLut, CurvatureCheck,
+    DepthProposalParams, GpcdParams, PieceJoining, RegionGrowingParams, ShapeFitParams,
 };
 
 /// Colour posterior ≥ threshold and depth within range (Eq. 2, then the masked depth image).
@@ -160,7 +161,18 @@ impl DepthProposalStage {
     }
 }
 
-impl<'a> Stage<(&'a RgbdFrame, &'a [bool]), Vec<Vec<usize>>> for DepthProposalStage {
+/// A frame's depth proposals (pixel indices per cluster).
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct DepthProposals {
+    /// The depth clusters proposed.
+    pub clusters: Vec<Vec<usize>>,
+    /// Clusters grown again from the pixels outside the colour mask of depth clusters the
+    /// colour path covers (`regrow_covered`), proposed under the same tests: their shapes count
+    /// only where no shape of the colour path claims the same fruit.
+    pub regrown: Vec<Vec<usize>>,
+}
+
+impl<'a> Stage<(&'a RgbdFrame, &'a [bool]), DepthProposals> for DepthProposalStage {
     fn name(&self) -> &'static str {
         "depth-proposals"
     }
@@ -168,19 +180,44 @@ impl<'a> Stage<(&'a RgbdFrame, &'a [bool]), Vec<Vec<usize>>> for DepthProposalSt
     fn run(
         &self,
         (frame, color_mask): (&'a RgbdFrame, &'a [bool]),
-    ) -> Result<Vec<Vec<usize>>, PipelineError> {
+    ) -> Result<DepthProposals, PipelineError> {
         let in_range = self.in_range.run(frame)?;
         let mut clusters = self.regions.run((frame, in_range.as_slice()))?;
         let (fx, depth) = (frame.camera().fx, frame.depth().as_slice());
+        let proposes = |c: &Vec<usize>| {
+            self.params
+                .proposes(c, color_mask, depth, fx, self.radius_range_m)
+        };
+        // Each covered cluster's pixels outside the mask, grown on their own: pixels of two
+        // depth clusters are never joined by growing (they would be one cluster).
+        let mut regrown = Vec::new();
+        if self.params.regrow_covered {
+            let (width, height) = (
+                frame.camera().width as usize,
+                frame.camera().height as usize,
+            );
+            for cluster in clusters
+                .iter()
+                .filter(|c| self.params.covered(c, color_mask))
+            {
+                let rest: Vec<usize> = cluster
+                    .iter()
+                    .copied()
+                    .filter(|&i| !color_mask.get(i).copied().unwrap_or(true))
+                    .collect();
+                regrown.extend(
+                    grow_regions_over(width, height, fx, depth, &rest, &self.regions.params)
+                        .into_iter()
+                        .filter(proposes),
+                );
+            }
+        }
         if let Some(joining) = &self.joining {
             let pieces = joining.run((frame, clusters.as_slice()))?;
             clusters.extend(pieces);
         }
-        clusters.retain(|c| {
-            self.params
-                .proposes(c, color_mask, depth, fx, self.radius_range_m)
-        });
-        Ok(clusters)
+        clusters.retain(proposes);
+        Ok(DepthProposals { clusters, regrown })
     }
 }
 
@@ -201,17 +238,18 @@ pub struct ProposalScreenStage {
     pub min_score: f64,
 }
 
-impl<'a> Stage<(&'a RgbdFrame, &'a PointCloud, &'a [Vec<usize>]), Vec<Vec<usize>>>
-    for ProposalScreenStage
-{
-    fn name(&self) -> &'static str {
-        "proposal-screen"
-    }
-
-    fn run(
+impl ProposalScreenStage {
+    /// The classifier's score of each of `clusters` (pixel indices of `frame`), in order: what
+    /// the screen compares with `min_score`.
+    ///
+    /// # Errors
+    /// Those of the descriptor and the classifier.
+    pub fn scores(
         &self,
-        (frame, cloud, clusters): (&'a RgbdFrame, &'a PointCloud, &'a [Vec<usize>]),
-    ) -> Result<Vec<Vec<usize>>, PipelineError> {
+        frame: &RgbdFrame,
+        cloud: &PointCloud,
+        clusters: &[Vec<usize>],
+    ) -> Result<Vec<f64>, PipelineError> {
         let color = if self.use_color { frame.color() } else { None };
         let normals = self.normals.for_focal(frame.camera().fx);
         let features: Result<Vec<Vec<f64>>, PipelineError> = clusters
@@ -224,7 +262,22 @@ impl<'a> Stage<(&'a RgbdFrame, &'a PointCloud, &'a [Vec<usize>]), Vec<Vec<usize>
             .collect();
         let features = features?;
         let rows: Vec<&[f64]> = features.iter().map(Vec::as_slice).collect();
-        let scores = self.svm.decision_values(&rows)?;
+        Ok(self.svm.decision_values(&rows)?)
+    }
+}
+
+impl<'a> Stage<(&'a RgbdFrame, &'a PointCloud, &'a [Vec<usize>]), Vec<Vec<usize>>>
+    for ProposalScreenStage
+{
+    fn name(&self) -> &'static str {
+        "proposal-screen"
+    }
+
+    fn run(
+        &self,
+        (frame, cloud, clusters): (&'a RgbdFrame, &'a PointCloud, &'a [Vec<usize>]),
+    ) -> Result<Vec<Vec<usize>>, PipelineError> {
+        let scores = self.scores(frame, cloud, clusters)?;
         Ok(clusters
             .iter()
             .zip(scores)
@@ -232,6 +285,17 @@ impl<'a> Stage<(&'a RgbdFrame, &'a PointCloud, &'a [Vec<usize>]), Vec<Vec<usize>
             .map(|(c, _)| c.clone())
             .collect())
     }
+}
+
+/// Drops from `regrown` (shapes fitted to [`DepthProposals::regrown`]) every shape that lies on
+/// a fruit of a shape in `colour` (the colour path's): one core within the other's radius (see
+/// `cores_within_larger_radius`), a piece of that fruit rather than a fruit beside it.
+pub fn drop_pieces_of_colour_fruit(colour: &[Candidate], regrown: &mut Vec<Candidate>) {
+    regrown.retain(|c| {
+        !colour
+            .iter()
+            .any(|k| cores_within_larger_radius(&k.shape, &c.shape))
+    });
 }
 
 /// Back-projection of the frame to an organised point cloud (Eq. 3), once per frame for every
@@ -572,6 +636,78 @@ mod tests {
     use pomona_consensus::WindowNormalParams;
     use pomona_core::{DepthImage, PinholeCamera};
     use pomona_learn::SvmClassifier;
+
+    #[test]
+    fn a_fruit_the_colour_mask_missed_is_regrown_from_the_cluster_of_one_it_found() {
+        // Two fruit touching at 1 m before a background out of range (3 m): a 12 px disc the
+        // colour mask holds and a 9 px disc beside it that it misses. Region growing on depth
+        // joins them; the colour mask covers most of the union, so it is left to the colour
+        // path and the missed fruit is only found grown again from the uncovered pixels.
+        let (w, h) = (80_usize, 40_usize);
+        let cam = PinholeCamera::new(w as u32, h as u32, 200.0, 200.0, 39.5, 19.5).unwrap();
+        let in_disc = |i: usize, (cx, cy, r): (f64, f64, f64)| {
+            let (u, v) = ((i % w) as f64 - cx, (i / w) as f64 - cy);
+            u * u + v * v <= r * r
+        };
+        let (found, missed) = ((26.0, 20.0, 12.0), (46.0, 20.0, 9.0));
+        let raw: Vec<u16> = (0..w * h)
+            .map(|i| {
+                if in_disc(i, found) || in_disc(i, missed) {
+                    1000
+                } else {
+                    3000
+                }
+            })
+            .collect();
+        let frame = RgbdFrame::new(
+            cam,
+            DepthImage::from_u16(w as u32, h as u32, &raw, 0.001).unwrap(),
+            None,
+        )
+        .unwrap();
+        let color_mask: Vec<bool> = (0..w * h).map(|i| in_disc(i, found)).collect();
+        let stage = |regrow_covered| DepthProposalStage {
+            params: DepthProposalParams {
+                regrow_covered,
+                ..DepthProposalParams::default()
+            },
+            in_range: ColorMaskStage::depth_range(2.0),
+            regions: RegionGrowingStage {
+                params: RegionGrowingParams::default(),
+            },
+            radius_range_m: (0.015, 0.08),
+            joining: None,
+        };
+        let missed_pixels: Vec<usize> = (0..w * h)
+            .filter(|&i| in_disc(i, missed) && !color_mask[i])
+            .collect();
+        let on = stage(true).run((&frame, color_mask.as_slice())).unwrap();
+        assert!(on.clusters.is_empty(), "the union is the colour path's");
+        assert_eq!(on.regrown.len(), 1);
+        let mut regrown = on.regrown[0].clone();
+        regrown.sort_unstable();
+        assert_eq!(regrown, missed_pixels);
+        let off = stage(false).run((&frame, color_mask.as_slice())).unwrap();
+        assert_eq!(off, DepthProposals::default());
+    }
+
+    #[test]
+    fn regrown_shapes_on_a_colour_path_fruit_are_dropped() {
+        let ball = |x: f64, r: f64| Candidate {
+            shape: pomona_consensus::Shape::Sphere(pomona_consensus::Sphere {
+                center: Point3::new(x, 0.0, 1.0),
+                radius_m: r,
+            }),
+            pixels: Vec::new(),
+            points: Vec::new(),
+            normals: None,
+        };
+        let colour = [ball(0.0, 0.035)];
+        // A piece of the colour path's fruit (20 mm from its centre) and a fruit touching it.
+        let mut regrown = vec![ball(0.02, 0.025), ball(0.065, 0.03)];
+        drop_pieces_of_colour_fruit(&colour, &mut regrown);
+        assert_eq!(regrown, vec![ball(0.065, 0.03)]);
+    }
 
     #[test]
     fn the_free_space_stage_drops_shapes_the_camera_sees_through() {

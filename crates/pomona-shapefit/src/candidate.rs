@@ -18,24 +18,6 @@ pub struct Candidate {
     pub normals: Option<Vec<Option<Unit<Vector3<f64>>>>>,
 }
 
-/// Whether `p` lies inside the space `shape` claims: the sphere's ball, or the cylinder's
-/// radius around its axis within its extent padded by the radius.
-pub(crate) fn occupies(shape: &Shape, p: &Point3<f64>) -> bool {
-    match shape {
-        Shape::Sphere(s) => (p - s.center).norm() < s.radius_m,
-        Shape::Cylinder(c) => {
-            let along = (p - c.axis_point).dot(&c.axis);
-            let (lo, hi) = c.extent_m.unwrap_or((0.0, 0.0));
-            c.distance_to_axis(p) < c.radius_m && along > lo - c.radius_m && along < hi + c.radius_m
-        }
-    }
-}
-
-/// Whether two shapes claim one fruit: either centre lies inside the other shape.
-pub(crate) fn claim_one_fruit(a: &Shape, b: &Shape) -> bool {
-    occupies(a, &b.center()) || occupies(b, &a.center())
-}
-
 /// The point of `shape`'s core nearest `p`: the sphere's centre, or the point of the
 /// cylinder's axis segment (its extent; the axis point without one).
 fn nearest_core_point(shape: &Shape, p: &Point3<f64>) -> Point3<f64> {
@@ -43,7 +25,8 @@ fn nearest_core_point(shape: &Shape, p: &Point3<f64>) -> Point3<f64> {
         Shape::Sphere(s) => s.center,
         Shape::Cylinder(c) => {
             let (lo, hi) = c.extent_m.unwrap_or((0.0, 0.0));
-            let t = (p - c.axis_point).dot(&c.axis).clamp(lo, hi);
+            // max-then-min, not `clamp`, which panics on an empty or NaN extent.
+            let t = (p - c.axis_point).dot(&c.axis).max(lo).min(hi);
             c.axis_point + c.axis.into_inner() * t
         }
     }

@@ -83,8 +83,9 @@ pub struct DepthProposalParams {
     /// such cluster are grown into clusters again and proposed under the same tests (and the
     /// screen); a shape fitted to one counts only when its core and a colour-path shape's are
     /// further apart than the larger radius (closer, it is a piece of that fruit: a leaf's
-    /// shadow or an unripe end). Detection only, like the rest of the proposals. Default on; `false` is the detector before (docs/results.md,
-    /// "Fruit the colour path's clusters swallowed").
+    /// shadow or an unripe end). Detection only, like the rest of the proposals. Default on;
+    /// `false` is the detector before (docs/results.md, "Fruit the colour path's clusters
+    /// swallowed").
     pub regrow_covered: bool,
 }
 

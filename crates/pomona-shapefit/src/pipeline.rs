@@ -15,7 +15,6 @@ use pomona_pipeline::{
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use crate::candidate::claim_one_fruit;
 use crate::curvature_check::rms;
 use crate::negative_selection::{cap_negatives, hardest_negatives};
 use crate::stages::{
@@ -750,6 +749,19 @@ fn fit_rms_m(shape: &Shape, points: &[Point3<f64>]) -> Option<f64> {
     (!points.is_empty()).then(|| rms(points, |p| shape.signed_distance(p)))
 }
 
+/// Whether `p` lies inside the space `shape` claims: the sphere's ball, or the cylinder's
+/// radius around its axis within its extent padded by the radius.
+fn occupies(shape: &Shape, p: &Point3<f64>) -> bool {
+    match shape {
+        Shape::Sphere(s) => (p - s.center).norm() < s.radius_m,
+        Shape::Cylinder(c) => {
+            let along = (p - c.axis_point).dot(&c.axis);
+            let (lo, hi) = c.extent_m.unwrap_or((0.0, 0.0));
+            c.distance_to_axis(p) < c.radius_m && along > lo - c.radius_m && along < hi + c.radius_m
+        }
+    }
+}
+
 /// The union of two pieces of one long fruit: cylinders whose axes agree within
 /// `max_axis_angle_deg`, whose midpoints are within `max_axis_offset_radii` radii of each
 /// other's axis, and whose extents along the axis overlap or leave a gap of at most
@@ -813,7 +825,7 @@ fn merge_overlapping(
                 }
             }
             let ck = sk.center();
-            if (ck - ci).norm() < radius_m || claim_one_fruit(sk, si) {
+            if (ck - ci).norm() < radius_m || occupies(sk, &ci) || occupies(si, &ck) {
                 continue 'candidates;
             }
         }

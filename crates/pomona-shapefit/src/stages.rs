@@ -167,8 +167,9 @@ pub struct DepthProposals {
     /// The depth clusters proposed.
     pub clusters: Vec<Vec<usize>>,
     /// Clusters grown again from the pixels outside the colour mask of depth clusters the
-    /// colour path covers (`regrow_covered`), proposed under the same tests: their shapes count
-    /// only where no shape of the colour path claims the same fruit.
+    /// colour path covers (`regrow_covered`), proposed under the same tests: a shape fitted to
+    /// one counts only when no colour-path shape lies on the same fruit
+    /// ([`drop_pieces_of_colour_fruit`]).
     pub regrown: Vec<Vec<usize>>,
 }
 

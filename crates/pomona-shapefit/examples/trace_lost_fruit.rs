@@ -138,9 +138,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             clusters: first,
             regrown,
         } = run_stage(&proposals, (frame, keep.as_slice()), &mut t)?;
-        let (mut proposed, mut screened) = (Vec::new(), Vec::new());
+        let (mut proposed, mut screened, mut screen_scores) = (Vec::new(), Vec::new(), Vec::new());
         for (batch, is_regrown) in [(first, false), (regrown, true)] {
-            let kept = run_stage(&screen, (frame, &cloud, batch.as_slice()), &mut t)?;
+            let scores = screen.scores(frame, &cloud, &batch)?;
+            let kept = screen.passing(&batch, &scores);
             let batch_shapes = run_stage(&shapes, (frame, &cloud, kept.as_slice()), &mut t)?;
             let mut admitted = admit(
                 frame,
@@ -155,8 +156,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             cands.extend(admitted);
             proposed.extend(batch);
             screened.extend(kept);
+            screen_scores.extend(scores);
         }
-        let screen_scores = screen.scores(frame, &cloud, &proposed)?;
         // Which cluster each candidate was fitted in (colour clusters, then screened proposals).
         let mut cluster_of = vec![usize::MAX; ids.len()];
         let mut proposal_of = vec![usize::MAX; ids.len()];

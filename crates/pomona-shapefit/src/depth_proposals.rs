@@ -124,21 +124,31 @@ impl DepthProposalParams {
         covered as f64 >= self.max_color_coverage * cluster.len() as f64
     }
 
-    /// Whether a depth-only `cluster` (pixel indices) is proposed: fewer than
-    /// `max_color_coverage` of its pixels in `color_mask`, and between `min_fruit_discs` discs of
-    /// radius `min_radius_m` and `max_fruit_discs` discs of radius `max_radius_m` at its median
-    /// depth (`depth_m`, focal length `fx_px`).
+    /// Whether a depth-only `cluster` (pixel indices) is proposed: not [`Self::covered`] by
+    /// `color_mask`, and [`Self::fruit_sized`].
     pub fn proposes(
         &self,
         cluster: &[usize],
         color_mask: &[bool],
         depth_m: &[f32],
         fx_px: f64,
+        radius_range_m: (f64, f64),
+    ) -> bool {
+        !cluster.is_empty()
+            && !self.covered(cluster, color_mask)
+            && self.fruit_sized(cluster, depth_m, fx_px, radius_range_m)
+    }
+
+    /// Whether `cluster` covers between `min_fruit_discs` discs of radius `min_radius_m` and
+    /// `max_fruit_discs` discs of radius `max_radius_m` at its median depth (`depth_m`, focal
+    /// length `fx_px`).
+    pub fn fruit_sized(
+        &self,
+        cluster: &[usize],
+        depth_m: &[f32],
+        fx_px: f64,
         (min_radius_m, max_radius_m): (f64, f64),
     ) -> bool {
-        if cluster.is_empty() || self.covered(cluster, color_mask) {
-            return false;
-        }
         let z_m = crate::region_growing::median_depth(depth_m, cluster);
         if !(z_m.is_finite() && z_m > 0.0) {
             return false;

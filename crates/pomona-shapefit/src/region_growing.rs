@@ -150,19 +150,22 @@ pub fn grow_regions_over(
     params: &RegionGrowingParams,
 ) -> Vec<Vec<usize>> {
     let n = width * height;
-    let inside = || pixels.iter().copied().filter(|&i| i < n);
-    let (Some(lo), Some(hi)) = (inside().min(), inside().max()) else {
-        return Vec::new();
-    };
     if depth_m.len() != n {
         return Vec::new();
     }
-    let (u0, u1) = inside().fold((width, 0), |(a, b), i| (a.min(i % width), b.max(i % width)));
+    let inside = || pixels.iter().copied().filter(|&i| i < n);
+    // Bounding box (columns u0..=u1, rows v0..=v1) with a one-pixel margin, in one pass.
+    let Some((u0, u1, v0, v1)) = inside().fold(None, |b, i| {
+        let (u, v) = (i % width, i / width);
+        Some(match b {
+            None => (u, u, v, v),
+            Some((a, b, c, d)) => (u.min(a), u.max(b), v.min(c), v.max(d)),
+        })
+    }) else {
+        return Vec::new();
+    };
     let (u0, u1) = (u0.saturating_sub(1), (u1 + 1).min(width - 1));
-    let (v0, v1) = (
-        (lo / width).saturating_sub(1),
-        (hi / width + 1).min(height - 1),
-    );
+    let (v0, v1) = (v0.saturating_sub(1), (v1 + 1).min(height - 1));
     let (w, h) = (u1 - u0 + 1, v1 - v0 + 1);
     let to_box = |i: usize| (i / width - v0) * w + (i % width - u0);
     let mut keep = vec![false; w * h];

@@ -183,42 +183,46 @@ impl<'a> Stage<(&'a RgbdFrame, &'a [bool]), DepthProposals> for DepthProposalSta
         (frame, color_mask): (&'a RgbdFrame, &'a [bool]),
     ) -> Result<DepthProposals, PipelineError> {
         let in_range = self.in_range.run(frame)?;
-        let mut clusters = self.regions.run((frame, in_range.as_slice()))?;
-        let (fx, depth) = (frame.camera().fx, frame.depth().as_slice());
-        let proposes = |c: &Vec<usize>| {
-            self.params
-                .proposes(c, color_mask, depth, fx, self.radius_range_m)
+        let clusters = self.regions.run((frame, in_range.as_slice()))?;
+        let (cam, depth) = (frame.camera(), frame.depth().as_slice());
+        let (fx, width, height) = (cam.fx, cam.width as usize, cam.height as usize);
+        let fruit_sized = |c: &Vec<usize>| {
+            !c.is_empty() && self.params.fruit_sized(c, depth, fx, self.radius_range_m)
         };
-        // Each covered cluster's pixels outside the mask, grown on their own: pixels of two
-        // depth clusters are never joined by growing (they would be one cluster).
-        let mut regrown = Vec::new();
-        if self.params.regrow_covered {
-            let (width, height) = (
-                frame.camera().width as usize,
-                frame.camera().height as usize,
-            );
-            for cluster in clusters
-                .iter()
-                .filter(|c| self.params.covered(c, color_mask))
-            {
+        // Pieces are joined from every cluster, covered or not, and face the full test.
+        let pieces = match &self.joining {
+            Some(joining) => joining.run((frame, clusters.as_slice()))?,
+            None => Vec::new(),
+        };
+        let (mut proposed, mut regrown) = (Vec::new(), Vec::new());
+        for cluster in clusters {
+            if !self.params.covered(&cluster, color_mask) {
+                if fruit_sized(&cluster) {
+                    proposed.push(cluster);
+                }
+            } else if self.params.regrow_covered {
+                // Its pixels outside the mask, grown on their own: pixels of two depth
+                // clusters are never joined by growing (they would be one cluster), and none
+                // of them is in the mask, so only the size test is left.
                 let rest: Vec<usize> = cluster
-                    .iter()
-                    .copied()
+                    .into_iter()
                     .filter(|&i| !color_mask.get(i).copied().unwrap_or(true))
                     .collect();
                 regrown.extend(
                     grow_regions_over(width, height, fx, depth, &rest, &self.regions.params)
                         .into_iter()
-                        .filter(proposes),
+                        .filter(fruit_sized),
                 );
             }
         }
-        if let Some(joining) = &self.joining {
-            let pieces = joining.run((frame, clusters.as_slice()))?;
-            clusters.extend(pieces);
-        }
-        clusters.retain(proposes);
-        Ok(DepthProposals { clusters, regrown })
+        proposed.extend(pieces.into_iter().filter(|c| {
+            self.params
+                .proposes(c, color_mask, depth, fx, self.radius_range_m)
+        }));
+        Ok(DepthProposals {
+            clusters: proposed,
+            regrown,
+        })
     }
 }
 
@@ -265,6 +269,16 @@ impl ProposalScreenStage {
         let rows: Vec<&[f64]> = features.iter().map(Vec::as_slice).collect();
         Ok(self.svm.decision_values(&rows)?)
     }
+
+    /// The `clusters` whose `scores` (from [`Self::scores`], in order) reach `min_score`.
+    pub fn passing(&self, clusters: &[Vec<usize>], scores: &[f64]) -> Vec<Vec<usize>> {
+        clusters
+            .iter()
+            .zip(scores)
+            .filter(|(_, &s)| s >= self.min_score)
+            .map(|(c, _)| c.clone())
+            .collect()
+    }
 }
 
 impl<'a> Stage<(&'a RgbdFrame, &'a PointCloud, &'a [Vec<usize>]), Vec<Vec<usize>>>
@@ -279,12 +293,7 @@ impl<'a> Stage<(&'a RgbdFrame, &'a PointCloud, &'a [Vec<usize>]), Vec<Vec<usize>
         (frame, cloud, clusters): (&'a RgbdFrame, &'a PointCloud, &'a [Vec<usize>]),
     ) -> Result<Vec<Vec<usize>>, PipelineError> {
         let scores = self.scores(frame, cloud, clusters)?;
-        Ok(clusters
-            .iter()
-            .zip(scores)
-            .filter(|(_, s)| *s >= self.min_score)
-            .map(|(c, _)| c.clone())
-            .collect())
+        Ok(self.passing(clusters, &scores))
     }
 }
 

@@ -84,9 +84,10 @@ pub struct ShapeFitParams {
     /// Negatives a mining round adds, at most, per positive (default 2).
     #[serde(default = "hard_negatives_per_positive")]
     pub hard_negatives_per_positive: f64,
-    /// Overlapping candidates are merged, keeping the higher score: a centre inside another
-    /// candidate's shape, or centres closer than this (metres). Not in the paper, which reports
-    /// split fruit as false positives (its Discussion); 0 switches merging off.
+    /// Overlapping candidates are merged, keeping the higher score: their cores (sphere centre,
+    /// cylinder axis segment) within the larger radius of each other, or centres closer than
+    /// this (metres). Not in the paper, which reports split fruit as false positives (its
+    /// Discussion); 0 switches merging off.
     pub merge_radius_m: f64,
     /// When two cylinders count as pieces of one long fruit and are joined in merging (absent
     /// in older model files: the defaults, the values that were fixed before).

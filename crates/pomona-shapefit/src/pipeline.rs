@@ -15,6 +15,7 @@ use pomona_pipeline::{
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
+use crate::candidate::cores_within_larger_radius;
 use crate::curvature_check::rms;
 use crate::negative_selection::{cap_negatives, hardest_negatives};
 use crate::stages::{
@@ -749,19 +750,6 @@ fn fit_rms_m(shape: &Shape, points: &[Point3<f64>]) -> Option<f64> {
     (!points.is_empty()).then(|| rms(points, |p| shape.signed_distance(p)))
 }
 
-/// Whether `p` lies inside the space `shape` claims: the sphere's ball, or the cylinder's
-/// radius around its axis within its extent padded by the radius.
-fn occupies(shape: &Shape, p: &Point3<f64>) -> bool {
-    match shape {
-        Shape::Sphere(s) => (p - s.center).norm() < s.radius_m,
-        Shape::Cylinder(c) => {
-            let along = (p - c.axis_point).dot(&c.axis);
-            let (lo, hi) = c.extent_m.unwrap_or((0.0, 0.0));
-            c.distance_to_axis(p) < c.radius_m && along > lo - c.radius_m && along < hi + c.radius_m
-        }
-    }
-}
-
 /// The union of two pieces of one long fruit: cylinders whose axes agree within
 /// `max_axis_angle_deg`, whose midpoints are within `max_axis_offset_radii` radii of each
 /// other's axis, and whose extents along the axis overlap or leave a gap of at most
@@ -790,8 +778,9 @@ fn coaxial_union(a: &Cylinder, b: &Cylinder, rule: &CoaxialMergeParams) -> Optio
 }
 
 /// Two fruit cannot fill the same space. Scanning candidates by decreasing score, a candidate is
-/// dropped when its centre lies inside a kept one's shape, a kept centre lies inside its shape,
-/// or the centres are closer than `radius_m`; a cylinder that continues a kept cylinder
+/// dropped when its core and a kept one's lie within the larger radius of each other
+/// ([`cores_within_larger_radius`], the rule that also drops the regrown proposals' pieces of
+/// colour fruit) or the centres are closer than `radius_m`; a cylinder that continues a kept cylinder
 /// ([`coaxial_union`] under `coaxial`) extends it instead — unless its index is `first_proposal`
 /// or later: a depth proposal is as often a stem or leaf in line with the fruit as a piece of
 /// it, and on the synthetic eggplants such extensions moved detected centres out of tolerance
@@ -824,8 +813,7 @@ fn merge_overlapping(
                     continue 'candidates;
                 }
             }
-            let ck = sk.center();
-            if (ck - ci).norm() < radius_m || occupies(sk, &ci) || occupies(si, &ck) {
+            if (sk.center() - ci).norm() < radius_m || cores_within_larger_radius(sk, si) {
                 continue 'candidates;
             }
         }
@@ -888,7 +876,7 @@ mod tests {
 
     #[test]
     fn overlapping_candidates_keep_the_best() {
-        // 0 and 1 overlap (1's centre is inside 0's 40 mm ball); 2 is far; 3 is 20 mm from 2.
+        // 0 and 1 overlap (1's centre is within 0's 40 mm radius); 2 is far; 3 is 20 mm from 2.
         let c = [
             ball(0.0, 0.04),
             ball(0.035, 0.02),
@@ -945,6 +933,27 @@ mod tests {
             merge_overlapping(&c, &[2.0, 1.0, 0.5], 0.03, &strict, usize::MAX).len(),
             3
         );
+    }
+
+    #[test]
+    fn a_long_fruit_fills_a_capsule_not_a_padded_box() {
+        // A kept eggplant along y from 0 to 0.15 m, radius 30 mm. A 20 mm ball 20 mm past its
+        // end and 15 mm off its axis is a piece of it (25 mm from the axis segment); one as far
+        // past the end but 25 mm off the axis (32 mm from the segment, beyond both radii) is a
+        // fruit beside its rounded end, though inside its radius padded along the axis.
+        let beyond_the_end = |off_axis_m: f64| Candidate {
+            shape: Shape::Sphere(pomona_consensus::Sphere {
+                center: Point3::new(off_axis_m, 0.17, 1.0),
+                radius_m: 0.02,
+            }),
+            ..ball(0.0, 0.02)
+        };
+        let coaxial = CoaxialMergeParams::default();
+        let kept = |other: Candidate| {
+            merge_overlapping(&[piece(0.0, 0.15), other], &[2.0, 1.0], 0.03, &coaxial, 2).len()
+        };
+        assert_eq!(kept(beyond_the_end(0.015)), 1);
+        assert_eq!(kept(beyond_the_end(0.025)), 2);
     }
 
     fn frame(truth_json: &str) -> LabelledFrame {

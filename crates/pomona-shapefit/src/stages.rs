@@ -299,7 +299,8 @@ impl<'a> Stage<(&'a RgbdFrame, &'a PointCloud, &'a [Vec<usize>]), Vec<Vec<usize>
 
 /// Drops from `regrown` (shapes fitted to [`DepthProposals::regrown`]) every shape that lies on
 /// a fruit of a shape in `colour` (the colour path's): one core within the other's radius (see
-/// `cores_within_larger_radius`), a piece of that fruit rather than a fruit beside it.
+/// `cores_within_larger_radius`, the merging's rule too), a piece of that fruit rather than a
+/// fruit beside it. Unlike the merging, the colour shape wins whatever the scores say.
 pub fn drop_pieces_of_colour_fruit(colour: &[Candidate], regrown: &mut Vec<Candidate>) {
     regrown.retain(|c| {
         !colour

@@ -198,8 +198,9 @@ fn approach_sequences_are_tracked_to_the_target() {
     ]);
     assert_eq!(report["params"]["scan_threshold_fraction"], 1.0);
     assert_eq!(report["params"]["edge_scan"]["gap_px"], 3);
-    // The local re-detection every frame: most frames are found by it.
-    let report = track_from_truth(&["--set", r#"redetect="always""#]);
+    // The local re-detection every frame (and no image patch to overrule it): most frames are
+    // found by it.
+    let report = track_from_truth(&["--set", r#"redetect="always""#, "--set", "patch_shift=null"]);
     assert_eq!(report["params"]["redetect"], "always");
     let redetected = report["redetected_frames"].as_u64().unwrap();
     assert!(redetected > 18, "{report}");

@@ -58,6 +58,7 @@ mod mask_hysteresis;
 mod mask_runs;
 mod mlp;
 mod params;
+mod patch_shift;
 mod pipeline;
 mod pixel_f1;
 mod ray_circles;
@@ -93,6 +94,7 @@ pub use mask_closing::close_mask;
 pub use mask_hysteresis::hysteresis_mask;
 pub use mlp::{HSigmaSample, Mlp, MlpParams};
 pub use params::{ColorContourParams, EXTRA_CIRCLE_SOURCE_KEYS};
+pub use patch_shift::{PatchShiftParams, PatchTemplate};
 pub use pipeline::{
     ColorContourDetector, ColorContourPipeline, ColorContourStageParams, PIPELINE_NAME,
 };

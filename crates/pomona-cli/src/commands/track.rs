@@ -1,8 +1,8 @@
 //! `pomona track`: follow the target fruit through every approach sequence of a folder made by
 //! `pomona synth --approach`, with seed 004's approach tracker (§3.3, the facade's
 //! `pomona::Tracker`; by default with the local contour re-detection,
-//! `--set redetect="off" --set max_search_radii=null --set min_fruit_share=0` for the paper's
-//! tracker alone), and score it. The tracker uses the
+//! `--set redetect="off" --set max_search_radii=null --set min_fruit_share=0 --set
+//! patch_shift=null` for the paper's tracker alone), and score it. The tracker uses the
 //! model's colour table and, for the re-detection, its stage parameters.
 //!
 //! Per sequence (`DIR/seq-*/`, a dataset with `approach.json` naming the target):
@@ -218,6 +218,9 @@ pub struct TrackReport {
     pub lost_frames: usize,
     /// Frames found by the local contour re-detection (`redetect` not `off`).
     pub redetected_frames: usize,
+    /// Frames whose estimate is the last circle moved with the image patch around it, the
+    /// circle found being too far from it (`patch_shift`).
+    pub predicted_frames: usize,
     /// How tracks started.
     pub init: StartedFrom,
     /// The tracker's parameters (defaults with `--set` applied).
@@ -579,7 +582,7 @@ pub fn run(args: &TrackArgs) -> Result<TrackReport> {
     println!(
         "tracked {} sequences ({} frames, init {}): success_rate {rate} ({} of {}; {} started on \
          the target), ms_per_frame {:.4} (median {:.4}, max {:.3}), {} frames found by search, {} \
-         by re-detection, {} lost",
+         by re-detection, {} by the image patch alone, {} lost",
         report.sequences,
         report.frames,
         serde_json::to_value(report.init)?
@@ -593,6 +596,7 @@ pub fn run(args: &TrackArgs) -> Result<TrackReport> {
         report.ms_per_frame_max,
         report.searched_frames,
         report.redetected_frames,
+        report.predicted_frames,
         report.lost_frames
     );
     if let Some(path) = &args.json {
@@ -636,6 +640,7 @@ impl TrackReport {
             searched_frames: count(TrackStatus::Searched),
             lost_frames: count(TrackStatus::Lost),
             redetected_frames: count(TrackStatus::Redetected),
+            predicted_frames: count(TrackStatus::Predicted),
             init: tracks.first().map_or(StartedFrom::Detection, |t| t.init),
             params,
             per_sequence: tracks

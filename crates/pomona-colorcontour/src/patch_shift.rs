@@ -89,21 +89,24 @@ fn grey(image: &ColorImage, x: i64, y: i64) -> Option<u16> {
 
 impl PatchTemplate {
     /// The patch of `image` around the circle (`center`, `radius_px`); `None` for a radius that
-    /// is not positive and finite.
+    /// is not positive, or a patch that would lie wholly outside the image or be larger than
+    /// a thousand images (no pixel arithmetic can then overflow).
     pub fn sample(
         image: &ColorImage,
         center: Point2<f64>,
         radius_px: f64,
         params: &PatchShiftParams,
     ) -> Option<Self> {
+        let half_side = params.half_side_radii * radius_px;
+        let (w, h) = (f64::from(image.width()), f64::from(image.height()));
+        let reachable = |v: f64, size: f64| v >= -half_side && v <= size + half_side;
         if !(radius_px > 0.0
-            && radius_px.is_finite()
-            && center.x.is_finite()
-            && center.y.is_finite())
+            && half_side <= 1000.0 * w.max(h)
+            && reachable(center.x, w)
+            && reachable(center.y, h))
         {
             return None;
         }
-        let half_side = params.half_side_radii * radius_px;
         let half_steps = i64::from(params.samples_per_side / 2).max(1);
         let step = ((half_side / half_steps as f64).round() as i64).max(1);
         let half = ((half_side / step as f64).round() as i64).clamp(1, half_steps);
@@ -225,6 +228,15 @@ mod tests {
         let template = PatchTemplate::sample(&image, Point2::new(2.0, 2.0), 15.0, &params)
             .expect("a valid circle");
         assert_eq!(template.shift_in(&image), None);
-        assert!(PatchTemplate::sample(&image, Point2::new(2.0, 2.0), 0.0, &params).is_none());
+        // No patch of a circle without radius, far outside the image or of absurd size.
+        for (x, r) in [
+            (2.0, 0.0),
+            (1e18, 15.0),
+            (-1e18, 15.0),
+            (2.0, 1e300),
+            (f64::NAN, 15.0),
+        ] {
+            assert!(PatchTemplate::sample(&image, Point2::new(x, 2.0), r, &params).is_none());
+        }
     }
 }

@@ -151,7 +151,8 @@ impl PatchTemplate {
 
     /// Where the patch moved to in `image` (the next frame): the offset of smallest mean
     /// absolute difference within the search range, on the grid's step and then to the pixel
-    /// around the best one; `None` when no offset keeps enough of the patch in the image.
+    /// around the best one; `None` when no offset keeps enough of the patch in the image, or
+    /// when the best coarse offset lies on the edge of the range (the motion may be larger).
     pub fn shift_in(&self, image: &ColorImage) -> Option<Vector2<f64>> {
         let mut best: Option<((i64, i64), f64)> = None;
         let consider = |offset: (i64, i64), best: &mut Option<((i64, i64), f64)>| {
@@ -168,6 +169,12 @@ impl PatchTemplate {
             }
         }
         let ((bx, by), _) = best?;
+        // A best match on the edge of the range may be the nearest of a larger motion: no
+        // shift is known then.
+        let edge = coarse * self.step;
+        if coarse > 0 && (bx.abs() == edge || by.abs() == edge) {
+            return None;
+        }
         for dy in (by - self.step + 1)..self.step + by {
             for dx in (bx - self.step + 1)..self.step + bx {
                 if dx.abs() <= self.search_px && dy.abs() <= self.search_px {
@@ -215,6 +222,9 @@ mod tests {
         assert_eq!(shift, Vector2::new(17.0, -6.0));
         // Unmoved: no shift.
         assert_eq!(template.shift_in(&before), Some(Vector2::zeros()));
+        // Moved by 27 px, beyond the 22 px searched: the best match lies on the edge of the
+        // range, and no shift is claimed.
+        assert_eq!(template.shift_in(&scene(87.0, 50.0, 15.0)), None);
     }
 
     #[test]

@@ -24,7 +24,8 @@ use serde::{Deserialize, Serialize};
 pub struct PatchShiftParams {
     /// Half the patch's side, in fruit radii.
     pub half_side_radii: f64,
-    /// Largest shift searched, in fruit radii (either axis).
+    /// Largest shift searched, in fruit radii (either axis; default 2, the reach of the
+    /// tracker's bounded spiral search, [`crate::TrackParams::max_search_radii`]).
     pub search_radii: f64,
     /// Grid points per side of the patch, at most (the step is at least one pixel).
     pub samples_per_side: u32,
@@ -39,7 +40,7 @@ impl Default for PatchShiftParams {
     fn default() -> Self {
         Self {
             half_side_radii: 1.5,
-            search_radii: 1.5,
+            search_radii: 2.0,
             samples_per_side: 13,
             min_inside_share: 0.5,
             max_offset_radii: 0.5,
@@ -212,7 +213,10 @@ mod tests {
 
     #[test]
     fn the_shift_of_a_moved_scene_is_found_to_the_pixel() {
-        let params = PatchShiftParams::default();
+        let params = PatchShiftParams {
+            search_radii: 1.5,
+            ..PatchShiftParams::default()
+        };
         let before = scene(60.0, 50.0, 15.0);
         let template = PatchTemplate::sample(&before, Point2::new(60.0, 50.0), 15.0, &params)
             .expect("a valid circle");

@@ -68,6 +68,29 @@ impl PatchShiftParams {
 }
 
 /// The grey values of one frame's patch around a fruit, sampled on a square grid.
+///
+/// ```
+/// use pomona_colorcontour::{PatchShiftParams, PatchTemplate};
+/// use pomona_core::nalgebra::{Point2, Vector2};
+/// use pomona_core::ColorImage;
+///
+/// // A bright fruit on a left-to-right ramp of shade, and the same view slid 9 px right.
+/// let view = |slide_px: f64| {
+///     let mut rgb = Vec::new();
+///     for y in 0..80 {
+///         for x in 0..120 {
+///             let (u, v) = (f64::from(x) - slide_px, f64::from(y));
+///             let on_fruit = (u - 50.0).hypot(v - 40.0) < 12.0;
+///             let g = if on_fruit { 250 } else { (u.max(0.0) * 1.5) as u8 };
+///             rgb.extend([g, g, g]);
+///         }
+///     }
+///     ColorImage::from_rgb(120, 80, rgb).unwrap()
+/// };
+/// let params = PatchShiftParams::default();
+/// let patch = PatchTemplate::sample(&view(0.0), Point2::new(50.0, 40.0), 12.0, &params).unwrap();
+/// assert_eq!(patch.shift_in(&view(9.0)), Some(Vector2::new(9.0, 0.0)));
+/// ```
 #[derive(Debug, Clone, PartialEq)]
 pub struct PatchTemplate {
     center: (i64, i64),

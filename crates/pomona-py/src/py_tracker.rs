@@ -93,8 +93,10 @@ impl Track {
 impl Track {
     /// Follows the fruit into ``color``, the next frame: an (H, W, 3) uint8 RGB array. Returns a
     /// dict: ``center_px`` ([x, y]), ``radius_px``, ``status`` (``"confirmed"``,
-    /// ``"searched"``, ``"redetected"`` or ``"lost"`` — lost repeats the last circle) and
-    /// ``probes`` (5×5 checks made). The GIL is released while it tracks.
+    /// ``"searched"``, ``"redetected"``, ``"predicted"`` — the last circle moved with the image
+    /// patch around it, the circle found being too far from there — or ``"lost"``, which
+    /// repeats the last circle) and ``probes`` (5×5 checks made). The GIL is released while it
+    /// tracks.
     ///
     /// Raises ``TypeError`` for an array of another dtype or shape.
     fn update<'py>(

@@ -178,35 +178,29 @@ impl PatchTemplate {
     /// around the best one; `None` when no offset keeps enough of the patch in the image, or
     /// when the best coarse offset lies on the edge of the range (the motion may be larger).
     pub fn shift_in(&self, image: &ColorImage) -> Option<Vector2<f64>> {
-        let mut best: Option<((i64, i64), f64)> = None;
-        let consider = |offset: (i64, i64), best: &mut Option<((i64, i64), f64)>| {
-            if let Some(c) = self.cost(image, offset) {
-                if best.is_none_or(|(_, b)| c < b) {
-                    *best = Some((offset, c));
-                }
-            }
+        // The first of equally good offsets wins, so the coarse best keeps its place on a tie.
+        let best = |offsets: &mut dyn Iterator<Item = (i64, i64)>| {
+            offsets
+                .filter_map(|o| Some((o, self.cost(image, o)?)))
+                .min_by(|a, b| a.1.total_cmp(&b.1))
+                .map(|(o, _)| o)
         };
-        let coarse = self.search_px / self.step;
-        for j in -coarse..=coarse {
-            for i in -coarse..=coarse {
-                consider((i * self.step, j * self.step), &mut best);
-            }
-        }
-        let ((bx, by), _) = best?;
+        let (coarse, step, reach) = (self.search_px / self.step, self.step, self.search_px);
+        let (bx, by) = best(
+            &mut (-coarse..=coarse)
+                .flat_map(|j| (-coarse..=coarse).map(move |i| (i * step, j * step))),
+        )?;
         // A best match on the edge of the range may be the nearest of a larger motion: no
         // shift is known then.
-        let edge = coarse * self.step;
+        let edge = coarse * step;
         if coarse > 0 && (bx.abs() == edge || by.abs() == edge) {
             return None;
         }
-        for dy in (by - self.step + 1)..self.step + by {
-            for dx in (bx - self.step + 1)..self.step + bx {
-                if dx.abs() <= self.search_px && dy.abs() <= self.search_px {
-                    consider((dx, dy), &mut best);
-                }
-            }
-        }
-        best.map(|((dx, dy), _)| Vector2::new(dx as f64, dy as f64))
+        let fine = (by - step + 1..by + step)
+            .flat_map(|dy| (bx - step + 1..bx + step).map(move |dx| (dx, dy)))
+            .filter(|&(dx, dy)| dx.abs() <= reach && dy.abs() <= reach);
+        let (dx, dy) = best(&mut std::iter::once((bx, by)).chain(fine))?;
+        Some(Vector2::new(dx as f64, dy as f64))
     }
 }
 

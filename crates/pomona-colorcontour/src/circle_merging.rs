@@ -23,11 +23,11 @@
 //! into a circle of 1247 px radius, every merge refitting the growing set against every other
 //! arc: 143 000 least-squares fits, 4.7 s for the frame.
 
-use pomona_core::nalgebra::Point2;
+use pomona_core::nalgebra::{Point2, Vector2};
 
 use crate::circle_least_squares::{refine_circle_with_cost, solve3};
 use crate::contour_circles::{step_points, step_support};
-use crate::{fit_circle, Contour, ContourArc, ContourCircle};
+use crate::{fit_circle, fit_ellipse, Contour, ContourArc, ContourCircle};
 
 /// Gauss–Newton steps of the geometric refinement of a merged circle.
 const REFINE_ITERATIONS: usize = 10;
@@ -37,10 +37,13 @@ const REFINE_ITERATIONS: usize = 10;
 /// times larger on short arcs.
 const SCREEN: f64 = 3.0;
 
+/// Pieces of contour: (contour index, that contour's covered steps).
+type Pieces = Vec<(usize, Vec<usize>)>;
+
 /// A set of arcs (contour index, that contour's covered steps) with their common circle.
 #[derive(Debug, Clone)]
 struct Merged {
-    pieces: Vec<(usize, Vec<usize>)>,
+    pieces: Pieces,
     circle: ContourCircle,
     /// Sums over the pieces' points for the screening fit ([`Moments`]).
     moments: Moments,
@@ -67,6 +70,12 @@ impl Moments {
             }
         }
         Self(m)
+    }
+
+    /// The mean of the points, relative to the common origin.
+    fn mean(&self) -> Option<Vector2<f64>> {
+        let [n, sx, sy, ..] = self.0;
+        (n > 0.0).then(|| Vector2::new(sx / n, sy / n))
     }
 
     fn plus(&self, other: &Self) -> Self {
@@ -102,11 +111,13 @@ impl Moments {
 /// The circles of `arcs` (each with the index of its contour in `contours`) after merging those
 /// that lie on one circle of radius at most `max_radius_px` (see the module docs). Arcs are
 /// returned unchanged, in their order, when `max_rms <= 0`; merged circles take the place of
-/// the first of their arcs.
+/// the first of their arcs. With `min_ellipse_axis_ratio > 0`, the circles of pairs left apart
+/// that lie on one ellipse follow ([`ellipse_circle`]); the pair's own circles stay.
 pub fn merge_arcs(
     contours: &[Contour],
     arcs: Vec<(usize, ContourArc)>,
     max_rms: f64,
+    min_ellipse_axis_ratio: f64,
     max_radius_px: f64,
 ) -> Vec<ContourCircle> {
     let arcs: Vec<(usize, ContourArc)> = arcs
@@ -160,7 +171,81 @@ pub fn merge_arcs(
             }
         }
     }
-    sets.into_iter().flatten().map(|m| m.circle).collect()
+    let mut circles: Vec<ContourCircle> = sets.iter().flatten().map(|m| m.circle).collect();
+    if max_rms > 0.0 && min_ellipse_axis_ratio > 0.0 {
+        let left: Vec<&Merged> = sets.iter().flatten().collect();
+        for (k, a) in left.iter().enumerate() {
+            for b in &left[k + 1..] {
+                circles.extend(ellipse_circle(
+                    contours,
+                    origin,
+                    (a, b),
+                    max_rms,
+                    min_ellipse_axis_ratio,
+                    max_radius_px,
+                ));
+            }
+        }
+    }
+    circles
+}
+
+/// Directions around an ellipse's centre in which a pair's coverage is counted.
+const ELLIPSE_BINS: usize = 64;
+
+/// Two arcs face each other when the directions in which they bulge are at least 120° apart
+/// (cosine at most −0.5).
+const FACING_COS: f64 = 0.5;
+
+/// The fruit circle of two sets that do not lie on one circle but, together, on one ellipse:
+/// one's centre inside the other's circle (as for a circle merge), the ellipse's shorter axis at
+/// least `min_axis_ratio` of its longer, its root-mean-square distance from the points at most
+/// `max_rms` of the shorter semi-axis, and the points covering at least half the directions
+/// around its centre (arcs on opposite sides of one fruit; one arc alone fixes no ellipse). The
+/// circle is centred on the ellipse with the semi-axis nearer the image rows as radius — the
+/// width of a hanging fruit, oblate or long — and at most `max_radius_px`.
+fn ellipse_circle(
+    contours: &[Contour],
+    origin: Point2<f64>,
+    (a, b): (&Merged, &Merged),
+    max_rms: f64,
+    min_axis_ratio: f64,
+    max_radius_px: f64,
+) -> Option<ContourCircle> {
+    if !one_centre_inside_the_other(a, b) {
+        return None;
+    }
+    // Arcs on opposite sides of one fruit face each other: each bulges away from its circle's
+    // centre, the two in opposite directions (checked on the sums, before any point is read).
+    let bulge = |m: &Merged| Some(m.moments.mean()? - (m.circle.center_px - origin));
+    let (ua, ub) = (bulge(a)?, bulge(b)?);
+    if ua.dot(&ub) > -FACING_COS * ua.norm() * ub.norm() {
+        return None;
+    }
+    let (pieces, points) = joined(contours, a, b);
+    let fit = fit_ellipse(&points)?;
+    let e = fit.ellipse;
+    let short = e.semi_axes_px.0.min(e.semi_axes_px.1);
+    let radius_px = e.horizontal_semi_axis_px();
+    if e.axis_ratio() < min_axis_ratio || fit.rms_px > max_rms * short || radius_px > max_radius_px
+    {
+        return None;
+    }
+    let mut covered = [false; ELLIPSE_BINS];
+    for p in &points {
+        let d = p - e.center_px;
+        let turn = d.y.atan2(d.x) / std::f64::consts::TAU + 0.5;
+        covered[((turn * ELLIPSE_BINS as f64) as usize).min(ELLIPSE_BINS - 1)] = true;
+    }
+    if covered.iter().filter(|c| **c).count() * 2 < ELLIPSE_BINS {
+        return None;
+    }
+    let support = support_of(contours, &pieces, radius_px);
+    Some(ContourCircle {
+        center_px: e.center_px,
+        radius_px,
+        support,
+    })
 }
 
 /// The merged set of `sets[i]` and `sets[j]` and its root-mean-square distance over its radius,
@@ -174,8 +259,7 @@ fn pair_fit(
     max_radius_px: f64,
 ) -> Option<(f64, Merged)> {
     let (a, b) = (sets[i].as_ref()?, sets[j].as_ref()?);
-    let (ca, cb) = (&a.circle, &b.circle);
-    if (ca.center_px - cb.center_px).norm() > ca.radius_px.max(cb.radius_px) {
+    if !one_centre_inside_the_other(a, b) {
         return None;
     }
     // Screening on the summed moments (constant time) before the points are visited.
@@ -189,11 +273,7 @@ fn pair_fit(
     if screen_radius > SCREEN * max_radius_px {
         return None;
     }
-    let pieces = union_pieces(&a.pieces, &b.pieces);
-    let points: Vec<Point2<f64>> = pieces
-        .iter()
-        .flat_map(|(c, steps)| step_points(&contours[*c].points, steps))
-        .collect();
+    let (pieces, points) = joined(contours, a, b);
     let ((center_px, radius_px), cost) = fit_circle(&points)
         .and_then(|start| refine_circle_with_cost(&points, start, REFINE_ITERATIONS))?;
     if radius_px > max_radius_px {
@@ -204,11 +284,7 @@ fn pair_fit(
     if quality.is_nan() || quality > max_rms {
         return None;
     }
-    let support = pieces
-        .iter()
-        .map(|(c, steps)| step_support(&contours[*c].points, steps, radius_px))
-        .sum::<f64>()
-        .min(1.0);
+    let support = support_of(contours, &pieces, radius_px);
     Some((
         quality,
         Merged {
@@ -221,6 +297,33 @@ fn pair_fit(
             },
         },
     ))
+}
+
+/// Whether one set's centre lies inside the other's circle (pieces of one fruit), the test a
+/// pair passes before it is fitted.
+fn one_centre_inside_the_other(a: &Merged, b: &Merged) -> bool {
+    let (ca, cb) = (&a.circle, &b.circle);
+    (ca.center_px - cb.center_px).norm() <= ca.radius_px.max(cb.radius_px)
+}
+
+/// The pieces of two sets together ([`union_pieces`]) and their contour points.
+fn joined(contours: &[Contour], a: &Merged, b: &Merged) -> (Pieces, Vec<Point2<f64>>) {
+    let pieces = union_pieces(&a.pieces, &b.pieces);
+    let points = pieces
+        .iter()
+        .flat_map(|(c, steps)| step_points(&contours[*c].points, steps))
+        .collect();
+    (pieces, points)
+}
+
+/// The support of a circle of `radius_px` on `pieces`: their arc length over its
+/// circumference, at most 1.
+fn support_of(contours: &[Contour], pieces: &[(usize, Vec<usize>)], radius_px: f64) -> f64 {
+    pieces
+        .iter()
+        .map(|(c, steps)| step_support(&contours[*c].points, steps, radius_px))
+        .sum::<f64>()
+        .min(1.0)
 }
 
 /// The pieces of both sets, steps of one contour joined into one sorted list without repeats.
@@ -275,7 +378,13 @@ mod tests {
             (0, arc(0..40, (55.0, 45.0), 18.0)),
             (0, arc(90..130, (45.0, 38.0), 17.0)),
         ];
-        let merged = merge_arcs(std::slice::from_ref(&c), arcs.clone(), 0.04, f64::INFINITY);
+        let merged = merge_arcs(
+            std::slice::from_ref(&c),
+            arcs.clone(),
+            0.04,
+            0.0,
+            f64::INFINITY,
+        );
         assert_eq!(merged.len(), 1, "{merged:?}");
         let m = merged[0];
         assert!(
@@ -285,7 +394,7 @@ mod tests {
         assert!((m.radius_px - 30.0).abs() < 1e-6);
         assert!((m.support - 80.0 / 200.0).abs() < 0.01, "{}", m.support);
         // Off: the arcs stay as they were.
-        let kept = merge_arcs(&[c], arcs, 0.0, f64::INFINITY);
+        let kept = merge_arcs(&[c], arcs, 0.0, 0.0, f64::INFINITY);
         assert_eq!(kept.len(), 2);
         assert_eq!(kept[0].radius_px, 18.0);
     }
@@ -303,18 +412,19 @@ mod tests {
             std::slice::from_ref(&huge),
             arcs.clone(),
             0.04,
+            0.0,
             f64::INFINITY,
         );
         assert_eq!(free.len(), 1, "{free:?}");
         assert!((free[0].radius_px - 250.0).abs() < 1e-3);
-        let capped = merge_arcs(std::slice::from_ref(&huge), arcs, 0.04, 150.0);
+        let capped = merge_arcs(std::slice::from_ref(&huge), arcs, 0.04, 0.0, 150.0);
         assert_eq!(capped.len(), 2, "{capped:?}");
         let fruit = ring((50.0, 40.0), 30.0, 200);
         let pieces = vec![
             (0, arc(0..40, (55.0, 45.0), 18.0)),
             (0, arc(90..130, (45.0, 38.0), 17.0)),
         ];
-        assert_eq!(merge_arcs(&[fruit], pieces, 0.04, 150.0).len(), 1);
+        assert_eq!(merge_arcs(&[fruit], pieces, 0.04, 0.0, 150.0).len(), 1);
     }
 
     #[test]
@@ -324,7 +434,7 @@ mod tests {
         let mut right = arc(0..30, (70.0, 30.0), 20.0);
         right.step_indices.extend(90..120);
         let arcs = vec![(0, arc(30..90, (30.0, 30.0), 20.0)), (1, right)];
-        let merged = merge_arcs(&[a, b], arcs, 0.04, f64::INFINITY);
+        let merged = merge_arcs(&[a, b], arcs, 0.04, 0.0, f64::INFINITY);
         assert_eq!(merged.len(), 2, "{merged:?}");
         // Circles that neither touch nor overlap are never candidates.
         let far = vec![
@@ -332,7 +442,10 @@ mod tests {
             (1, arc(0..40, (300.0, 30.0), 20.0)),
         ];
         let far_contours = [ring((30.0, 30.0), 20.0, 120), ring((30.0, 30.0), 20.0, 120)];
-        assert_eq!(merge_arcs(&far_contours, far, 0.5, f64::INFINITY).len(), 2);
+        assert_eq!(
+            merge_arcs(&far_contours, far, 0.5, 0.0, f64::INFINITY).len(),
+            2
+        );
     }
 
     #[test]
@@ -363,7 +476,7 @@ mod tests {
             })
             .collect();
         assert!(arcs.len() >= 2, "{arcs:?}");
-        let merged = merge_arcs(&contours, arcs, params.merge_max_rms, f64::INFINITY);
+        let merged = merge_arcs(&contours, arcs, params.merge_max_rms, 0.0, f64::INFINITY);
         let best = merged
             .iter()
             .max_by(|a, b| a.support.total_cmp(&b.support))
@@ -374,5 +487,91 @@ mod tests {
         );
         assert!((best.radius_px - r).abs() < 0.1 * r, "{merged:?}");
         assert!(best.support > 0.6, "{merged:?}");
+    }
+
+    /// The edge fit's arcs of a row-major mask, traced and smoothed as the stages do.
+    fn arcs_of_mask(
+        mask: &[bool],
+        w: usize,
+        params: &crate::EdgeFitParams,
+    ) -> (Vec<Contour>, Vec<(usize, ContourArc)>) {
+        let h = mask.len() / w;
+        let contours: Vec<Contour> =
+            crate::trace_contours(&crate::smooth_mask(mask, w, h), w, h, 20)
+                .iter()
+                .map(|c| c.smoothed(params.smoothing_half_window))
+                .collect();
+        let arcs = contours
+            .iter()
+            .enumerate()
+            .flat_map(|(k, c)| {
+                crate::contour_arcs(c, params)
+                    .into_iter()
+                    .map(move |a| (k, a))
+            })
+            .collect();
+        (contours, arcs)
+    }
+
+    #[test]
+    fn an_oblate_fruit_between_two_neighbours_gets_its_circle_from_its_ellipse() {
+        // A fruit 60 px wide and 48 px tall whose sides touch two round neighbours: its outline
+        // is its top and bottom arcs, each flatter than its width.
+        let (w, h, cx, cy) = (220usize, 120usize, 110.0, 60.0);
+        let mask: Vec<bool> = (0..w * h)
+            .map(|i| {
+                let (x, y) = ((i % w) as f64, (i / w) as f64);
+                ((x - cx) / 30.0).powi(2) + ((y - cy) / 24.0).powi(2) <= 1.0
+                    || (x - cx + 52.0).hypot(y - cy) <= 25.0
+                    || (x - cx - 52.0).hypot(y - cy) <= 25.0
+            })
+            .collect();
+        let params = crate::EdgeFitParams {
+            merge_ellipse_min_axis_ratio: 0.55,
+            ..crate::EdgeFitParams::default()
+        };
+        let (contours, arcs) = arcs_of_mask(&mask, w, &params);
+        let found = |ratio: f64| {
+            merge_arcs(&contours, arcs.clone(), params.merge_max_rms, ratio, 100.0)
+                .into_iter()
+                .filter(|c| (c.center_px - Point2::new(cx, cy)).norm() < 0.2 * 30.0)
+                .filter(|c| (c.radius_px - 30.0).abs() < 0.15 * 30.0)
+                .collect::<Vec<_>>()
+        };
+        let with = found(params.merge_ellipse_min_axis_ratio);
+        assert!(
+            !with.is_empty(),
+            "{:?}",
+            merge_arcs(&contours, arcs.clone(), 0.04, 0.55, 100.0)
+        );
+        assert!(found(0.0).is_empty(), "{:?}", found(0.0));
+    }
+
+    #[test]
+    fn two_touching_round_fruit_make_no_ellipse() {
+        let (w, h) = (200usize, 100usize);
+        let mask: Vec<bool> = (0..w * h)
+            .map(|i| {
+                let (x, y) = ((i % w) as f64, (i / w) as f64);
+                (x - 75.0).hypot(y - 50.0) <= 25.0 || (x - 123.0).hypot(y - 50.0) <= 25.0
+            })
+            .collect();
+        let params = crate::EdgeFitParams {
+            merge_ellipse_min_axis_ratio: 0.55,
+            ..crate::EdgeFitParams::default()
+        };
+        let (contours, arcs) = arcs_of_mask(&mask, w, &params);
+        let circles = merge_arcs(
+            &contours,
+            arcs.clone(),
+            params.merge_max_rms,
+            params.merge_ellipse_min_axis_ratio,
+            100.0,
+        );
+        // Nothing between the two fruit, and nothing more than without the ellipses.
+        assert_eq!(
+            circles,
+            merge_arcs(&contours, arcs, params.merge_max_rms, 0.0, 100.0)
+        );
     }
 }

@@ -48,6 +48,7 @@ mod contour_circles;
 mod disc_share;
 mod distance_transform;
 mod edge_scan;
+mod ellipse_fit;
 mod hough_circles;
 mod hsigma;
 mod hsigma_lut;
@@ -83,6 +84,7 @@ pub use distance_transform::squared_distance_to_background;
 pub use edge_scan::{
     circle_from_boundaries, scan_four_directions, EdgeScanParams, ScanEnd, SCAN_DIRECTIONS,
 };
+pub use ellipse_fit::{fit_ellipse, Ellipse, EllipseFit};
 pub use hough_circles::{hough_circles, HoughCircleParams};
 pub use hsigma::{
     hsigma, hsigma_integers, hsigma_of_integers, intensity_level, intensity_of_level,

@@ -168,6 +168,7 @@ impl Stage<(&[Contour], f64), Vec<ContourCircle>> for EdgeFitStage {
             contours,
             arcs,
             self.params.merge_max_rms,
+            self.params.merge_ellipse_min_axis_ratio,
             max_radius_px,
         ))
     }

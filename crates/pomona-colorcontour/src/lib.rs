@@ -45,6 +45,7 @@ mod circle_merging;
 mod circle_pruning;
 mod contour;
 mod contour_circles;
+mod depth_cut;
 mod disc_share;
 mod distance_transform;
 mod edge_scan;
@@ -80,6 +81,7 @@ pub use contour::{smooth_mask, trace_contours, Contour};
 pub use contour_circles::{
     contour_arcs, contour_circles, ContourArc, ContourCircle, EdgeFitParams, GroupCircle,
 };
+pub use depth_cut::{cut_at_depth_steps, DepthCutParams};
 pub use distance_transform::squared_distance_to_background;
 pub use edge_scan::{
     circle_from_boundaries, scan_four_directions, EdgeScanParams, ScanEnd, SCAN_DIRECTIONS,

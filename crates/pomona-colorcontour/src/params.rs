@@ -4,7 +4,9 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::{EdgeFitParams, HoughCircleParams, MlpParams, PruneRank, RayCircleParams};
+use crate::{
+    DepthCutParams, EdgeFitParams, HoughCircleParams, MlpParams, PruneRank, RayCircleParams,
+};
 
 /// The model-file keys (dotted, under `stage_params`) of the circle sources beyond seed 004's
 /// edge fit — the ray circles and the Hough circles. Setting each to `null` leaves the paper's
@@ -60,6 +62,13 @@ pub struct ColorContourParams {
     /// model files from before it mean).
     #[serde(default)]
     pub mask_closing_px: usize,
+    /// In a frame with depth, the cleaned mask is cut where one fruit stands in front of
+    /// another ([`crate::cut_at_depth_steps`]; not in the paper), so that the outline stages
+    /// see the front fruit's whole outline. On by default (built-in model included); `None`:
+    /// no cut (what model files from before this setting mean, `--set params.depth_cut=null`);
+    /// colour-only frames are never cut.
+    #[serde(default)]
+    pub depth_cut: Option<DepthCutParams>,
     /// The adaptive edge fitting (Eq. 8).
     pub edge_fit: EdgeFitParams,
     /// Circles from rays cast out of the mask's inscribed discs, added to the edge fit's (not
@@ -164,6 +173,7 @@ impl Default for ColorContourParams {
             color_grow_seed_px: 10,
             min_component_px: 40,
             mask_closing_px: 2,
+            depth_cut: Some(DepthCutParams::default()),
             edge_fit: EdgeFitParams::default(),
             ray_circles: None,
             hough_circles: Some(HoughCircleParams::default()),

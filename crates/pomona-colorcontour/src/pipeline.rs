@@ -11,13 +11,13 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::stages::{
-    ColorClassStage, ContourStage, EdgeFitStage, FruitStage, HoughCircleStage, MaskCleaningStage,
-    RayCircleStage,
+    ColorClassStage, ContourStage, DepthCutStage, EdgeFitStage, FruitStage, HoughCircleStage,
+    MaskCleaningStage, RayCircleStage,
 };
 use crate::{
     best_f1_threshold, quantise_probability, taught_labels, training_pixels, value_histograms,
-    ColorContourParams, ContourCircle, HSigmaLut, HoughCircleParams, Mlp, RayCircleParams,
-    SampledRegion,
+    ColorContourParams, ContourCircle, DepthCutParams, HSigmaLut, HoughCircleParams, Mlp,
+    RayCircleParams, SampledRegion,
 };
 
 /// Name of the pipeline on the command line and in model files.
@@ -251,6 +251,7 @@ pub struct ColorContourDetector {
     smoothing_half_window: usize,
     min_component_px: usize,
     mask_closing_px: usize,
+    depth_cut: Option<DepthCutParams>,
     edge_fit: EdgeFitStage,
     ray_circles: Option<RayCircleParams>,
     hough_circles: Option<HoughCircleParams>,
@@ -318,6 +319,9 @@ impl ColorContourDetector {
         if let Some((name, reason)) = p.hough_circles.as_ref().and_then(|h| h.problem()) {
             return Err(invalid(name, reason));
         }
+        if let Some((name, reason)) = p.depth_cut.as_ref().and_then(|c| c.problem()) {
+            return Err(invalid(name, reason));
+        }
         if !(p.depth_refit_tolerance_m.is_finite() && p.depth_refit_tolerance_m >= 0.0) {
             return Err(invalid(
                 "depth_refit_tolerance_m",
@@ -329,6 +333,7 @@ impl ColorContourDetector {
             smoothing_half_window: p.edge_fit.smoothing_half_window,
             min_component_px: p.min_component_px,
             mask_closing_px: p.mask_closing_px,
+            depth_cut: p.depth_cut,
             edge_fit: EdgeFitStage { params: p.edge_fit },
             ray_circles: p.ray_circles,
             hough_circles: p.hough_circles,
@@ -352,26 +357,39 @@ impl ColorContourDetector {
         let camera = frame.camera();
         // Merged circles no larger than the largest fruit the size test accepts.
         let (_, max_radius_px) = self.fruit.params.radius_px_range(camera.mean_focal_px());
-        let circles =
-            self.circles_of_mask(&fruit, camera.width as usize, max_radius_px, timings)?;
+        let depth = frame.depth();
+        let depth_m = depth.has_readings().then(|| depth.as_slice());
+        let circles = self.circles_of_mask(
+            &fruit,
+            camera.width as usize,
+            max_radius_px,
+            depth_m,
+            timings,
+        )?;
         Ok((fruit, circles))
     }
 
     /// The circles fitted on the outlines of a fruit mask (row-major, `width` wide): the
-    /// mask cleaning, contour and edge-fit stages, merged circles at most `max_radius_px` in
-    /// radius, and the ray circles when the parameters ask for them.
+    /// mask cleaning, the depth cut when the parameters ask for it and the frame's depth
+    /// `depth_m` is given, the contour and edge-fit stages, merged circles at most
+    /// `max_radius_px` in radius, and the ray and Hough circles when the parameters ask for them.
     fn circles_of_mask(
         &self,
         fruit: &[bool],
         width: usize,
         max_radius_px: f64,
+        depth_m: Option<&[f32]>,
         timings: &mut StageTimings,
     ) -> Result<Vec<ContourCircle>, PipelineError> {
         let cleaning = MaskCleaningStage {
             closing_px: self.mask_closing_px,
             width,
         };
-        let cleaned = run_stage(&cleaning, fruit, timings)?;
+        let mut cleaned = run_stage(&cleaning, fruit, timings)?;
+        if let (Some(params), Some(depth_m)) = (self.depth_cut, depth_m) {
+            let cut = DepthCutStage { params, width };
+            cleaned = run_stage(&cut, (cleaned.as_slice(), depth_m), timings)?;
+        }
         let contour_stage = ContourStage {
             min_component_px: self.min_component_px,
             smoothing_half_window: self.smoothing_half_window,
@@ -420,7 +438,7 @@ impl ColorContourDetector {
         let fruit = self.color.classify(region.pixels(image), cols, rows);
         Ok(self
             // No cap on merged circles: the region is a few fruit across.
-            .circles_of_mask(&fruit, cols, f64::INFINITY, timings)?
+            .circles_of_mask(&fruit, cols, f64::INFINITY, None, timings)?
             .into_iter()
             .map(|c| region.circle_to_image(c))
             .collect())
@@ -510,6 +528,8 @@ mod tests {
         assert!(stage.params.ray_circles.is_none());
         assert_eq!(stage.params.hough_circles, defaults.hough_circles);
         assert!(stage.params.hough_circles.is_some());
+        assert_eq!(stage.params.depth_cut, defaults.depth_cut);
+        assert!(stage.params.depth_cut.is_some());
         assert!(stage.params.depthless_within_reach && defaults.depthless_within_reach);
         let (lo, hi) = stage.params.accepted_radius_range_m();
         assert!((lo - 0.025 / 1.1).abs() < 1e-12 && (hi - 0.055 * 1.1).abs() < 1e-12);

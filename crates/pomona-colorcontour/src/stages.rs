@@ -1,5 +1,6 @@
 //! The stages of the detector, each behind [`pomona_pipeline::Stage`] so it can be timed,
-//! benchmarked or replaced alone: colour lookup → mask cleaning → contours → edge fitting (and,
+//! benchmarked or replaced alone: colour lookup → mask cleaning → (with depth, optionally, the
+//! depth cut) → contours → edge fitting (and,
 //! from the cleaned mask, the Hough circles and, optionally, the ray circles) → circles to
 //! fruit.
 
@@ -9,10 +10,10 @@ use pomona_pipeline::{PipelineError, Stage};
 
 use crate::disc_share::disc_share;
 use crate::{
-    close_mask, contour_arcs, hough_circles, hysteresis_mask, merge_arcs, prune_overlapping,
-    quantise_probability, ray_circles, smooth_mask, sphere_from_depth, sphere_from_size,
-    trace_contours, ColorContourParams, Contour, ContourArc, ContourCircle, EdgeFitParams,
-    HSigmaLut, HoughCircleParams, RayCircleParams, PIPELINE_NAME,
+    close_mask, contour_arcs, cut_at_depth_steps, hough_circles, hysteresis_mask, merge_arcs,
+    prune_overlapping, quantise_probability, ray_circles, smooth_mask, sphere_from_depth,
+    sphere_from_size, trace_contours, ColorContourParams, Contour, ContourArc, ContourCircle,
+    DepthCutParams, EdgeFitParams, HSigmaLut, HoughCircleParams, RayCircleParams, PIPELINE_NAME,
 };
 
 /// Per pixel: the lookup table's value at or above the threshold (§3.1), or, with a lower
@@ -133,6 +134,26 @@ impl Stage<&[bool], Vec<Contour>> for ContourStage {
             .iter()
             .map(|c| c.smoothed(self.smoothing_half_window))
             .collect())
+    }
+}
+
+/// The cleaned mask cut at depth steps ([`crate::cut_at_depth_steps`]; not in the paper).
+#[derive(Debug, Clone)]
+pub struct DepthCutStage {
+    /// The cut's settings.
+    pub params: DepthCutParams,
+    /// Mask width in pixels.
+    pub width: usize,
+}
+
+/// Input: the mask and the frame's depth, metres per pixel (`NaN` without a reading).
+impl Stage<(&[bool], &[f32]), Vec<bool>> for DepthCutStage {
+    fn name(&self) -> &'static str {
+        "depth-cut"
+    }
+
+    fn run(&self, (mask, depth_m): (&[bool], &[f32])) -> Result<Vec<bool>, PipelineError> {
+        Ok(cut_at_depth_steps(mask, depth_m, self.width, &self.params))
     }
 }
 

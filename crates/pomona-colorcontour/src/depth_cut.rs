@@ -63,7 +63,8 @@ impl DepthCutParams {
 
 /// `mask` (row-major, `width` wide) without the pixels that lie more than `params.step_m`
 /// behind a mask pixel within `params.reach_px` (see the module docs); `depth_m` holds the
-/// frame's depth per pixel, `NaN` (or any non-finite value) without a reading.
+/// frame's depth per pixel, `NaN` (or any non-finite value) without a reading; pixels past the
+/// end of a shorter `depth_m` have none.
 ///
 /// ```
 /// use pomona_colorcontour::{cut_at_depth_steps, DepthCutParams};
@@ -82,7 +83,7 @@ pub fn cut_at_depth_steps(
 ) -> Vec<bool> {
     let width = width.max(1);
     let height = mask.len() / width;
-    let fruit = |k: usize| mask[k] && depth_m[k].is_finite() && depth_m[k] > 0.0;
+    let fruit = |k: usize| mask[k] && depth_m.get(k).is_some_and(|d| d.is_finite() && *d > 0.0);
     // Positive depths order as their bit patterns do; `u32::MAX`: not computed yet.
     let half = params.median_half_window_px;
     let grid_w = width.div_ceil(2);
@@ -245,6 +246,15 @@ mod tests {
         assert_eq!(
             cut_at_depth_steps(&mask, &no_depth, w, &DepthCutParams::default()),
             mask
+        );
+        // A depth image of another size is read as far as it goes, never past its end.
+        for short in [0, 1, 20 * w + 30, mask.len() - 1] {
+            let cut = cut_at_depth_steps(&mask, &depth[..short], w, &DepthCutParams::default());
+            assert_eq!(cut.len(), mask.len());
+        }
+        assert_eq!(
+            cut_at_depth_steps(&mask, &depth, 0, &DepthCutParams::default()).len(),
+            mask.len()
         );
     }
 

@@ -27,6 +27,7 @@ use pomona_core::nalgebra::{Point2, Vector2};
 
 use crate::circle_least_squares::{refine_circle_with_cost, solve3};
 use crate::contour_circles::{step_points, step_support};
+use crate::hough_circles::coverage;
 use crate::{fit_circle, fit_ellipse, Contour, ContourArc, ContourCircle};
 
 /// Gauss–Newton steps of the geometric refinement of a merged circle.
@@ -231,13 +232,7 @@ fn ellipse_circle(
     {
         return None;
     }
-    let mut covered = [false; ELLIPSE_BINS];
-    for p in &points {
-        let d = p - e.center_px;
-        let turn = d.y.atan2(d.x) / std::f64::consts::TAU + 0.5;
-        covered[((turn * ELLIPSE_BINS as f64) as usize).min(ELLIPSE_BINS - 1)] = true;
-    }
-    if covered.iter().filter(|c| **c).count() * 2 < ELLIPSE_BINS {
+    if coverage(&points, e.center_px, ELLIPSE_BINS) < 0.5 {
         return None;
     }
     let support = support_of(contours, &pieces, radius_px);
@@ -460,21 +455,8 @@ mod tests {
             })
             .collect();
         let params = crate::EdgeFitParams::default();
-        let contours: Vec<Contour> =
-            crate::trace_contours(&crate::smooth_mask(&mask, w, h), w, h, 20)
-                .iter()
-                .map(|c| c.smoothed(params.smoothing_half_window))
-                .collect();
+        let (contours, arcs) = arcs_of_mask(&mask, w, &params);
         assert_eq!(contours.len(), 2);
-        let arcs: Vec<(usize, ContourArc)> = contours
-            .iter()
-            .enumerate()
-            .flat_map(|(k, c)| {
-                crate::contour_arcs(c, &params)
-                    .into_iter()
-                    .map(move |a| (k, a))
-            })
-            .collect();
         assert!(arcs.len() >= 2, "{arcs:?}");
         let merged = merge_arcs(&contours, arcs, params.merge_max_rms, 0.0, f64::INFINITY);
         let best = merged

@@ -549,7 +549,7 @@ impl OutlineIndex {
 }
 
 /// Fraction of `bins` directions around `center` holding at least one of `points`.
-fn coverage(points: &[Point2<f64>], center: Point2<f64>, bins: usize) -> f64 {
+pub(crate) fn coverage(points: &[Point2<f64>], center: Point2<f64>, bins: usize) -> f64 {
     let mut covered = vec![false; bins];
     for p in points {
         let angle = (p.y - center.y).atan2(p.x - center.x) + std::f64::consts::PI;

@@ -16,7 +16,9 @@
 //!
 //! * `... ray circles on` / `ray circles alone`: the orchard frames with the opt-in ray circles
 //!   (`params.ray_circles`), end to end and the stage alone on their cleaned fruit masks;
-//!   `hough circles alone`: the Hough circles (on in the built-in model) on the same masks.
+//!   `hough circles alone`: the Hough circles (on in the built-in model) on the same masks;
+//!   `depth cut alone`: the mask cut at depth steps (on in the built-in model) on the cleaned
+//!   masks and depth of both synthetic sets.
 //! * `colour table compiled`: the built-in network compiled into its lookup table (with the
 //!   intensity input: eight planes, in the rayon pool of one thread), and the same network
 //!   without its intensity weights (the paper's single plane) — the cost of loading a model.
@@ -28,7 +30,7 @@
 use criterion::{criterion_group, criterion_main, Criterion};
 use pomona_colorcontour::stages::MaskCleaningStage;
 use pomona_colorcontour::{
-    hough_circles, ray_circles, ColorContourDetector, ColorContourPipeline,
+    cut_at_depth_steps, hough_circles, ray_circles, ColorContourDetector, ColorContourPipeline,
     ColorContourStageParams, HSigmaLut,
 };
 use pomona_core::RgbdFrame;
@@ -170,6 +172,36 @@ fn detect(c: &mut Criterion) {
             }
         })
     });
+    // The depth cut (on in the built-in model) alone on the cleaned masks of both synthetic
+    // sets and their frames' depth, as in the pipeline.
+    let depth_cut = stage_params.params.depth_cut.unwrap_or_default();
+    for (name, frames) in [
+        ("depth cut alone on 3 wide d435 masks", &sets[0].1),
+        ("depth cut alone on 3 orchard kinect-v2 masks", &sets[1].1),
+    ] {
+        let cut_inputs: Vec<(Vec<bool>, &[f32], usize)> = frames
+            .iter()
+            .map(|f| {
+                let (mask, _) = by_color
+                    .fitted_circles(f, &mut StageTimings::default())
+                    .unwrap_or_else(|e| panic!("{e}"));
+                let width = f.camera().width as usize;
+                let cleaning = MaskCleaningStage {
+                    closing_px: stage_params.params.mask_closing_px,
+                    width,
+                };
+                let cleaned = cleaning.run(&mask).unwrap_or_else(|e| panic!("{e}"));
+                (cleaned, f.depth().as_slice(), width)
+            })
+            .collect();
+        c.bench_function(name, |b| {
+            b.iter(|| {
+                for (mask, depth_m, width) in &cut_inputs {
+                    criterion::black_box(cut_at_depth_steps(mask, depth_m, *width, &depth_cut));
+                }
+            })
+        });
+    }
     let network = stage_params.mlp.clone();
     let plane_only = pomona_colorcontour::Mlp {
         intensity_weights: Vec::new(),

@@ -136,22 +136,20 @@ fn detect(c: &mut Criterion) {
         serde_json::from_value(with_rays.stage_params).unwrap_or_else(|e| panic!("{e}"));
     let rays = stage_params.params.ray_circles.unwrap_or_default();
     let by_color = ColorContourDetector::new(&stage_params).unwrap_or_else(|e| panic!("{e}"));
-    // The stage reads the cleaned mask (closing, Gaussian, threshold), as in the pipeline.
-    let masks: Vec<(Vec<bool>, usize)> = orchard_frames
-        .iter()
-        .map(|f| {
-            let (mask, _) = by_color
-                .fitted_circles(f, &mut StageTimings::default())
-                .unwrap_or_else(|e| panic!("{e}"));
-            let width = f.camera().width as usize;
-            let cleaning = MaskCleaningStage {
-                closing_px: stage_params.params.mask_closing_px,
-                width,
-            };
-            let cleaned = cleaning.run(&mask).unwrap_or_else(|e| panic!("{e}"));
-            (cleaned, width)
-        })
-        .collect();
+    // The stages alone read a frame's cleaned mask (closing, Gaussian, threshold), as in the
+    // pipeline.
+    let cleaned_mask = |f: &RgbdFrame| -> (Vec<bool>, usize) {
+        let (mask, _) = by_color
+            .fitted_circles(f, &mut StageTimings::default())
+            .unwrap_or_else(|e| panic!("{e}"));
+        let width = f.camera().width as usize;
+        let cleaning = MaskCleaningStage {
+            closing_px: stage_params.params.mask_closing_px,
+            width,
+        };
+        (cleaning.run(&mask).unwrap_or_else(|e| panic!("{e}")), width)
+    };
+    let masks: Vec<(Vec<bool>, usize)> = orchard_frames.iter().map(cleaned_mask).collect();
     c.bench_function("ray circles alone on 3 orchard kinect-v2 masks", |b| {
         b.iter(|| {
             for (mask, width) in &masks {
@@ -182,15 +180,7 @@ fn detect(c: &mut Criterion) {
         let cut_inputs: Vec<(Vec<bool>, &[f32], usize)> = frames
             .iter()
             .map(|f| {
-                let (mask, _) = by_color
-                    .fitted_circles(f, &mut StageTimings::default())
-                    .unwrap_or_else(|e| panic!("{e}"));
-                let width = f.camera().width as usize;
-                let cleaning = MaskCleaningStage {
-                    closing_px: stage_params.params.mask_closing_px,
-                    width,
-                };
-                let cleaned = cleaning.run(&mask).unwrap_or_else(|e| panic!("{e}"));
+                let (cleaned, width) = cleaned_mask(f);
                 (cleaned, f.depth().as_slice(), width)
             })
             .collect();

@@ -110,39 +110,35 @@ pub fn cut_at_depth_steps(
     // window, computed once per block (`u32::MAX`: not yet).
     let half = params.median_half_window_px;
     let grid_w = width.div_ceil(2);
-    let mut grid = vec![
-        u32::MAX;
-        if half == 0 {
-            0
-        } else {
-            grid_w * height.div_ceil(2)
+    let mut grid = Vec::new();
+    if half > 0 {
+        grid = vec![u32::MAX; grid_w * height.div_ceil(2)];
+        let mut window: Vec<u32> = Vec::with_capacity((half + 1).pow(2));
+        for &(x, y) in &fruit_pixels {
+            let g = (y / 2) * grid_w + x / 2;
+            if grid[g] != u32::MAX {
+                continue;
+            }
+            let (cx, cy) = (x & !1, y & !1);
+            let (x0, y0) = (cx.saturating_sub(half), cy.saturating_sub(half));
+            window.clear();
+            for yy in (y0..(cy + half + 1).min(height)).step_by(2) {
+                let row = yy * width;
+                window.extend(
+                    (row + x0..row + (cx + half + 1).min(width))
+                        .step_by(2)
+                        .filter(|&j| fruit(j))
+                        .map(|j| depth_m[j].to_bits()),
+                );
+            }
+            // The block's first fruit pixel stands in when the sampled window holds no reading.
+            if window.is_empty() {
+                window.push(depth_m[y * width + x].to_bits());
+            }
+            // A full sort of these few values is quicker than a selection (measured).
+            window.sort_unstable();
+            grid[g] = window[window.len() / 2];
         }
-    ];
-    let mut window: Vec<u32> = Vec::with_capacity((half + 1).pow(2));
-    for &(x, y) in fruit_pixels.iter().filter(|_| half > 0) {
-        let g = (y / 2) * grid_w + x / 2;
-        if grid[g] != u32::MAX {
-            continue;
-        }
-        let (cx, cy) = (x & !1, y & !1);
-        let (x0, y0) = (cx.saturating_sub(half), cy.saturating_sub(half));
-        window.clear();
-        for yy in (y0..(cy + half + 1).min(height)).step_by(2) {
-            let row = yy * width;
-            window.extend(
-                (row + x0..row + (cx + half + 1).min(width))
-                    .step_by(2)
-                    .filter(|&j| fruit(j))
-                    .map(|j| depth_m[j].to_bits()),
-            );
-        }
-        // The block's first fruit pixel stands in when the sampled window holds no reading.
-        if window.is_empty() {
-            window.push(depth_m[y * width + x].to_bits());
-        }
-        // A full sort of these few values is quicker than a selection (measured).
-        window.sort_unstable();
-        grid[g] = window[window.len() / 2];
     }
     // The robust depths as an image (`INFINITY` off the fruit, never nearer than anything):
     // a fruit pixel is behind a step when one within the reach is nearer by more than it.
@@ -258,10 +254,10 @@ mod tests {
     }
 
     /// The rule with medians, pixel by pixel: each fruit pixel's depth is its reading without a
-    /// median window, else the median of the
-    /// fruit readings on every other row and column of the window around its 2 × 2 block's even
-    /// corner (the block's first fruit pixel in raster order when none), and it is cut when a
-    /// fruit pixel within `reach` has a depth nearer by more than `step`.
+    /// median window, else the median of the fruit readings on every other row and column of
+    /// the window around its 2 × 2 block's even corner (the reading of the block's first fruit
+    /// pixel in raster order when there are none), and it is cut when a fruit pixel within
+    /// `reach` has a depth nearer by more than `step`.
     fn by_definition_with_medians(
         mask: &[bool],
         depth: &[f32],

@@ -16,10 +16,7 @@ pub fn fit_circle(points: &[Point2<f64>]) -> Option<(Point2<f64>, f64)> {
         return None;
     }
     // Centre the points for conditioning, then solve x² + y² + D x + E y + F = 0.
-    let n = points.len() as f64;
-    let mean = points
-        .iter()
-        .fold(Point2::origin(), |m, p| m + p.coords / n);
+    let mean = centroid(points);
     let mut a = [[0.0f64; 3]; 3];
     let mut b = [0.0f64; 3];
     for p in points {
@@ -37,6 +34,15 @@ pub fn fit_circle(points: &[Point2<f64>]) -> Option<(Point2<f64>, f64)> {
     let (cx, cy) = (-0.5 * d, -0.5 * e);
     let r2 = cx * cx + cy * cy - f;
     (r2 > 0.0 && r2.is_finite()).then(|| (Point2::new(cx + mean.x, cy + mean.y), r2.sqrt()))
+}
+
+/// The mean of `points` (the origin for none): the centre that the least-squares fits move the
+/// points to for conditioning.
+pub(crate) fn centroid(points: &[Point2<f64>]) -> Point2<f64> {
+    let n = points.len() as f64;
+    points
+        .iter()
+        .fold(Point2::origin(), |m, p| m + p.coords / n)
 }
 
 /// The geometric least-squares circle (minimum sum of squared distances of `points` from it),

@@ -28,7 +28,7 @@ use pomona_core::nalgebra::{Point2, Vector2};
 use crate::circle_least_squares::{refine_circle_with_cost, solve3};
 use crate::contour_circles::{step_points, step_support};
 use crate::hough_circles::coverage;
-use crate::{fit_circle, fit_ellipse, Contour, ContourArc, ContourCircle};
+use crate::{fit_circle, fit_ellipse, Contour, ContourArc, ContourCircle, EdgeFitParams};
 
 /// Gauss–Newton steps of the geometric refinement of a merged circle.
 const REFINE_ITERATIONS: usize = 10;
@@ -110,17 +110,19 @@ impl Moments {
 }
 
 /// The circles of `arcs` (each with the index of its contour in `contours`) after merging those
-/// that lie on one circle of radius at most `max_radius_px` (see the module docs). Arcs are
+/// that lie on one circle of radius at most `max_radius_px` (see the module docs), with the
+/// merge settings of `params` (`merge_max_rms` is the module docs' `max_rms`). Arcs are
 /// returned unchanged, in their order, when `max_rms <= 0`; merged circles take the place of
-/// the first of their arcs. With `min_ellipse_axis_ratio > 0`, the circles of pairs left apart
-/// that lie on one ellipse follow ([`ellipse_circle`]); the pair's own circles stay.
+/// the first of their arcs. With `merge_ellipse_min_axis_ratio > 0`, the circles of pairs left
+/// apart that lie on one ellipse follow ([`ellipse_circle`]); the pair's own circles stay.
 pub fn merge_arcs(
     contours: &[Contour],
     arcs: Vec<(usize, ContourArc)>,
-    max_rms: f64,
-    min_ellipse_axis_ratio: f64,
+    params: &EdgeFitParams,
     max_radius_px: f64,
 ) -> Vec<ContourCircle> {
+    let (max_rms, min_ellipse_axis_ratio) =
+        (params.merge_max_rms, params.merge_ellipse_min_axis_ratio);
     let arcs: Vec<(usize, ContourArc)> = arcs
         .into_iter()
         .filter(|(c, _)| *c < contours.len())
@@ -322,8 +324,8 @@ fn support_of(contours: &[Contour], pieces: &[(usize, Vec<usize>)], radius_px: f
 }
 
 /// The pieces of both sets, steps of one contour joined into one sorted list without repeats.
-fn union_pieces(a: &[(usize, Vec<usize>)], b: &[(usize, Vec<usize>)]) -> Vec<(usize, Vec<usize>)> {
-    let mut out: Vec<(usize, Vec<usize>)> = a.to_vec();
+fn union_pieces(a: &[(usize, Vec<usize>)], b: &[(usize, Vec<usize>)]) -> Pieces {
+    let mut out: Pieces = a.to_vec();
     for (c, steps) in b {
         match out.iter_mut().find(|(oc, _)| oc == c) {
             Some((_, existing)) => {
@@ -340,6 +342,15 @@ fn union_pieces(a: &[(usize, Vec<usize>)], b: &[(usize, Vec<usize>)]) -> Vec<(us
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The edge fit's settings with these two merge settings.
+    fn merging(merge_max_rms: f64, merge_ellipse_min_axis_ratio: f64) -> EdgeFitParams {
+        EdgeFitParams {
+            merge_max_rms,
+            merge_ellipse_min_axis_ratio,
+            ..EdgeFitParams::default()
+        }
+    }
 
     /// A closed contour: `n` points on a circle.
     fn ring(c: (f64, f64), r: f64, n: usize) -> Contour {
@@ -376,8 +387,7 @@ mod tests {
         let merged = merge_arcs(
             std::slice::from_ref(&c),
             arcs.clone(),
-            0.04,
-            0.0,
+            &merging(0.04, 0.0),
             f64::INFINITY,
         );
         assert_eq!(merged.len(), 1, "{merged:?}");
@@ -389,7 +399,7 @@ mod tests {
         assert!((m.radius_px - 30.0).abs() < 1e-6);
         assert!((m.support - 80.0 / 200.0).abs() < 0.01, "{}", m.support);
         // Off: the arcs stay as they were.
-        let kept = merge_arcs(&[c], arcs, 0.0, 0.0, f64::INFINITY);
+        let kept = merge_arcs(&[c], arcs, &merging(0.0, 0.0), f64::INFINITY);
         assert_eq!(kept.len(), 2);
         assert_eq!(kept[0].radius_px, 18.0);
     }
@@ -406,20 +416,27 @@ mod tests {
         let free = merge_arcs(
             std::slice::from_ref(&huge),
             arcs.clone(),
-            0.04,
-            0.0,
+            &merging(0.04, 0.0),
             f64::INFINITY,
         );
         assert_eq!(free.len(), 1, "{free:?}");
         assert!((free[0].radius_px - 250.0).abs() < 1e-3);
-        let capped = merge_arcs(std::slice::from_ref(&huge), arcs, 0.04, 0.0, 150.0);
+        let capped = merge_arcs(
+            std::slice::from_ref(&huge),
+            arcs,
+            &merging(0.04, 0.0),
+            150.0,
+        );
         assert_eq!(capped.len(), 2, "{capped:?}");
         let fruit = ring((50.0, 40.0), 30.0, 200);
         let pieces = vec![
             (0, arc(0..40, (55.0, 45.0), 18.0)),
             (0, arc(90..130, (45.0, 38.0), 17.0)),
         ];
-        assert_eq!(merge_arcs(&[fruit], pieces, 0.04, 0.0, 150.0).len(), 1);
+        assert_eq!(
+            merge_arcs(&[fruit], pieces, &merging(0.04, 0.0), 150.0).len(),
+            1
+        );
     }
 
     #[test]
@@ -429,7 +446,7 @@ mod tests {
         let mut right = arc(0..30, (70.0, 30.0), 20.0);
         right.step_indices.extend(90..120);
         let arcs = vec![(0, arc(30..90, (30.0, 30.0), 20.0)), (1, right)];
-        let merged = merge_arcs(&[a, b], arcs, 0.04, 0.0, f64::INFINITY);
+        let merged = merge_arcs(&[a, b], arcs, &merging(0.04, 0.0), f64::INFINITY);
         assert_eq!(merged.len(), 2, "{merged:?}");
         // Circles that neither touch nor overlap are never candidates.
         let far = vec![
@@ -438,7 +455,7 @@ mod tests {
         ];
         let far_contours = [ring((30.0, 30.0), 20.0, 120), ring((30.0, 30.0), 20.0, 120)];
         assert_eq!(
-            merge_arcs(&far_contours, far, 0.5, 0.0, f64::INFINITY).len(),
+            merge_arcs(&far_contours, far, &merging(0.5, 0.0), f64::INFINITY).len(),
             2
         );
     }
@@ -458,7 +475,12 @@ mod tests {
         let (contours, arcs) = arcs_of_mask(&mask, w, &params);
         assert_eq!(contours.len(), 2);
         assert!(arcs.len() >= 2, "{arcs:?}");
-        let merged = merge_arcs(&contours, arcs, params.merge_max_rms, 0.0, f64::INFINITY);
+        let merged = merge_arcs(
+            &contours,
+            arcs,
+            &merging(params.merge_max_rms, 0.0),
+            f64::INFINITY,
+        );
         let best = merged
             .iter()
             .max_by(|a, b| a.support.total_cmp(&b.support))
@@ -514,17 +536,22 @@ mod tests {
         };
         let (contours, arcs) = arcs_of_mask(&mask, w, &params);
         let found = |ratio: f64| {
-            merge_arcs(&contours, arcs.clone(), params.merge_max_rms, ratio, 100.0)
-                .into_iter()
-                .filter(|c| (c.center_px - Point2::new(cx, cy)).norm() < 0.2 * 30.0)
-                .filter(|c| (c.radius_px - 30.0).abs() < 0.15 * 30.0)
-                .collect::<Vec<_>>()
+            merge_arcs(
+                &contours,
+                arcs.clone(),
+                &merging(params.merge_max_rms, ratio),
+                100.0,
+            )
+            .into_iter()
+            .filter(|c| (c.center_px - Point2::new(cx, cy)).norm() < 0.2 * 30.0)
+            .filter(|c| (c.radius_px - 30.0).abs() < 0.15 * 30.0)
+            .collect::<Vec<_>>()
         };
         let with = found(params.merge_ellipse_min_axis_ratio);
         assert!(
             !with.is_empty(),
             "{:?}",
-            merge_arcs(&contours, arcs.clone(), 0.04, 0.55, 100.0)
+            merge_arcs(&contours, arcs.clone(), &merging(0.04, 0.55), 100.0)
         );
         assert!(found(0.0).is_empty(), "{:?}", found(0.0));
     }
@@ -543,17 +570,11 @@ mod tests {
             ..crate::EdgeFitParams::default()
         };
         let (contours, arcs) = arcs_of_mask(&mask, w, &params);
-        let circles = merge_arcs(
-            &contours,
-            arcs.clone(),
-            params.merge_max_rms,
-            params.merge_ellipse_min_axis_ratio,
-            100.0,
-        );
+        let circles = merge_arcs(&contours, arcs.clone(), &params, 100.0);
         // Nothing between the two fruit, and nothing more than without the ellipses.
         assert_eq!(
             circles,
-            merge_arcs(&contours, arcs, params.merge_max_rms, 0.0, 100.0)
+            merge_arcs(&contours, arcs, &merging(params.merge_max_rms, 0.0), 100.0)
         );
     }
 }

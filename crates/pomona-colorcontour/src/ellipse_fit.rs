@@ -15,6 +15,8 @@
 
 use pomona_core::nalgebra::{Matrix3, Point2, Vector2, Vector3};
 
+use crate::circle_least_squares::centroid;
+
 /// An ellipse in the image: centre, semi-axes and the direction of the first semi-axis.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Ellipse {
@@ -76,9 +78,7 @@ pub fn fit_ellipse(points: &[Point2<f64>]) -> Option<EllipseFit> {
     }
     // Centre and scale the points for conditioning.
     let n = points.len() as f64;
-    let mean = points
-        .iter()
-        .fold(Vector2::zeros(), |m, p| m + p.coords / n);
+    let mean = centroid(points).coords;
     let spread = (points
         .iter()
         .map(|p| (p.coords - mean).norm_squared())

@@ -357,8 +357,9 @@ impl ColorContourDetector {
         let camera = frame.camera();
         // Merged circles no larger than the largest fruit the size test accepts.
         let (_, max_radius_px) = self.fruit.params.radius_px_range(camera.mean_focal_px());
+        // The depth is only read by the depth cut: no scan for readings without it.
         let depth = frame.depth();
-        let depth_m = depth.has_readings().then(|| depth.as_slice());
+        let depth_m = (self.depth_cut.is_some() && depth.has_readings()).then(|| depth.as_slice());
         let circles = self.circles_of_mask(
             &fruit,
             camera.width as usize,

@@ -1,8 +1,7 @@
 //! The stages of the detector, each behind [`pomona_pipeline::Stage`] so it can be timed,
 //! benchmarked or replaced alone: colour lookup → mask cleaning → (with depth, optionally, the
-//! depth cut) → contours → edge fitting (and,
-//! from the cleaned mask, the Hough circles and, optionally, the ray circles) → circles to
-//! fruit.
+//! depth cut) → contours → edge fitting (and, from the cleaned mask, the Hough circles and,
+//! optionally, the ray circles) → circles to fruit.
 
 use pomona_core::nalgebra::Point2;
 use pomona_core::{Detection, PixelBox, RgbdFrame};
@@ -185,13 +184,7 @@ impl Stage<(&[Contour], f64), Vec<ContourCircle>> for EdgeFitStage {
                     .map(move |a| (k, a))
             })
             .collect();
-        Ok(merge_arcs(
-            contours,
-            arcs,
-            self.params.merge_max_rms,
-            self.params.merge_ellipse_min_axis_ratio,
-            max_radius_px,
-        ))
+        Ok(merge_arcs(contours, arcs, &self.params, max_radius_px))
     }
 }
 

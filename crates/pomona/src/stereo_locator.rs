@@ -8,7 +8,9 @@
 //! [`PairEvidence`] adds and, after it, the pass over the circles it leaves unpaired
 //! ([`LeftoverPairing`]); each pair's stereo-view centre is refined by appearance
 //! ([`DisparityRefinement`]) and the pair located by Eq. 18 or triangulation
-//! ([`StereoMethod`]). Every step beyond the seed is a setting of [`StereoSettings`], whose
+//! ([`StereoMethod`]); a located fruit whose circle, at the located depth, is not a fruit's
+//! size is dropped (seed 004 §3.2's size test, on the stereo depth:
+//! [`StereoSettings::fruit_radius_m`]). Every step beyond the seed is a setting of [`StereoSettings`], whose
 //! default is what `pomona stereo` runs (docs/results.md measures each).
 //!
 //! Kept apart from [`Detector`] because it needs a rig and two images, and returns what the
@@ -87,6 +89,13 @@ pub struct StereoSettings {
     /// Sub-pixel refinement of each pair's stereo-view centre; `None`: the circle centres, as
     /// in the seed.
     pub refinement: Option<DisparityRefinement>,
+    /// The size test at the located depth, `(smallest, largest)` fruit radius in metres: a
+    /// located pair whose primary circle's radius at its located depth falls outside is not a
+    /// fruit where it was located — a wrong pair, or a right one whose disparity is wrong —
+    /// and goes to [`StereoFrame::rejected_by_size`]. Seed 004 prunes circles outside 25–55 mm
+    /// at the measured depth; the default is the `color-contour` detector's accepted range
+    /// (that range widened by its radius tolerance, as with depth). `None`: no test.
+    pub fruit_radius_m: Option<(f64, f64)>,
 }
 
 impl StereoSettings {
@@ -125,6 +134,9 @@ impl Default for StereoSettings {
             },
             leftovers: Some(LeftoverPairing::new(range)),
             refinement: Some(DisparityRefinement::default()),
+            fruit_radius_m: Some(
+                pomona_colorcontour::ColorContourParams::default().accepted_radius_range_m(),
+            ),
         }
     }
 }
@@ -166,6 +178,9 @@ pub struct StereoFrame {
     pub stereo: Vec<Detection>,
     /// The located pairs, in the order of `detections`.
     pub pairs: Vec<LocatedPair>,
+    /// Pairs matched and located, then dropped by the size test
+    /// ([`StereoSettings::fruit_radius_m`]).
+    pub rejected_by_size: Vec<LocatedPair>,
     /// What the matching evidence did (all zero when off).
     pub evidence: EvidenceOutcome,
 }
@@ -209,6 +224,16 @@ impl StereoLocator {
             pass.validate()?;
         }
         settings.evidence.validate()?;
+        if let Some((lo, hi)) = settings.fruit_radius_m {
+            if !(lo.is_finite() && hi.is_finite() && 0.0 < lo && lo < hi) {
+                return Err(ArmError::InvalidParameter {
+                    name: "fruit_radius_m",
+                    value: lo,
+                    reason: "needs finite 0 < smallest < largest",
+                }
+                .into());
+            }
+        }
         if let Some(refinement) = &settings.refinement {
             refinement.validate()?;
         }
@@ -294,6 +319,7 @@ impl StereoLocator {
         matched.sort_by_key(|p| p.primary);
         let mut detections = Vec::new();
         let mut pairs = Vec::new();
+        let mut rejected_by_size = Vec::new();
         for pair in &matched {
             let (p, s) = (&pc[pair.primary], &sc[pair.stereo]);
             let refinement = match &self.settings.refinement {
@@ -310,14 +336,7 @@ impl StereoLocator {
             else {
                 continue;
             };
-            detections.push(located(
-                &self.rig,
-                center_m,
-                &found_primary[pair.primary],
-                &found_stereo[pair.stereo],
-                p.radius_px,
-            ));
-            pairs.push(LocatedPair {
+            let located_pair = LocatedPair {
                 primary: pair.primary,
                 stereo: pair.stereo,
                 primary_px: p.center_px,
@@ -327,13 +346,29 @@ impl StereoLocator {
                 center_m,
                 evidence: evidence.score(pair.primary, pair.stereo),
                 from_leftovers: leftovers.contains(pair),
-            });
+            };
+            let radius_m = radius_at(&self.rig, &center_m, p.radius_px);
+            if let Some((lo, hi)) = self.settings.fruit_radius_m {
+                if !(lo..=hi).contains(&radius_m) {
+                    rejected_by_size.push(located_pair);
+                    continue;
+                }
+            }
+            detections.push(located(
+                &self.rig,
+                center_m,
+                &found_primary[pair.primary],
+                &found_stereo[pair.stereo],
+                p.radius_px,
+            ));
+            pairs.push(located_pair);
         }
         Ok(StereoFrame {
             detections,
             primary: found_primary,
             stereo: found_stereo,
             pairs,
+            rejected_by_size,
             evidence,
         })
     }
@@ -352,6 +387,11 @@ fn circles(detections: &[Detection]) -> Vec<ImageCircle> {
         .collect()
 }
 
+/// The radius in metres of a circle of `radius_px` at the depth of `center_m` (primary camera).
+fn radius_at(rig: &RotatedStereo, center_m: &Point3<f64>, radius_px: f64) -> f64 {
+    center_m.z * radius_px / rig.camera.mean_focal_px()
+}
+
 /// The located detection of a matched pair: the primary detection with the centre located, the
 /// diameter of its circle (`radius_px`) at that depth, the mean score and the lower confidence.
 fn located(
@@ -361,10 +401,9 @@ fn located(
     stereo: &Detection,
     radius_px: f64,
 ) -> Detection {
-    let f = rig.camera.mean_focal_px();
     Detection {
         center_m,
-        diameter_m: Some(2.0 * center_m.z * radius_px / f),
+        diameter_m: Some(2.0 * radius_at(rig, &center_m, radius_px)),
         score: 0.5 * (primary.score + stereo.score),
         confidence: primary
             .confidence
@@ -508,6 +547,64 @@ mod tests {
         let locator =
             StereoLocator::new(detector(), KeepRule::All, rig, StereoSettings::default()).unwrap();
         assert!(locator.locate(&small, &images.1).is_err());
+    }
+
+    #[test]
+    fn pairs_located_at_a_depth_where_their_circle_is_no_fruit_are_dropped() {
+        let rig = rig();
+        let (a, b) = shots(&rig, true);
+        let locate = |fruit_radius_m: Option<(f64, f64)>| {
+            let settings = StereoSettings {
+                fruit_radius_m,
+                ..StereoSettings::default()
+            };
+            let detector = Detector::builtin("color-contour").unwrap();
+            StereoLocator::new(detector, KeepRule::All, rig, settings)
+                .unwrap()
+                .locate(&a, &b)
+                .unwrap()
+        };
+        // The fruit are 40 mm in radius: inside the default range, and inside 35–45 mm.
+        for range in [
+            StereoSettings::default().fruit_radius_m,
+            Some((0.035, 0.045)),
+            None,
+        ] {
+            let found = locate(range);
+            assert_eq!(found.pairs.len(), 3, "{range:?}: {:?}", found.pairs);
+            assert!(found.rejected_by_size.is_empty(), "{range:?}");
+            for d in &found.detections {
+                let r = 0.5 * d.diameter_m.unwrap();
+                assert!((r - RADIUS_M).abs() < 0.005, "{range:?}: radius {r}");
+            }
+        }
+        // Ranges that leave them out: every pair is matched and located, then dropped.
+        for range in [(0.01, 0.03), (0.05, 0.08)] {
+            let found = locate(Some(range));
+            assert!(
+                found.detections.is_empty() && found.pairs.is_empty(),
+                "{range:?}"
+            );
+            assert_eq!(found.rejected_by_size.len(), 3, "{range:?}");
+        }
+        // A range that is not one is refused.
+        for bad in [
+            (0.05, 0.03),
+            (0.0, 0.03),
+            (0.02, f64::INFINITY),
+            (f64::NAN, 0.03),
+        ] {
+            let settings = StereoSettings {
+                fruit_radius_m: Some(bad),
+                ..StereoSettings::default()
+            };
+            let detector = Detector::builtin("color-contour").unwrap();
+            let refused = StereoLocator::new(detector, KeepRule::All, rig, settings);
+            assert!(
+                matches!(refused, Err(Error::Stereo(_))),
+                "{bad:?}: {refused:?}"
+            );
+        }
     }
 
     #[test]

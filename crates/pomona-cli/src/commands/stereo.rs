@@ -90,6 +90,12 @@ pub struct StereoArgs {
     /// Pixels added to every disparity window (detector centre error, lens effects).
     #[arg(long, value_name = "PX", default_value_t = 4.0)]
     pub margin_px: f64,
+    /// The size test at the located depth (seed 004's 25–55 mm, on the stereo depth): a pair
+    /// whose primary circle, at its located depth, has a radius outside `MIN,MAX` metres is
+    /// dropped. Default: the color-contour detector's accepted radii (0.0227,0.0605). `off`:
+    /// no test.
+    #[arg(long, value_name = "MIN,MAX|off", value_parser = parse_radius_range)]
+    pub fruit_radius_m: Option<RadiusRange>,
     /// Refine each pair's stereo-view centre by appearance before locating it (beyond the seed;
     /// the default).
     #[arg(long, overrides_with = "no_refine")]
@@ -226,6 +232,21 @@ fn parse_or_off(s: &str) -> Result<OrOff, String> {
         .map_err(|_| format!("need a number or `off`, got {s}"))
 }
 
+/// `--fruit-radius-m`: a range, or `off` (`RadiusRange(None)`).
+#[derive(Debug, Clone, Copy)]
+pub struct RadiusRange(pub Option<(f64, f64)>);
+
+fn parse_radius_range(s: &str) -> Result<RadiusRange, String> {
+    if s == "off" {
+        return Ok(RadiusRange(None));
+    }
+    let (lo, hi) = parse_number_pair(s, "MIN,MAX in metres (e.g. 0.02,0.06) or `off`")?;
+    if !(0.0 < lo && lo < hi) {
+        return Err(format!("need 0 < MIN < MAX, got {lo},{hi}"));
+    }
+    Ok(RadiusRange(Some((lo, hi))))
+}
+
 fn parse_reach(s: &str) -> Result<(f64, f64), String> {
     let (lo, hi) = parse_number_pair(s, "NEAR,FAR in metres (e.g. 0.5,2.0)")?;
     if !(lo.is_finite() && hi.is_finite() && 0.0 < lo && lo < hi) {
@@ -315,6 +336,7 @@ fn run_frame(
             primary_centres: centres(&found.primary),
             stereo_centres: centres(&found.stereo),
             pairs: found.pairs,
+            rejected_by_size: found.rejected_by_size,
         },
         detections: found.detections,
     })
@@ -385,6 +407,9 @@ pub fn run(args: &StereoArgs) -> Result<()> {
         evidence,
         leftovers,
         refinement,
+        fruit_radius_m: args
+            .fruit_radius_m
+            .map_or(StereoSettings::default().fruit_radius_m, |r| r.0),
     };
     let locator = StereoLocator::new(detector, keep, rig, settings)
         .context("bad --reach-m or --margin-px")?;

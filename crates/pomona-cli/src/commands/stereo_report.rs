@@ -43,10 +43,12 @@ pub struct StereoFrameOutcome {
     pub stereo_centres: Vec<Point2<f64>>,
     /// Matched pairs that were located.
     pub pairs: Vec<LocatedPair>,
+    /// Matched and located pairs the size test dropped (scored for matching, not for 3D).
+    pub rejected_by_size: Vec<LocatedPair>,
 }
 
-/// How many located pairs the appearance refinement moved and why the others kept their
-/// circle centres.
+/// How many located pairs (those the size test dropped included) the appearance refinement
+/// moved and why the others kept their circle centres.
 #[derive(Debug, Clone, Default, Serialize)]
 pub struct RefinementCounts {
     /// Pairs whose stereo centre was refined.
@@ -147,7 +149,7 @@ pub struct WrongPair {
 /// Matching scores.
 #[derive(Debug, Clone, Default, Serialize)]
 pub struct MatchingScore {
-    /// Located pairs.
+    /// Located pairs, with those the size test then dropped (`rejected_by_size`).
     pub pairs: usize,
     /// Pairs whose two detections are both real fruit.
     pub pairs_of_fruit: usize,
@@ -162,6 +164,9 @@ pub struct MatchingScore {
     /// Located pairs made by the pass over the circles the relaxation left unpaired
     /// (`--match-leftovers`), and of those, pairs of two different fruit.
     pub from_leftovers: [usize; 2],
+    /// Pairs the size test at the located depth dropped (`--fruit-radius-m`; counted in `pairs`
+    /// and the matching scores, not in the 3D errors), and of those, pairs of one fruit.
+    pub rejected_by_size: [usize; 2],
     /// Pairs of two different fruit, by cause: `duplicate` (the primary fruit or the stereo fruit
     /// has another circle in its view), `partner_missing` (the primary fruit has no circle in the
     /// stereo view), `rival` (neither: the relaxation preferred a neighbour).
@@ -319,7 +324,10 @@ impl StereoReport {
     ) -> Result<Self> {
         let mut tally = Tally::default();
         let mut counts = RefinementCounts::default();
-        for pair in outcomes.iter().flat_map(|o| &o.pairs) {
+        for pair in outcomes
+            .iter()
+            .flat_map(|o| o.pairs.iter().chain(&o.rejected_by_size))
+        {
             match pair.refinement {
                 Some(RefinementOutcome::Refined { .. }) => counts.refined += 1,
                 Some(RefinementOutcome::Fallback { reason, .. }) => {
@@ -380,6 +388,13 @@ impl StereoReport {
                 } else {
                     kept.join(", ")
                 }
+            ));
+        }
+        let [dropped, dropped_right] = self.matching.rejected_by_size;
+        if dropped > 0 {
+            s.push_str(&format!(
+                "dropped by the size test at the located depth: {dropped} pairs (of one fruit: \
+                 {dropped_right}); the 3D errors below are over the located pairs\n\n"
             ));
         }
         let [leftover, leftover_wrong] = self.matching.from_leftovers;
@@ -532,8 +547,10 @@ impl Tally {
         let mut paired = HashSet::new();
         // Per fruit id: in a pair with another fruit, in a pair with a false detection.
         let mut fates = BTreeMap::<String, (bool, bool)>::new();
-        for pair in &outcome.pairs {
+        let rejected = outcome.rejected_by_size.iter().map(|p| (p, true));
+        for (pair, dropped) in outcome.pairs.iter().map(|p| (p, false)).chain(rejected) {
             let (p, s, located) = (&pair.primary_px, &pair.stereo_px, &pair.center_m);
+            self.matching.rejected_by_size[0] += usize::from(dropped);
             self.matching.pairs += 1;
             self.matching.from_leftovers[0] += usize::from(pair.from_leftovers);
             let (ia, ib) = (identity(&cp, p), identity(&cs, &pair.stereo_circle_px));
@@ -579,11 +596,13 @@ impl Tally {
                 continue;
             }
             self.matching.correct += 1;
+            self.matching.rejected_by_size[1] += usize::from(dropped);
             let first = paired.insert(a.clone());
             if !first {
                 self.matching.repeated += 1;
             }
-            if let (true, Some(truth)) = (first, centre_of.get(a.as_str())) {
+            // A pair the size test dropped was not located: no 3D error.
+            if let (true, false, Some(truth)) = (first, dropped, centre_of.get(a.as_str())) {
                 let error_mm = (located - truth).norm() * 1e3;
                 self.errors_by_depth.push((truth.z, error_mm));
                 if let (true, Some(&visibility)) =

@@ -23,7 +23,10 @@ use crate::py_error::to_py;
 /// the working volume (``None``: pivot + 0.2 to pivot + 2.0 m); ``refine``: the sub-pixel
 /// refinement of each pair's stereo-view centre (``False``: the circle centres, as in the seed
 /// and ``pomona stereo --no-refine``); ``leftovers``: the pass that pairs the circles the
-/// relaxation leaves by appearance (``False``: none, as in the seed).
+/// relaxation leaves by appearance (``False``: none, as in the seed); ``fruit_radius_m``:
+/// ``(smallest, largest)`` radius in metres a located fruit's circle must have at its located
+/// depth (seed 004's size test on the stereo depth; ``None``: the detector's accepted radii,
+/// as ``pomona stereo``); ``size_test``: ``False`` for no size test (``--fruit-radius-m off``).
 #[pyclass(frozen, module = "pomona")]
 pub struct StereoLocator {
     inner: pomona::StereoLocator,
@@ -32,7 +35,7 @@ pub struct StereoLocator {
 #[pymethods]
 impl StereoLocator {
     #[new]
-    #[pyo3(signature = (*, camera, beta_deg, pivot_m, model = None, set = None, method = "paper", min_confidence = None, reach_m = None, refine = true, leftovers = true))]
+    #[pyo3(signature = (*, camera, beta_deg, pivot_m, model = None, set = None, method = "paper", min_confidence = None, reach_m = None, refine = true, leftovers = true, fruit_radius_m = None, size_test = true))]
     #[allow(clippy::too_many_arguments)] // Python keyword arguments
     fn new(
         camera: &Bound<'_, PyAny>,
@@ -45,6 +48,8 @@ impl StereoLocator {
         reach_m: Option<(f64, f64)>,
         refine: bool,
         leftovers: bool,
+        fruit_radius_m: Option<(f64, f64)>,
+        size_test: bool,
     ) -> PyResult<Self> {
         let camera = camera_from_dict(camera)?.camera;
         let rig = RotatedStereo::new(beta_deg.to_radians(), pivot_m, camera)
@@ -59,6 +64,9 @@ impl StereoLocator {
             reach_m,
             refinement: defaults.refinement.filter(|_| refine),
             leftovers: defaults.leftovers.filter(|_| leftovers),
+            fruit_radius_m: fruit_radius_m
+                .or(defaults.fruit_radius_m)
+                .filter(|_| size_test),
             ..defaults
         };
         Ok(Self {

@@ -70,6 +70,21 @@ def test_the_seeds_matching_without_refinement_or_leftover_pass():
     assert sorted(d["center_m"] for d in seed) != sorted(d["center_m"] for d in refined)
 
 
+def test_the_size_test_drops_fruit_located_at_another_size():
+    kwargs = dict(camera=CAMERA, beta_deg=BETA_DEG, pivot_m=PIVOT_M, min_confidence=0.0)
+    primary, stereo = shot(FRUIT, True), shot([in_stereo(p) for p in FRUIT], True)
+    # The fruit are 40 mm in radius: kept by the default range and by 35–45 mm ...
+    for extra in ({}, dict(fruit_radius_m=(0.035, 0.045)), dict(size_test=False)):
+        found = pomona.StereoLocator(**kwargs, **extra).locate(primary, stereo)
+        assert len(found) == len(FRUIT), (extra, found)
+    # ... and dropped by a range for smaller fruit, unless the test is off.
+    assert pomona.StereoLocator(**kwargs, fruit_radius_m=(0.01, 0.03)).locate(primary, stereo) == []
+    off = pomona.StereoLocator(**kwargs, fruit_radius_m=(0.01, 0.03), size_test=False)
+    assert len(off.locate(primary, stereo)) == len(FRUIT)
+    with pytest.raises(pomona.PomonaError, match="fruit_radius_m"):
+        pomona.StereoLocator(**kwargs, fruit_radius_m=(0.05, 0.03))
+
+
 def test_bad_input_is_refused_by_name():
     with pytest.raises(pomona.PomonaError, match="method"):
         pomona.StereoLocator(camera=CAMERA, beta_deg=BETA_DEG, pivot_m=PIVOT_M, method="x")

@@ -10,8 +10,9 @@
 //! ([`DisparityRefinement`]) and the pair located by Eq. 18 or triangulation
 //! ([`StereoMethod`]); a located fruit whose circle, at the located depth, is not a fruit's
 //! size is dropped (seed 004 §3.2's size test, on the stereo depth:
-//! [`StereoSettings::fruit_radius_m`]). Every step beyond the seed is a setting of [`StereoSettings`], whose
-//! default is what `pomona stereo` runs (docs/results.md measures each).
+//! [`StereoSettings::fruit_radius_m`]). Every step beyond the seed is a setting of
+//! [`StereoSettings`], whose default is what `pomona stereo` runs (docs/results.md measures
+//! each).
 //!
 //! Kept apart from [`Detector`] because it needs a rig and two images, and returns what the
 //! matching did as well as the located fruit (a stereo report scores both).

@@ -412,7 +412,7 @@ pub fn run(args: &StereoArgs) -> Result<()> {
             .map_or(StereoSettings::default().fruit_radius_m, |r| r.0),
     };
     let locator = StereoLocator::new(detector, keep, rig, settings)
-        .context("bad --reach-m or --margin-px")?;
+        .context("bad --reach-m, --margin-px or --fruit-radius-m")?;
     let (rig, windows, detector) = (locator.rig(), locator.windows(), locator.detector());
     let pool = thread_pool(args.threads.map(|n| n as usize))?;
     let runs: Vec<FrameRun> = pool.install(|| {

@@ -85,6 +85,8 @@ class StereoLocator:
         reach_m: Optional[tuple[float, float]] = None,
         refine: bool = True,
         leftovers: bool = True,
+        fruit_radius_m: Optional[tuple[float, float]] = None,
+        size_test: bool = True,
     ) -> None: ...
     def locate(
         self, primary: npt.NDArray[np.uint8], stereo: npt.NDArray[np.uint8]

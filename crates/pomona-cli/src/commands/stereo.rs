@@ -95,7 +95,7 @@ pub struct StereoArgs {
     /// dropped. Default: the color-contour detector's accepted radii (0.0227,0.0605). `off`:
     /// no test.
     #[arg(long, value_name = "MIN,MAX|off", value_parser = parse_radius_range)]
-    pub fruit_radius_m: Option<RadiusRange>,
+    pub fruit_radius_m: Option<OrOff<(f64, f64)>>,
     /// Refine each pair's stereo-view centre by appearance before locating it (beyond the seed;
     /// the default).
     #[arg(long, overrides_with = "no_refine")]
@@ -197,11 +197,11 @@ pub struct StereoArgs {
     pub threads: Option<u64>,
 }
 
-/// A number, or `None` for `off` (`--refine-fruit-chroma`, `--refine-whole-patch-min-ncc`);
-/// its range is checked with the other refinement parameters
-/// ([`DisparityRefinement::validate`]).
+/// A value, or `None` for `off`: a number (`--refine-fruit-chroma`,
+/// `--refine-whole-patch-min-ncc`, ...; its range is checked with the other refinement
+/// parameters, [`DisparityRefinement::validate`]) or a range (`--fruit-radius-m`).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct OrOff(pub Option<f64>);
+pub struct OrOff<T = f64>(pub Option<T>);
 
 /// The refinement the `--refine*` options ask for (`None` with `--no-refine`).
 fn refinement(args: &StereoArgs) -> Result<Option<DisparityRefinement>> {
@@ -223,28 +223,29 @@ fn refinement(args: &StereoArgs) -> Result<Option<DisparityRefinement>> {
     Ok(Some(r))
 }
 
-fn parse_or_off(s: &str) -> Result<OrOff, String> {
+/// `off`, else what `parse` makes of `s`.
+fn off_or<T>(s: &str, parse: impl Fn(&str) -> Result<T, String>) -> Result<OrOff<T>, String> {
     if s == "off" {
         return Ok(OrOff(None));
     }
-    s.parse::<f64>()
-        .map(|x| OrOff(Some(x)))
-        .map_err(|_| format!("need a number or `off`, got {s}"))
+    parse(s).map(|v| OrOff(Some(v)))
 }
 
-/// `--fruit-radius-m`: a range, or `off` (`RadiusRange(None)`).
-#[derive(Debug, Clone, Copy)]
-pub struct RadiusRange(pub Option<(f64, f64)>);
+fn parse_or_off(s: &str) -> Result<OrOff, String> {
+    off_or(s, |s| {
+        s.parse::<f64>()
+            .map_err(|_| format!("need a number or `off`, got {s}"))
+    })
+}
 
-fn parse_radius_range(s: &str) -> Result<RadiusRange, String> {
-    if s == "off" {
-        return Ok(RadiusRange(None));
-    }
-    let (lo, hi) = parse_number_pair(s, "MIN,MAX in metres (e.g. 0.02,0.06) or `off`")?;
-    if !(0.0 < lo && lo < hi) {
-        return Err(format!("need 0 < MIN < MAX, got {lo},{hi}"));
-    }
-    Ok(RadiusRange(Some((lo, hi))))
+fn parse_radius_range(s: &str) -> Result<OrOff<(f64, f64)>, String> {
+    off_or(s, |s| {
+        let (lo, hi) = parse_number_pair(s, "MIN,MAX in metres (e.g. 0.02,0.06) or `off`")?;
+        if !(0.0 < lo && lo < hi) {
+            return Err(format!("need 0 < MIN < MAX, got {lo},{hi}"));
+        }
+        Ok((lo, hi))
+    })
 }
 
 fn parse_reach(s: &str) -> Result<(f64, f64), String> {

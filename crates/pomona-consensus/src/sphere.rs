@@ -177,6 +177,27 @@ pub struct SphereEstimatorParams {
     /// its normal deviates from the sphere's radial direction by more than this angle (sign
     /// ignored), radians. Default `None` (the paper uses distances only).
     pub max_normal_deviation_rad: Option<f64>,
+    /// When set, the sphere is seen from this point (the camera centre, in the data's frame):
+    /// only its facing side is visible, so a datum whose radial direction points away from the
+    /// viewpoint (more than [`FACING_SLACK`] past the rim) is an outlier, and a hypothesis whose
+    /// four samples are not all on the facing side is refused. A convex fruit seen from outside
+    /// shows only that side; without the test a sphere fitted inside out — through a fruit's
+    /// edge and the leaves beside it, its centre in front of them — can win on inlier count.
+    /// Default `None` (the paper uses distances only; absent in older files).
+    #[serde(default)]
+    pub visible_from: Option<Point3<f64>>,
+}
+
+/// How far past the rim a datum still counts as facing the viewpoint: the cosine between its
+/// radial direction and its direction to the viewpoint may fall to `-FACING_SLACK` (about 6°
+/// past the silhouette, where depth sensors place rim points too far).
+pub const FACING_SLACK: f64 = 0.1;
+
+/// Whether the datum at `point`, whose radial vector from the shape is `radial`, faces
+/// `viewpoint` (see [`SphereEstimatorParams::visible_from`]).
+fn faces(radial: &Vector3<f64>, point: &Point3<f64>, viewpoint: &Point3<f64>) -> bool {
+    let to_view = viewpoint - point;
+    radial.dot(&to_view) > -FACING_SLACK * radial.norm() * to_view.norm()
 }
 
 impl Default for SphereEstimatorParams {
@@ -184,6 +205,7 @@ impl Default for SphereEstimatorParams {
         Self {
             radius_range_m: (0.02, 0.08),
             max_normal_deviation_rad: None,
+            visible_from: None,
         }
     }
 }
@@ -231,7 +253,13 @@ impl<D: Positioned> Estimator<D> for SphereEstimator {
         };
         let (pa, pb, pc, pd) = (a.position(), b.position(), c.position(), d.position());
         let s = Sphere::from_four_points([&pa, &pb, &pc, &pd])?;
-        <Self as Estimator<D>>::is_model_valid(self, &s).then_some(s)
+        let facing = |p: &Point3<f64>| {
+            self.params
+                .visible_from
+                .is_none_or(|v| faces(&(p - s.center), p, &v))
+        };
+        let seen = [pa, pb, pc, pd].iter().all(facing);
+        (seen && <Self as Estimator<D>>::is_model_valid(self, &s)).then_some(s)
     }
 
     fn is_datum_valid(&self, datum: &D) -> bool {
@@ -243,7 +271,13 @@ impl<D: Positioned> Estimator<D> for SphereEstimator {
     }
 
     fn residual(&self, model: &Sphere, datum: &D) -> f64 {
-        let radial = datum.position() - model.center;
+        let p = datum.position();
+        let radial = p - model.center;
+        if let Some(v) = self.params.visible_from {
+            if !faces(&radial, &p, &v) {
+                return f64::INFINITY;
+            }
+        }
         self.prior.residual(&radial, datum.normal(), model.radius_m)
     }
 
@@ -323,6 +357,81 @@ mod tests {
         }
         .check()
         .is_err());
+    }
+
+    /// `n` points spread evenly over `sphere` (a Fibonacci spiral), those whose radial direction
+    /// faces the origin when `facing`, the others when not.
+    fn side_of(sphere: &Sphere, n: usize, facing: bool) -> Vec<Point3<f64>> {
+        let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
+        (0..n)
+            .map(|i| {
+                let z = 1.0 - 2.0 * (i as f64 + 0.5) / n as f64;
+                let s = (1.0 - z * z).sqrt();
+                let t = golden * i as f64;
+                sphere.center + Vector3::new(s * t.cos(), s * t.sin(), z) * sphere.radius_m
+            })
+            .filter(|p| ((p - sphere.center).dot(&(-p.coords)) > 0.0) == facing)
+            .collect()
+    }
+
+    /// A fruit's camera-facing cap beside a bowl (the far side of a larger sphere, as leaves
+    /// curled round a fruit can be): the bowl holds more points and wins by inlier count; seen
+    /// from the camera only the cap is the visible side of a sphere.
+    #[test]
+    fn a_sphere_seen_from_the_camera_shows_its_facing_side() {
+        use crate::{Acceptance, Consensus, MsacParams};
+        let fruit = Sphere {
+            center: Point3::new(0.05, 0.0, 1.0),
+            radius_m: 0.035,
+        };
+        let bowl = Sphere {
+            center: Point3::new(-0.09, 0.0, 0.95),
+            radius_m: 0.05,
+        };
+        let mut data = side_of(&fruit, 160, true);
+        data.extend(side_of(&bowl, 400, false));
+        let msac = MsacParams {
+            cost_threshold_m: 0.004,
+            acceptance: Acceptance::Always,
+            iterations: 400,
+            early_stop_confidence: None,
+            inlier_threshold_m: 0.002,
+            refine_threshold_m: Some(0.002),
+            ..MsacParams::default()
+        }
+        .check()
+        .unwrap();
+        let fit = |visible_from| {
+            let estimator = SphereEstimatorParams {
+                visible_from,
+                ..Default::default()
+            }
+            .check()
+            .unwrap();
+            msac.fit_seeded(&estimator, &data, 7)
+                .unwrap()
+                .unwrap()
+                .model
+        };
+        let blind = fit(None);
+        assert!((blind.center - bowl.center).norm() < 1e-3, "{blind:?}");
+        let seen = fit(Some(Point3::origin()));
+        assert!((seen.center - fruit.center).norm() < 1e-3, "{seen:?}");
+        assert!((seen.radius_m - fruit.radius_m).abs() < 1e-3, "{seen:?}");
+        // Four samples of the bowl's far side make no hypothesis when it is seen from the camera.
+        let far_side = side_of(&bowl, 400, false);
+        let sample: Vec<&Point3<f64>> = far_side.iter().step_by(50).take(4).collect();
+        let estimate = |visible_from| {
+            let estimator = SphereEstimatorParams {
+                visible_from,
+                ..Default::default()
+            }
+            .check()
+            .unwrap();
+            Estimator::<Point3<f64>>::estimate(&estimator, &sample)
+        };
+        assert!(estimate(None).is_some());
+        assert!(estimate(Some(Point3::origin())).is_none());
     }
 
     #[test]

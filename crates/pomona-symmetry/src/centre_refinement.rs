@@ -5,7 +5,10 @@
 //! good as the stride (30 mm: up to 26 mm off even for a perfect classifier) and there is no
 //! diameter. Here a sphere is fitted by MSAC ([`pomona_consensus::Msac`], seed 002's 4-point
 //! sphere estimator with its fruit-size prior and a geometric least-squares refit on the
-//! inliers) to the scene points within `search_radius_m` of the merged box centre. The fit
+//! inliers) to the scene points within `search_radius_m` of the merged box centre — with
+//! `facing_camera`, only spheres whose four samples and inliers lie on the side facing the
+//! camera, as a convex fruit seen from outside does (the ball also holds leaves and neighbours,
+//! and a sphere fitted inside out through them can have the most inliers). The fit
 //! replaces the centre and gives the diameter only when it is believable:
 //! * at least `min_inliers` points and `min_inlier_fraction` of the gathered points lie within
 //!   `inlier_threshold_m` of the sphere (leaves and neighbours in the search ball are outliers);
@@ -63,6 +66,15 @@ pub struct CentreRefinementParams {
     pub min_inlier_fraction: f64,
     /// A fitted centre farther than this from the box centre is rejected, metres.
     pub max_shift_m: f64,
+    /// Whether the sphere is fitted to the side the camera sees only (the camera at the cloud's
+    /// origin): every MSAC sample and every inlier must face the camera
+    /// ([`SphereEstimatorParams::visible_from`]). The ball gathered around a box holds leaves
+    /// and neighbours as well as the fruit; without the test the sphere with most inliers can be
+    /// one fitted inside out through them, its centre in front of the points — refused by the
+    /// centre-behind test, or, when it passes, off the fruit. Absent in model files from before
+    /// it existed: `false`, as they were trained (new training: `true`).
+    #[serde(default)]
+    pub facing_camera: bool,
     /// Seed of the MSAC samples.
     pub seed: u64,
     /// Fitted radius → fruit radius, learnt by training from the fits inside annotated fruit
@@ -94,6 +106,7 @@ impl Default for CentreRefinementParams {
             min_inliers: 30,
             min_inlier_fraction: 0.25,
             max_shift_m: 0.04,
+            facing_camera: true,
             seed: 0,
             radius_calibration: None,
         }
@@ -188,6 +201,7 @@ impl CentreRefinement {
         let estimator = SphereEstimatorParams {
             radius_range_m: params.radius_range_m,
             max_normal_deviation_rad: None,
+            visible_from: params.facing_camera.then(Point3::origin),
         }
         .check()
         .map_err(|_| {
@@ -436,6 +450,16 @@ mod tests {
         })
         .unwrap();
         assert_eq!(off.refine(&cloud, &[boxed(c)])[0].sphere, None);
+    }
+
+    #[test]
+    fn files_from_before_the_facing_test_fit_as_they_were_trained() {
+        assert!(CentreRefinementParams::default().facing_camera);
+        let older: CentreRefinementParams = serde_json::from_str(r#"{"enabled": true}"#).unwrap();
+        assert!(!older.facing_camera);
+        let json = serde_json::to_string(&CentreRefinementParams::default()).unwrap();
+        let back: CentreRefinementParams = serde_json::from_str(&json).unwrap();
+        assert_eq!(back, CentreRefinementParams::default());
     }
 
     #[test]

@@ -720,7 +720,7 @@ mod tests {
     }
 
     /// A model written before the refinement existed runs without it; a partial block reads
-    /// the other keys' defaults.
+    /// the other keys' defaults, except `facing_camera`, off as in the files written before it.
     #[test]
     fn refinement_is_off_without_its_block_and_keys_default() {
         let mut json = serde_json::to_value(StageParams::symmetry()).unwrap();
@@ -734,11 +734,17 @@ mod tests {
             partial.refinement,
             CentreRefinementParams {
                 max_shift_m: 0.03,
+                // The one key whose absence means "as before", not the default.
+                facing_camera: false,
                 ..CentreRefinementParams::default()
             }
         );
         assert!(StageParams::symmetry().refinement.enabled);
         assert!(StageParams::viewer_pose().refinement.enabled);
+        // Both built-in models fit the refining sphere to the side the camera sees.
+        for params in built_in_params() {
+            assert!(params.refinement.enabled && params.refinement.facing_camera);
+        }
     }
 
     /// The stage parameters of the built-in `symmetry` and `viewer-pose` files.

@@ -21,7 +21,10 @@
 //! for its new fixed-frame cascade (docs/results.md, "Two classifiers, one score"). The normal
 //! window's scaling on cameras finer than 615 px (`normals.scale_above_focal_px`, session 58)
 //! touches none of the training cameras, so it was added to both files by hand; rerunning the
-//! recipe afterwards gave both files byte for byte (`cmp`).
+//! recipe afterwards gave both files byte for byte (`cmp`). Both were rewritten by the recipe
+//! on 7 December (session 64) when the refinement began fitting only the side the camera sees
+//! (`refinement.facing_camera`): the SVMs came out byte-identical, the radius and confidence
+//! calibrations refitted.
 //!
 //! Model size: each support vector is 168 numbers, and each model holds two SVMs (the main one
 //! and its cascade's fixed-frame one, see `CascadeParams`): the files are 5.6 and 2.7 MB

@@ -401,14 +401,16 @@ mod tests {
         }
         .check()
         .unwrap();
-        let fit = |visible_from| {
-            let estimator = SphereEstimatorParams {
+        let estimator = |visible_from| {
+            SphereEstimatorParams {
                 visible_from,
                 ..Default::default()
             }
             .check()
-            .unwrap();
-            msac.fit_seeded(&estimator, &data, 7)
+            .unwrap()
+        };
+        let fit = |visible_from| {
+            msac.fit_seeded(&estimator(visible_from), &data, 7)
                 .unwrap()
                 .unwrap()
                 .model
@@ -421,15 +423,8 @@ mod tests {
         // Four samples of the bowl's far side make no hypothesis when it is seen from the camera.
         let far_side = side_of(&bowl, 400, false);
         let sample: Vec<&Point3<f64>> = far_side.iter().step_by(50).take(4).collect();
-        let estimate = |visible_from| {
-            let estimator = SphereEstimatorParams {
-                visible_from,
-                ..Default::default()
-            }
-            .check()
-            .unwrap();
-            Estimator::<Point3<f64>>::estimate(&estimator, &sample)
-        };
+        let estimate =
+            |visible_from| Estimator::<Point3<f64>>::estimate(&estimator(visible_from), &sample);
         assert!(estimate(None).is_some());
         assert!(estimate(Some(Point3::origin())).is_none());
     }

@@ -214,9 +214,24 @@ impl SphereEstimatorParams {
     /// Validates into a [`SphereEstimator`].
     ///
     /// # Errors
-    /// [`ConsensusError::InvalidParameter`] when the radius range is not `0 ≤ min < max` or the
-    /// angle is not in `(0, π/2]`.
+    /// [`ConsensusError::InvalidParameter`] when the radius range is not `0 ≤ min < max`, the
+    /// angle is not in `(0, π/2]` or the viewpoint is not finite.
     pub fn check(self) -> Result<SphereEstimator, ConsensusError> {
+        if let Some(v) = self
+            .visible_from
+            .filter(|v| !v.coords.iter().all(|c| c.is_finite()))
+        {
+            return Err(ConsensusError::InvalidParameter {
+                name: "visible_from",
+                value: v
+                    .coords
+                    .iter()
+                    .copied()
+                    .find(|c| !c.is_finite())
+                    .unwrap_or(f64::NAN),
+                reason: "must be a finite point",
+            });
+        }
         let prior = RadialPrior::check(self.radius_range_m, self.max_normal_deviation_rad)?;
         Ok(SphereEstimator {
             params: self,
@@ -427,6 +442,11 @@ mod tests {
             |visible_from| Estimator::<Point3<f64>>::estimate(&estimator(visible_from), &sample);
         assert!(estimate(None).is_some());
         assert!(estimate(Some(Point3::origin())).is_none());
+        let nowhere = SphereEstimatorParams {
+            visible_from: Some(Point3::new(0.0, f64::NAN, 0.0)),
+            ..Default::default()
+        };
+        assert!(nowhere.check().is_err());
     }
 
     #[test]

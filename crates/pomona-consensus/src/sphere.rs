@@ -197,7 +197,11 @@ pub const FACING_SLACK: f64 = 0.1;
 /// `viewpoint` (see [`SphereEstimatorParams::visible_from`]).
 fn faces(radial: &Vector3<f64>, point: &Point3<f64>, viewpoint: &Point3<f64>) -> bool {
     let to_view = viewpoint - point;
-    radial.dot(&to_view) > -FACING_SLACK * radial.norm() * to_view.norm()
+    let dot = radial.dot(&to_view);
+    // `dot > -FACING_SLACK · |radial| · |to_view|`, without square roots: every datum of a
+    // hypothesis's scoring passes here, and most face the viewpoint outright.
+    dot > 0.0
+        || dot * dot < FACING_SLACK * FACING_SLACK * radial.norm_squared() * to_view.norm_squared()
 }
 
 impl Default for SphereEstimatorParams {
@@ -273,8 +277,8 @@ impl<D: Positioned> Estimator<D> for SphereEstimator {
                 .visible_from
                 .is_none_or(|v| faces(&(p - s.center), p, &v))
         };
-        let seen = [pa, pb, pc, pd].iter().all(facing);
-        (seen && <Self as Estimator<D>>::is_model_valid(self, &s)).then_some(s)
+        (<Self as Estimator<D>>::is_model_valid(self, &s) && [pa, pb, pc, pd].iter().all(facing))
+            .then_some(s)
     }
 
     fn is_datum_valid(&self, datum: &D) -> bool {

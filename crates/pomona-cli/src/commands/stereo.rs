@@ -240,18 +240,24 @@ fn parse_or_off(s: &str) -> Result<OrOff, String> {
 
 fn parse_radius_range(s: &str) -> Result<OrOff<(f64, f64)>, String> {
     off_or(s, |s| {
-        let (lo, hi) = parse_number_pair(s, "MIN,MAX in metres (e.g. 0.02,0.06) or `off`")?;
-        if !(0.0 < lo && lo < hi) {
-            return Err(format!("need 0 < MIN < MAX, got {lo},{hi}"));
-        }
-        Ok((lo, hi))
+        positive_range(
+            s,
+            ("MIN", "MAX"),
+            "MIN,MAX in metres (e.g. 0.02,0.06) or `off`",
+        )
     })
 }
 
 fn parse_reach(s: &str) -> Result<(f64, f64), String> {
-    let (lo, hi) = parse_number_pair(s, "NEAR,FAR in metres (e.g. 0.5,2.0)")?;
+    positive_range(s, ("NEAR", "FAR"), "NEAR,FAR in metres (e.g. 0.5,2.0)")
+}
+
+/// Two finite numbers `0 < lo < hi`, named `names` in the error (`example` shows the form).
+fn positive_range(s: &str, names: (&str, &str), example: &str) -> Result<(f64, f64), String> {
+    let (lo, hi) = parse_number_pair(s, example)?;
     if !(lo.is_finite() && hi.is_finite() && 0.0 < lo && lo < hi) {
-        return Err(format!("need 0 < NEAR < FAR, got {lo},{hi}"));
+        let (a, b) = names;
+        return Err(format!("need 0 < {a} < {b}, got {lo},{hi}"));
     }
     Ok((lo, hi))
 }

@@ -47,7 +47,9 @@ pub use curvature_check::CurvatureCheck;
 pub use depth_proposals::DepthProposalParams;
 pub use gpcd::{gpcd, GpcdParams, HueStatistics, GPCD_LEN};
 pub use negative_selection::MINING_MIN_SCORE;
-pub use params::{CoaxialMergeParams, LabelRule, ShapeFitParams};
+pub use params::{
+    CoaxialMergeParams, LabelRule, ShapeFitParams, BUILT_IN_DOUBLE_CURVATURE_PATCH_RADII,
+};
 pub use piece_joining::PieceJoining;
 pub use pipeline::{ShapeFitDetector, ShapeFitPipeline, ShapeFitStageParams, PIPELINE_NAME};
 pub use pomona_consensus::{fit_center_fixed_radius, RadiusCalibration, MIN_CALIBRATION_SAMPLES};

@@ -9,8 +9,8 @@ use pomona_learn::{
     TrainingSet,
 };
 use pomona_pipeline::{
-    params_from_json, params_to_json, run_stage, Detector, FrameSource, LabelledFrame, Pipeline,
-    PipelineError, StageTimings, TrainOptions,
+    params_from_json, params_to_json, run_stage, Detector, DoubleCurvatureCheck, FrameSource,
+    LabelledFrame, Pipeline, PipelineError, StageTimings, TrainOptions,
 };
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -518,6 +518,7 @@ impl Pipeline for ShapeFitPipeline {
             coaxial_merge: stage_params.params.coaxial_merge,
             calibration: stage_params.params.radius_calibration,
             sphere_range_m: stage_params.params.shapes.sphere.radius_range_m,
+            double_curvature: stage_params.params.double_curvature,
         }))
     }
 }
@@ -715,6 +716,8 @@ pub struct ShapeFitDetector {
     coaxial_merge: CoaxialMergeParams,
     calibration: Option<RadiusCalibration>,
     sphere_range_m: (f64, f64),
+    /// Asked of every sphere merging would keep.
+    double_curvature: DoubleCurvatureCheck,
 }
 
 fn detection(c: &Candidate, shape: &Shape, score: f64, camera: &PinholeCamera) -> Detection {
@@ -785,19 +788,22 @@ fn coaxial_union(a: &Cylinder, b: &Cylinder, rule: &CoaxialMergeParams) -> Optio
 /// or later: a depth proposal is as often a stem or leaf in line with the fruit as a piece of
 /// it, and on the synthetic eggplants such extensions moved detected centres out of tolerance
 /// (AP 0.757 → 0.702 with every proposal scored far below every mask candidate). Not in the paper, which counts split
-/// fruit as false positives (its Discussion); `radius_m <= 0` switches merging off. Returns the
-/// kept indices with their (possibly extended) shapes.
+/// fruit as false positives (its Discussion); `radius_m <= 0` switches merging off. A candidate
+/// that would be kept is asked `admits` first: refused, it is dropped and suppresses nothing.
+/// Returns the kept indices with their (possibly extended) shapes.
 fn merge_overlapping(
     candidates: &[Candidate],
     scores: &[f64],
     radius_m: f64,
     coaxial: &CoaxialMergeParams,
     first_proposal: usize,
+    admits: impl Fn(&Shape) -> bool,
 ) -> Vec<(usize, Shape)> {
     let mut order: Vec<usize> = (0..candidates.len()).collect();
     if radius_m <= 0.0 {
         return order
             .into_iter()
+            .filter(|&i| admits(&candidates[i].shape))
             .map(|i| (i, candidates[i].shape))
             .collect();
     }
@@ -817,7 +823,9 @@ fn merge_overlapping(
                 continue 'candidates;
             }
         }
-        kept.push((i, *si));
+        if admits(si) {
+            kept.push((i, *si));
+        }
     }
     kept
 }
@@ -849,6 +857,10 @@ impl Detector for ShapeFitDetector {
             self.merge_radius_m,
             &self.coaxial_merge,
             first_proposal,
+            |shape| match shape {
+                Shape::Sphere(s) => self.double_curvature.admits(frame, &s.center, s.radius_m),
+                Shape::Cylinder(_) => true,
+            },
         );
         Ok(kept
             .into_iter()
@@ -884,16 +896,43 @@ mod tests {
             ball(0.32, 0.005),
         ];
         let coaxial = CoaxialMergeParams::default();
-        let kept: Vec<usize> =
-            merge_overlapping(&c, &[1.0, 2.0, 0.5, 0.1], 0.03, &coaxial, usize::MAX)
-                .into_iter()
-                .map(|k| k.0)
-                .collect();
+        let kept: Vec<usize> = merge_overlapping(
+            &c,
+            &[1.0, 2.0, 0.5, 0.1],
+            0.03,
+            &coaxial,
+            usize::MAX,
+            |_| true,
+        )
+        .into_iter()
+        .map(|k| k.0)
+        .collect();
         assert_eq!(kept, vec![1, 2]);
         assert_eq!(
-            merge_overlapping(&c, &[1.0, 2.0, 0.5, 0.1], 0.0, &coaxial, usize::MAX).len(),
+            merge_overlapping(&c, &[1.0, 2.0, 0.5, 0.1], 0.0, &coaxial, usize::MAX, |_| {
+                true
+            })
+            .len(),
             4
         );
+    }
+
+    #[test]
+    fn a_refused_candidate_is_dropped_and_suppresses_nothing() {
+        // 1 scores best and would suppress 0, whose centre lies within its radius; refused, it
+        // leaves 0 (and the far 2) kept.
+        let c = [ball(0.0, 0.04), ball(0.035, 0.02), ball(0.3, 0.03)];
+        let coaxial = CoaxialMergeParams::default();
+        let not_1 = |s: &Shape| (s.center().x - 0.035).abs() > 1e-9;
+        let kept = |radius_m: f64| -> Vec<usize> {
+            merge_overlapping(&c, &[1.0, 2.0, 0.5], radius_m, &coaxial, usize::MAX, not_1)
+                .into_iter()
+                .map(|k| k.0)
+                .collect()
+        };
+        assert_eq!(kept(0.03), vec![0, 2]);
+        // Without merging every candidate is asked, too.
+        assert_eq!(kept(0.0), vec![0, 2]);
     }
 
     fn piece(lo: f64, hi: f64) -> Candidate {
@@ -917,7 +956,7 @@ mod tests {
         // Two pieces of one eggplant with a 40 mm gap (a leaf), and one 200 mm further on.
         let c = [piece(0.0, 0.06), piece(0.10, 0.15), piece(0.35, 0.40)];
         let coaxial = CoaxialMergeParams::default();
-        let kept = merge_overlapping(&c, &[2.0, 1.0, 0.5], 0.03, &coaxial, usize::MAX);
+        let kept = merge_overlapping(&c, &[2.0, 1.0, 0.5], 0.03, &coaxial, usize::MAX, |_| true);
         assert_eq!(kept.len(), 2);
         let Shape::Cylinder(joined) = &kept[0].1 else {
             panic!("not a cylinder")
@@ -930,7 +969,7 @@ mod tests {
             ..coaxial
         };
         assert_eq!(
-            merge_overlapping(&c, &[2.0, 1.0, 0.5], 0.03, &strict, usize::MAX).len(),
+            merge_overlapping(&c, &[2.0, 1.0, 0.5], 0.03, &strict, usize::MAX, |_| true).len(),
             3
         );
     }
@@ -950,7 +989,15 @@ mod tests {
         };
         let coaxial = CoaxialMergeParams::default();
         let kept = |other: Candidate| {
-            merge_overlapping(&[piece(0.0, 0.15), other], &[2.0, 1.0], 0.03, &coaxial, 2).len()
+            merge_overlapping(
+                &[piece(0.0, 0.15), other],
+                &[2.0, 1.0],
+                0.03,
+                &coaxial,
+                2,
+                |_| true,
+            )
+            .len()
         };
         assert_eq!(kept(beyond_the_end(0.015)), 1);
         assert_eq!(kept(beyond_the_end(0.025)), 2);

@@ -918,6 +918,26 @@ mod tests {
     }
 
     #[test]
+    fn both_built_in_models_check_that_spheres_bend_both_ways() {
+        let pipeline = ShapeFitPipeline::default();
+        for json in [
+            pipeline.default_model(),
+            pipeline.default_depth_only_model(),
+        ] {
+            let model: serde_json::Value = serde_json::from_str(json.unwrap()).unwrap();
+            let params: ShapeFitParams =
+                serde_json::from_value(model["stage_params"]["params"].clone()).unwrap();
+            assert_eq!(
+                params.double_curvature,
+                DoubleCurvatureCheck {
+                    patch_radii: crate::BUILT_IN_DOUBLE_CURVATURE_PATCH_RADII,
+                    ..DoubleCurvatureCheck::default()
+                }
+            );
+        }
+    }
+
+    #[test]
     fn a_refused_candidate_is_dropped_and_suppresses_nothing() {
         // 1 scores best and would suppress 0, whose centre lies within its radius; refused, it
         // leaves 0 (and the far 2) kept.

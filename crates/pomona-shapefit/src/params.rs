@@ -133,9 +133,11 @@ pub struct ShapeFitParams {
     /// Detection only: a sphere that merging would keep must see the depth around its centre
     /// bend both ways, or it is dropped and suppresses nothing (not in the paper; see
     /// [`DoubleCurvatureCheck`]: a leaf bent over a fruit-sized arc fits a sphere well but is
-    /// curved one way only). Cylinders, straight along their axis, are not judged. Default on,
-    /// over 1.2 fruit radii ([`shape_fit_double_curvature`]); absent in older model files: off,
-    /// so they detect as they did.
+    /// curved one way only). Cylinders, straight along their axis, are not judged. On in both
+    /// built-in models, over 1.2 fruit radii ([`BUILT_IN_DOUBLE_CURVATURE_PATCH_RADII`]); off by
+    /// default and in older model files (which detect as they did), because on models trained on
+    /// the real `ak-apples` frames it dropped apples whose sphere sits 20–50 mm off their centre
+    /// (leave-one-out recall 0.923 → 0.885; docs/results.md, "Spheres that bend one way").
     #[serde(default = "DoubleCurvatureCheck::off")]
     pub double_curvature: DoubleCurvatureCheck,
 }

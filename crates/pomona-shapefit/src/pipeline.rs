@@ -10,10 +10,12 @@ use pomona_learn::{
 };
 use pomona_pipeline::{
     params_from_json, params_to_json, run_stage, Detector, DoubleCurvatureCheck, FrameSource,
-    LabelledFrame, Pipeline, PipelineError, StageTimings, TrainOptions,
+    FruitCheck, LabelledFrame, Pipeline, PipelineError, StageTimings, TrainOptions,
 };
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
+use std::cell::Cell;
+use std::time::{Duration, Instant};
 
 use crate::candidate::cores_within_larger_radius;
 use crate::curvature_check::rms;
@@ -851,6 +853,9 @@ impl Detector for ShapeFitDetector {
                 c.shape = cal.apply(&c.shape, &c.points, self.sphere_range_m);
             }
         }
+        // The double-curvature check runs inside merging, on the spheres it would keep; its
+        // time is reported as a stage of its own.
+        let checking = Cell::new(Duration::ZERO);
         let kept = merge_overlapping(
             &candidates,
             &scores,
@@ -858,10 +863,18 @@ impl Detector for ShapeFitDetector {
             &self.coaxial_merge,
             first_proposal,
             |shape| match shape {
-                Shape::Sphere(s) => self.double_curvature.admits(frame, &s.center, s.radius_m),
+                Shape::Sphere(s) => {
+                    let start = Instant::now();
+                    let admitted = self.double_curvature.admits(frame, &s.center, s.radius_m);
+                    checking.set(checking.get() + start.elapsed());
+                    admitted
+                }
                 Shape::Cylinder(_) => true,
             },
         );
+        if self.double_curvature.enabled {
+            timings.add(DoubleCurvatureCheck::STAGE, checking.get());
+        }
         Ok(kept
             .into_iter()
             .map(|(i, shape)| detection(&candidates[i], &shape, scores[i], frame.camera()))

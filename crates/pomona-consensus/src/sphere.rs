@@ -221,18 +221,13 @@ impl SphereEstimatorParams {
     /// [`ConsensusError::InvalidParameter`] when the radius range is not `0 ≤ min < max`, the
     /// angle is not in `(0, π/2]` or the viewpoint is not finite.
     pub fn check(self) -> Result<SphereEstimator, ConsensusError> {
-        if let Some(v) = self
+        if let Some(value) = self
             .visible_from
-            .filter(|v| !v.coords.iter().all(|c| c.is_finite()))
+            .and_then(|v| v.coords.iter().copied().find(|c| !c.is_finite()))
         {
             return Err(ConsensusError::InvalidParameter {
                 name: "visible_from",
-                value: v
-                    .coords
-                    .iter()
-                    .copied()
-                    .find(|c| !c.is_finite())
-                    .unwrap_or(f64::NAN),
+                value,
                 reason: "must be a finite point",
             });
         }

@@ -556,6 +556,17 @@ mod tests {
         assert_eq!(restored, fresh);
     }
 
+    /// The parameters of `json` read as a file written before `key` existed (the key must be
+    /// there to take out).
+    fn read_without(json: &serde_json::Value, key: &str) -> ShapeFitParams {
+        let mut older = json.clone();
+        assert!(
+            older.as_object_mut().unwrap().remove(key).is_some(),
+            "{key}"
+        );
+        serde_json::from_value(older).unwrap()
+    }
+
     #[test]
     fn older_files_get_the_free_space_check() {
         let fresh = ShapeFitParams::default();
@@ -584,16 +595,10 @@ mod tests {
             },
             ..fresh.clone()
         };
-        let mut json = serde_json::to_value(&on).unwrap();
+        let json = serde_json::to_value(&on).unwrap();
         let written: ShapeFitParams = serde_json::from_value(json.clone()).unwrap();
         assert_eq!(written, on);
-        assert!(json
-            .as_object_mut()
-            .unwrap()
-            .remove("double_curvature")
-            .is_some());
-        let old: ShapeFitParams = serde_json::from_value(json).unwrap();
-        assert_eq!(old, fresh);
+        assert_eq!(read_without(&json, "double_curvature"), fresh);
         // A bad setting is refused by name, only while the check is on.
         let bad = ShapeFitParams {
             double_curvature: DoubleCurvatureCheck {
@@ -624,13 +629,7 @@ mod tests {
         json["cv_selection"] = serde_json::json!("one-standard-error");
         let set: ShapeFitParams = serde_json::from_value(json.clone()).unwrap();
         assert_eq!(set.cv_selection, CellSelection::OneStandardError);
-        assert!(json
-            .as_object_mut()
-            .unwrap()
-            .remove("cv_selection")
-            .is_some());
-        let old: ShapeFitParams = serde_json::from_value(json).unwrap();
-        assert_eq!(old, fresh);
+        assert_eq!(read_without(&json, "cv_selection"), fresh);
     }
 
     #[test]
@@ -642,11 +641,10 @@ mod tests {
             }),
             ..ShapeFitParams::default()
         };
-        let mut json = serde_json::to_value(&with).unwrap();
+        let json = serde_json::to_value(&with).unwrap();
         let back: ShapeFitParams = serde_json::from_value(json.clone()).unwrap();
         assert_eq!(back, with);
-        assert!(json.as_object_mut().unwrap().remove("curvature").is_some());
-        let old: ShapeFitParams = serde_json::from_value(json).unwrap();
+        let old = read_without(&json, "curvature");
         with.curvature = None;
         assert_eq!(old, with);
     }

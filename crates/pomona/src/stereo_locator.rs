@@ -356,11 +356,10 @@ impl StereoLocator {
                 }
             }
             detections.push(located(
-                &self.rig,
                 center_m,
                 &found_primary[pair.primary],
                 &found_stereo[pair.stereo],
-                p.radius_px,
+                radius_m,
             ));
             pairs.push(located_pair);
         }
@@ -394,17 +393,17 @@ fn radius_at(rig: &RotatedStereo, center_m: &Point3<f64>, radius_px: f64) -> f64
 }
 
 /// The located detection of a matched pair: the primary detection with the centre located, the
-/// diameter of its circle (`radius_px`) at that depth, the mean score and the lower confidence.
+/// diameter of its circle at that depth (`radius_m`, [`radius_at`]), the mean score and the
+/// lower confidence.
 fn located(
-    rig: &RotatedStereo,
     center_m: Point3<f64>,
     primary: &Detection,
     stereo: &Detection,
-    radius_px: f64,
+    radius_m: f64,
 ) -> Detection {
     Detection {
         center_m,
-        diameter_m: Some(2.0 * radius_at(rig, &center_m, radius_px)),
+        diameter_m: Some(2.0 * radius_m),
         score: 0.5 * (primary.score + stereo.score),
         confidence: primary
             .confidence
@@ -659,7 +658,8 @@ mod tests {
         a.confidence = Some(0.9);
         let mut b = Detection::new(Point3::new(0.0, 0.0, 9.0), 4.0);
         b.confidence = Some(0.6);
-        let d = located(&rig, Point3::new(0.1, 0.0, 1.0), &a, &b, 20.0);
+        let center_m = Point3::new(0.1, 0.0, 1.0);
+        let d = located(center_m, &a, &b, radius_at(&rig, &center_m, 20.0));
         assert_eq!(d.center_m, Point3::new(0.1, 0.0, 1.0));
         assert!((d.diameter_m.unwrap() - 0.08).abs() < 1e-12);
         assert_eq!((d.score, d.confidence), (3.0, Some(0.6)));

@@ -863,6 +863,8 @@ impl Detector for ShapeFitDetector {
             &self.coaxial_merge,
             first_proposal,
             |shape| match shape {
+                // Switched off, it admits every sphere: nothing to time.
+                Shape::Sphere(_) if !self.double_curvature.enabled => true,
                 Shape::Sphere(s) => {
                     let start = Instant::now();
                     let admitted = self.double_curvature.admits(frame, &s.center, s.radius_m);
@@ -899,6 +901,24 @@ mod tests {
         }
     }
 
+    /// [`merge_overlapping`] with every candidate admitted.
+    fn merged(
+        candidates: &[Candidate],
+        scores: &[f64],
+        radius_m: f64,
+        coaxial: &CoaxialMergeParams,
+        first_proposal: usize,
+    ) -> Vec<(usize, Shape)> {
+        merge_overlapping(
+            candidates,
+            scores,
+            radius_m,
+            coaxial,
+            first_proposal,
+            |_| true,
+        )
+    }
+
     #[test]
     fn overlapping_candidates_keep_the_best() {
         // 0 and 1 overlap (1's centre is within 0's 40 mm radius); 2 is far; 3 is 20 mm from 2.
@@ -909,23 +929,13 @@ mod tests {
             ball(0.32, 0.005),
         ];
         let coaxial = CoaxialMergeParams::default();
-        let kept: Vec<usize> = merge_overlapping(
-            &c,
-            &[1.0, 2.0, 0.5, 0.1],
-            0.03,
-            &coaxial,
-            usize::MAX,
-            |_| true,
-        )
-        .into_iter()
-        .map(|k| k.0)
-        .collect();
+        let kept: Vec<usize> = merged(&c, &[1.0, 2.0, 0.5, 0.1], 0.03, &coaxial, usize::MAX)
+            .into_iter()
+            .map(|k| k.0)
+            .collect();
         assert_eq!(kept, vec![1, 2]);
         assert_eq!(
-            merge_overlapping(&c, &[1.0, 2.0, 0.5, 0.1], 0.0, &coaxial, usize::MAX, |_| {
-                true
-            })
-            .len(),
+            merged(&c, &[1.0, 2.0, 0.5, 0.1], 0.0, &coaxial, usize::MAX).len(),
             4
         );
     }
@@ -989,7 +999,7 @@ mod tests {
         // Two pieces of one eggplant with a 40 mm gap (a leaf), and one 200 mm further on.
         let c = [piece(0.0, 0.06), piece(0.10, 0.15), piece(0.35, 0.40)];
         let coaxial = CoaxialMergeParams::default();
-        let kept = merge_overlapping(&c, &[2.0, 1.0, 0.5], 0.03, &coaxial, usize::MAX, |_| true);
+        let kept = merged(&c, &[2.0, 1.0, 0.5], 0.03, &coaxial, usize::MAX);
         assert_eq!(kept.len(), 2);
         let Shape::Cylinder(joined) = &kept[0].1 else {
             panic!("not a cylinder")
@@ -1002,7 +1012,7 @@ mod tests {
             ..coaxial
         };
         assert_eq!(
-            merge_overlapping(&c, &[2.0, 1.0, 0.5], 0.03, &strict, usize::MAX, |_| true).len(),
+            merged(&c, &[2.0, 1.0, 0.5], 0.03, &strict, usize::MAX).len(),
             3
         );
     }
@@ -1022,15 +1032,7 @@ mod tests {
         };
         let coaxial = CoaxialMergeParams::default();
         let kept = |other: Candidate| {
-            merge_overlapping(
-                &[piece(0.0, 0.15), other],
-                &[2.0, 1.0],
-                0.03,
-                &coaxial,
-                2,
-                |_| true,
-            )
-            .len()
+            merged(&[piece(0.0, 0.15), other], &[2.0, 1.0], 0.03, &coaxial, 2).len()
         };
         assert_eq!(kept(beyond_the_end(0.015)), 1);
         assert_eq!(kept(beyond_the_end(0.025)), 2);

@@ -32,6 +32,9 @@ enum Command {
     Synth(commands::synth::SynthArgs),
     /// Train a detector (a pipeline) on labelled datasets and write its model file.
     Train(commands::train::TrainArgs),
+    /// Refit a model's confidence calibration on labelled frames it did not train on
+    /// (optionally over the detections' geometric cues), without retraining it.
+    Calibrate(commands::calibrate::CalibrateArgs),
     /// Find fruit in every frame of a dataset or a ROS 2 recording; writes one detection file
     /// per frame.
     Detect(commands::detect::DetectArgs),
@@ -74,6 +77,7 @@ fn main() -> ExitCode {
         Command::Arm(args) => commands::arm::run(args),
         Command::Stereo(args) => commands::stereo::run(args),
         Command::Train(args) => commands::train::run(args),
+        Command::Calibrate(args) => commands::calibrate::run(args),
         Command::Detect(args) => commands::detect::run(args),
         Command::Extract(args) => commands::extract::run(args),
         Command::Experiment(args) => commands::experiment::run(args),

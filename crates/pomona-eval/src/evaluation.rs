@@ -61,9 +61,10 @@ pub fn evaluate(
 #[derive(Default)]
 struct Tally {
     per_frame: Vec<FrameReport>,
-    /// Every matched or unmatched detection's score and whether it is a true positive (the PR
-    /// curve ranks all of them, whatever the threshold).
-    scored: Vec<(f64, bool)>,
+    /// Every matched or unmatched detection's score, confidence and whether it is a true
+    /// positive (the PR curve ranks all of them, whatever the threshold: by confidence when
+    /// every detection has one, else by score; see [`crate::ranking_values`]).
+    scored: Vec<(f64, Option<f64>, bool)>,
     center_errors: Vec<f64>,
     center_errors_radii: Vec<f64>,
     diameter_errors: Vec<f64>,
@@ -89,7 +90,7 @@ impl Tally {
                     diameter_error_m,
                     ..
                 } => {
-                    self.scored.push((det.score, true));
+                    self.scored.push((det.score, det.confidence, true));
                     if config.keeps(det) {
                         tp += 1;
                         self.center_errors.extend(center_error_m);
@@ -98,7 +99,7 @@ impl Tally {
                     }
                 }
                 DetectionOutcome::FalsePositive => {
-                    self.scored.push((det.score, false));
+                    self.scored.push((det.score, det.confidence, false));
                     fp += usize::from(config.keeps(det));
                 }
                 DetectionOutcome::Ignored => {}
@@ -179,7 +180,20 @@ impl Tally {
                 null_reasons.insert("ap".into(), "no counted truth fruit".into());
                 None
             }
-            (None, n) => Some(PrCurve::new(&self.scored, n)),
+            (None, n) => {
+                let by_confidence = self.scored.iter().all(|s| s.1.is_some());
+                let ranked: Vec<(f64, bool)> = self
+                    .scored
+                    .iter()
+                    .map(
+                        |&(score, confidence, hit)| match (by_confidence, confidence) {
+                            (true, Some(c)) => (c, hit),
+                            _ => (score, hit),
+                        },
+                    )
+                    .collect();
+                Some(PrCurve::new(&ranked, n))
+            }
         };
         let recall = ratio(self.tp, self.fruits);
         if recall.is_none() {

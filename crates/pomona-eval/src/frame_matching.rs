@@ -168,7 +168,8 @@ pub fn match_frame(
         .collect();
     let mut outcomes = vec![DetectionOutcome::FalsePositive; detections.len()];
     let mut order: Vec<usize> = (0..detections.len()).collect();
-    order.sort_by(|&a, &b| detections[b].score.total_cmp(&detections[a].score));
+    let rank = ranking_values(detections);
+    order.sort_by(|&a, &b| rank[b].total_cmp(&rank[a]));
 
     for d in order {
         let det = &detections[d];
@@ -225,5 +226,20 @@ pub fn match_frame(
     FrameMatch {
         detections: outcomes,
         truth: status,
+    }
+}
+
+/// What detections are ranked by, best first: their calibrated confidences when every one has
+/// one, else their raw scores. A confidence fitted to cues beside the score (a cue
+/// calibration) can order detections differently from their scores, and it is the ranking a
+/// user thresholds on; with the score alone (Platt's sigmoid) both orders are the same.
+pub fn ranking_values(detections: &[Detection]) -> Vec<f64> {
+    match detections
+        .iter()
+        .map(|d| d.confidence)
+        .collect::<Option<Vec<f64>>>()
+    {
+        Some(confidences) => confidences,
+        None => detections.iter().map(|d| d.score).collect(),
     }
 }

@@ -34,7 +34,7 @@ pub use detection_dir::{
 pub use error::EvalError;
 pub use eval_config::EvalConfig;
 pub use evaluation::{evaluate, FrameInput};
-pub use frame_matching::{match_frame, DetectionOutcome, FrameMatch, TruthStatus};
+pub use frame_matching::{match_frame, ranking_values, DetectionOutcome, FrameMatch, TruthStatus};
 pub use pr_curve::{PrCurve, PrPoint};
 pub use pr_plot::write_pr_plot;
 pub use report::{CenterError, DiameterError, EvalReport, FrameReport};

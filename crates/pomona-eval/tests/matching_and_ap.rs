@@ -538,3 +538,52 @@ fn a_depth_band_counts_only_the_fruit_and_stray_detections_inside_it() {
         assert!(config.validate().is_err(), "{bad:?}");
     }
 }
+
+#[test]
+fn confidences_rank_when_every_detection_has_one() {
+    let t = truth(true, vec![fruit("a", Some([0.0, 0.0, 1.0]), None)]);
+    // The closer detection scores lower but is the more confident (a cue calibration can
+    // reorder): with confidences on both it takes the fruit; with one missing, scores rank.
+    let with = |c: [Option<f64>; 2]| {
+        vec![
+            Detection {
+                confidence: c[0],
+                ..det([0.0, 0.0, 1.001], 0.2)
+            },
+            Detection {
+                confidence: c[1],
+                ..det([0.0, 0.0, 1.04], 0.7)
+            },
+        ]
+    };
+    let m = match_frame(
+        &t,
+        &with([Some(0.9), Some(0.3)]),
+        &camera(),
+        &EvalConfig::default(),
+    );
+    assert!(matches!(
+        m.detections[0],
+        DetectionOutcome::TruePositive { truth: 0, .. }
+    ));
+    assert_eq!(m.detections[1], DetectionOutcome::FalsePositive);
+    let m = match_frame(
+        &t,
+        &with([Some(0.9), None]),
+        &camera(),
+        &EvalConfig::default(),
+    );
+    assert_eq!(m.detections[0], DetectionOutcome::FalsePositive);
+    // The PR curve ranks the same way: the confident hit first gives precision 1 at recall 1.
+    let config = EvalConfig {
+        min_confidence: Some(0.0),
+        ..EvalConfig::default()
+    };
+    let r = evaluate(
+        &[frame("f", t, with([Some(0.9), Some(0.3)]))],
+        &camera(),
+        &config,
+    )
+    .unwrap();
+    assert!(close(r.ap_voc11.unwrap(), 1.0), "{:?}", r.ap_voc11);
+}

@@ -35,6 +35,7 @@
 //! ```
 
 mod batched_decision;
+mod cue_logistic;
 mod error;
 mod folds;
 #[doc(hidden)]
@@ -51,6 +52,7 @@ mod smo;
 mod svm;
 
 pub use batched_decision::{BatchedClassifier, DECISION_BLOCK};
+pub use cue_logistic::{CueLogistic, CueVector, DetectionCues};
 pub use error::{LearnError, ModelFileError};
 pub use folds::stratified_folds;
 pub use grid_search::{

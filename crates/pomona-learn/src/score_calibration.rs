@@ -21,7 +21,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::{LearnError, PlattSigmoid};
+use crate::{CueLogistic, DetectionCues, LearnError, PlattSigmoid};
 
 /// How the operating threshold is chosen on held-out detections.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
@@ -61,6 +61,11 @@ pub struct ScoreCalibration {
     pub operating_point: OperatingPoint,
     /// Held-out data behind the fit.
     pub evidence: CalibrationEvidence,
+    /// When set, the confidence is this regression over the score and the detection's
+    /// geometric cues instead of the sigmoid of the score alone, and the operating confidence
+    /// is on its scale (`pomona calibrate --cues`; absent in older files and by default).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cues: Option<CueLogistic>,
 }
 
 impl ScoreCalibration {
@@ -84,12 +89,59 @@ impl ScoreCalibration {
                 self.operating_confidence
             )));
         }
-        Ok(())
+        self.cues.as_ref().map_or(Ok(()), CueLogistic::validate)
     }
 
-    /// Confidence in `[0, 1]` of a detection with raw `score`; non-decreasing in `score`.
+    /// Confidence in `[0, 1]` of a detection with raw `score` by the score alone (the sigmoid);
+    /// non-decreasing in `score`. A calibration with cues rates detections by
+    /// [`ScoreCalibration::confidence_of`].
     pub fn confidence(&self, score: f64) -> f64 {
         self.sigmoid.probability(score)
+    }
+
+    /// Confidence in `[0, 1]` of a detection with `cues`: the cue regression's when the
+    /// calibration has one, else the sigmoid of the score.
+    pub fn confidence_of(&self, cues: &DetectionCues) -> f64 {
+        match &self.cues {
+            Some(m) => m.probability(cues),
+            None => self.confidence(cues.score),
+        }
+    }
+
+    /// As [`ScoreCalibration::fit`], and a [`CueLogistic`] over `cues` (their curvature measured
+    /// over `curvature_patch_radii` fruit radii) that then gives the confidences and the
+    /// operating confidence; the sigmoid of the score is fitted too and kept beside it.
+    ///
+    /// # Errors
+    /// As [`ScoreCalibration::fit`] and [`CueLogistic::fit`].
+    pub fn fit_with_cues(
+        cues: &[DetectionCues],
+        is_true: &[bool],
+        truth_fruit: usize,
+        operating_point: OperatingPoint,
+        curvature_patch_radii: f64,
+    ) -> Result<Self, LearnError> {
+        let scores: Vec<f64> = cues.iter().map(|c| c.score).collect();
+        let by_score = Self::fit(&scores, is_true, truth_fruit, operating_point)?;
+        let model = CueLogistic::fit(cues, is_true, curvature_patch_radii)?;
+        let mut ranked: Vec<(f64, bool)> = cues
+            .iter()
+            .map(|c| model.probability(c))
+            .zip(is_true.iter().copied())
+            .collect();
+        ranked.sort_by(|a, b| b.0.total_cmp(&a.0));
+        let (confidence, precision, recall) =
+            choose_threshold(&ranked, truth_fruit, operating_point);
+        Ok(Self {
+            operating_confidence: confidence,
+            evidence: CalibrationEvidence {
+                precision,
+                recall,
+                ..by_score.evidence
+            },
+            cues: Some(model),
+            ..by_score
+        })
     }
 
     /// Fits the calibration to held-out detections: `scores[i]` with `is_true[i]` (whether it
@@ -166,6 +218,7 @@ impl ScoreCalibration {
             choose_threshold(&ranked, truth_fruit, operating_point);
         Ok(Self {
             sigmoid,
+            cues: None,
             operating_confidence: confidence,
             operating_point,
             evidence: CalibrationEvidence {

@@ -23,7 +23,7 @@
 
 use pomona_core::{Detection, RgbdFrame};
 use pomona_eval::{match_frame, DetectionOutcome, EvalConfig};
-use pomona_learn::{ModelFile, OperatingPoint, ScoreCalibration};
+use pomona_learn::{DetectionCues, ModelFile, OperatingPoint, ScoreCalibration};
 use rand::seq::SliceRandom;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -31,8 +31,13 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::{
-    Detector, FrameSource, LabelledFrame, Pipeline, PipelineError, StageTimings, TrainOptions,
+    detection_cues, Detector, FrameSource, LabelledFrame, Pipeline, PipelineError, StageTimings,
+    TrainOptions,
 };
+
+/// Fruit radii round a detection's centre over which a cue calibration measures the seen
+/// curvature (shape-fit's built-in double-curvature check uses the same).
+pub const CUE_CURVATURE_PATCH_RADII: f64 = 1.2;
 
 /// How the confidence calibration is fitted.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -49,6 +54,10 @@ pub struct CalibrationParams {
     pub radius_fraction_2d: Option<f64>,
     /// How the operating confidence is chosen.
     pub operating_point: OperatingPoint,
+    /// Fit the confidence to the detections' geometric cues beside their score
+    /// ([`pomona_learn::CueLogistic`]) instead of to the score alone.
+    #[serde(default)]
+    pub cues: bool,
 }
 
 impl Default for CalibrationParams {
@@ -60,6 +69,7 @@ impl Default for CalibrationParams {
             min_visibility: eval.min_visibility,
             radius_fraction_2d: eval.radius_fraction_2d,
             operating_point: OperatingPoint::MaxF1,
+            cues: false,
         }
     }
 }
@@ -88,8 +98,21 @@ impl Detector for CalibratedDetector {
         timings: &mut StageTimings,
     ) -> Result<Vec<Detection>, PipelineError> {
         let mut detections = self.inner.detect(frame, timings)?;
-        for d in &mut detections {
-            d.confidence = Some(self.calibration.confidence(d.score));
+        match &self.calibration.cues {
+            Some(cues) => {
+                let patch = cues.curvature_patch_radii;
+                let started = std::time::Instant::now();
+                for d in &mut detections {
+                    let c = detection_cues(d, frame, patch);
+                    d.confidence = Some(cues.probability(&c));
+                }
+                timings.add("confidence", started.elapsed());
+            }
+            None => {
+                for d in &mut detections {
+                    d.confidence = Some(self.calibration.confidence(d.score));
+                }
+            }
         }
         Ok(detections)
     }
@@ -165,8 +188,9 @@ fn fold_of_frames(n: usize, folds: usize, seed: u64) -> Vec<usize> {
 
 /// Held-out evidence of one frame.
 struct HeldOut {
-    /// `(score, is_true)` per detection whose truth status is known.
-    labelled: Vec<(f64, bool)>,
+    /// `(cues, is_true)` per detection whose truth status is known (only the score is measured
+    /// unless the calibration fits cues).
+    labelled: Vec<(DetectionCues, bool)>,
     /// Truth fruit that could have been found.
     findable: usize,
     /// Whether the frame's truth is complete.
@@ -186,12 +210,25 @@ fn held_out_labels(
         ..EvalConfig::default()
     };
     let m = match_frame(&frame.truth, detections, frame.frame.camera(), &config);
+    let cues_of = |d: &Detection| {
+        if params.cues {
+            detection_cues(d, &frame.frame, CUE_CURVATURE_PATCH_RADII)
+        } else {
+            DetectionCues {
+                score: d.score,
+                log_coverage: None,
+                log_depth: None,
+                relative_curvature: None,
+                elongated: false,
+            }
+        }
+    };
     let labelled = detections
         .iter()
         .zip(&m.detections)
         .filter_map(|(d, outcome)| match outcome {
-            DetectionOutcome::TruePositive { .. } => Some((d.score, true)),
-            DetectionOutcome::FalsePositive if frame.truth.complete => Some((d.score, false)),
+            DetectionOutcome::TruePositive { .. } => Some((cues_of(d), true)),
+            DetectionOutcome::FalsePositive if frame.truth.complete => Some((cues_of(d), false)),
             _ => None,
         })
         .collect();
@@ -288,29 +325,131 @@ pub fn train_calibrated(
     }
     let offset = done;
     let mut model = pipeline.train(frames, options, &|d, _| progress(offset + d, total))?;
-    let (scores, is_true): (Vec<f64>, Vec<bool>) = labelled.into_iter().unzip();
-    if !is_true.contains(&false) && incomplete > 0 {
-        // Every held-out detection matched an annotated fruit and the rest may be unannotated
-        // fruit: nothing tells true from false, so the model stays uncalibrated.
-        return Ok(CalibratedTraining {
+    let evidence = Evidence {
+        labelled,
+        truth_fruit,
+        incomplete,
+        frames: n,
+    };
+    match evidence.calibration(params) {
+        Ok(calibration) => {
+            model.calibration = Some(calibration);
+            Ok(CalibratedTraining {
+                model,
+                not_calibrated: None,
+            })
+        }
+        Err(Uncalibrated::NoFalseDetection(why)) => Ok(CalibratedTraining {
             model,
-            not_calibrated: Some(format!(
-                "no held-out detection is known to be false ({incomplete} of {n} frames have \
-                 incomplete truth, where unmatched detections may be unannotated fruit); the \
-                 model reports raw scores"
-            )),
-        });
+            not_calibrated: Some(why),
+        }),
+        Err(Uncalibrated::Unfit(e)) => Err(not_enough(format!(
+            "cannot calibrate confidences on the held-out detections of {folds} folds: {e}"
+        ))),
     }
-    let calibration = ScoreCalibration::fit(&scores, &is_true, truth_fruit, params.operating_point)
-        .map_err(|e| {
-            not_enough(format!(
-                "cannot calibrate confidences on the held-out detections of {folds} folds: {e}"
-            ))
-        })?;
-    model.calibration = Some(calibration);
-    Ok(CalibratedTraining {
-        model,
-        not_calibrated: None,
+}
+
+/// Labelled detections pooled over frames a model did not train on.
+struct Evidence {
+    labelled: Vec<(DetectionCues, bool)>,
+    truth_fruit: usize,
+    incomplete: usize,
+    frames: usize,
+}
+
+/// Why no calibration came out of the evidence.
+enum Uncalibrated {
+    /// Incomplete truth left no detection known to be false (the message says so).
+    NoFalseDetection(String),
+    /// The fit failed.
+    Unfit(pomona_learn::LearnError),
+}
+
+impl Evidence {
+    fn calibration(self, params: &CalibrationParams) -> Result<ScoreCalibration, Uncalibrated> {
+        let (cues, is_true): (Vec<DetectionCues>, Vec<bool>) = self.labelled.into_iter().unzip();
+        if !is_true.contains(&false) && self.incomplete > 0 {
+            // Every detection matched an annotated fruit and the rest may be unannotated
+            // fruit: nothing tells true from false, so the model stays uncalibrated.
+            return Err(Uncalibrated::NoFalseDetection(format!(
+                "no held-out detection is known to be false ({} of {} frames have incomplete \
+                 truth, where unmatched detections may be unannotated fruit); the model reports \
+                 raw scores",
+                self.incomplete, self.frames
+            )));
+        }
+        let fitted = if params.cues {
+            ScoreCalibration::fit_with_cues(
+                &cues,
+                &is_true,
+                self.truth_fruit,
+                params.operating_point,
+                CUE_CURVATURE_PATCH_RADII,
+            )
+        } else {
+            let scores: Vec<f64> = cues.iter().map(|c| c.score).collect();
+            ScoreCalibration::fit(&scores, &is_true, self.truth_fruit, params.operating_point)
+        };
+        fitted.map_err(Uncalibrated::Unfit)
+    }
+}
+
+/// Refits `model`'s confidence calibration on labelled `frames` it was not trained on: the
+/// model's detector (without its old calibration) runs on every frame, each detection is
+/// labelled by the evaluation's rules, and a new [`ScoreCalibration`] (with cues when
+/// `params.cues`) replaces the old one. The classifier and stage parameters are untouched.
+/// `progress` receives (frames done, total).
+///
+/// # Errors
+/// Detection errors of the pipeline; [`PipelineError::NotEnoughTrainingData`] when the frames
+/// leave no detection known to be false or the detections cannot be calibrated.
+pub fn recalibrate(
+    pipeline: &dyn Pipeline,
+    model: &ModelFile,
+    frames: &dyn FrameSource,
+    params: &CalibrationParams,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<ModelFile, PipelineError> {
+    let detector = pipeline.load(model)?;
+    let n = frames.len();
+    let done = std::sync::atomic::AtomicUsize::new(0);
+    let per_frame: Vec<HeldOut> = (0..n)
+        .into_par_iter()
+        .map(|i| {
+            let frame = frames.load(i)?;
+            let detections = detector.detect(&frame.frame, &mut StageTimings::default())?;
+            let h = held_out_labels(&frame, &detections, params);
+            progress(
+                1 + done.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
+                n,
+            );
+            Ok(h)
+        })
+        .collect::<Result<_, PipelineError>>()?;
+    let mut evidence = Evidence {
+        labelled: Vec::new(),
+        truth_fruit: 0,
+        incomplete: 0,
+        frames: n,
+    };
+    for h in per_frame {
+        evidence.labelled.extend(h.labelled);
+        evidence.truth_fruit += h.findable;
+        evidence.incomplete += usize::from(!h.complete);
+    }
+    let not_enough = |reason: String| PipelineError::NotEnoughTrainingData {
+        pipeline: pipeline.name(),
+        reason,
+    };
+    let calibration = evidence.calibration(params).map_err(|e| match e {
+        Uncalibrated::NoFalseDetection(why) => not_enough(why),
+        Uncalibrated::Unfit(e) => not_enough(format!(
+            "cannot calibrate confidences on the detections of {n} frames: {e}"
+        )),
+    })?;
+    Ok(ModelFile {
+        calibration: Some(calibration),
+        ..model.clone()
     })
 }
 

@@ -21,6 +21,7 @@
 //!   ([`DatasetFrames`]) or rendered on demand (`SyntheticFrames`, with the `synth` feature).
 
 mod calibration;
+mod detection_cues;
 mod detection_evaluation;
 mod detection_filter;
 mod detector;
@@ -36,8 +37,10 @@ mod train_params;
 mod untagged_fruit;
 
 pub use calibration::{
-    load_detector, train_calibrated, CalibratedDetector, CalibratedTraining, CalibrationParams,
+    load_detector, recalibrate, train_calibrated, CalibratedDetector, CalibratedTraining,
+    CalibrationParams, CUE_CURVATURE_PATCH_RADII,
 };
+pub use detection_cues::detection_cues;
 pub use detection_evaluation::{detect_and_evaluate, DetectionEvaluation};
 pub use detection_filter::{DetectionFilter, FruitCheck};
 pub use detector::{complete_with_defaults, Detector, Pipeline, TrainOptions};

@@ -1,6 +1,7 @@
 //! One module per subcommand.
 
 pub mod arm;
+pub mod calibrate;
 pub mod cloud;
 pub mod convert;
 pub mod demo;

@@ -124,14 +124,12 @@ impl ScoreCalibration {
         let scores: Vec<f64> = cues.iter().map(|c| c.score).collect();
         let by_score = Self::fit(&scores, is_true, truth_fruit, operating_point)?;
         let model = CueLogistic::fit(cues, is_true, curvature_patch_radii)?;
-        let mut ranked: Vec<(f64, bool)> = cues
-            .iter()
-            .map(|c| model.probability(c))
-            .zip(is_true.iter().copied())
-            .collect();
-        ranked.sort_by(|a, b| b.0.total_cmp(&a.0));
-        let (confidence, precision, recall) =
-            choose_threshold(&ranked, truth_fruit, operating_point);
+        let (confidence, precision, recall) = threshold_of(
+            cues.iter().map(|c| model.probability(c)),
+            is_true,
+            truth_fruit,
+            operating_point,
+        );
         Ok(Self {
             operating_confidence: confidence,
             evidence: CalibrationEvidence {
@@ -208,14 +206,12 @@ impl ScoreCalibration {
                 scores.len()
             ));
         }
-        let mut ranked: Vec<(f64, bool)> = scores
-            .iter()
-            .map(|&s| sigmoid.probability(s))
-            .zip(is_true.iter().copied())
-            .collect();
-        ranked.sort_by(|a, b| b.0.total_cmp(&a.0));
-        let (confidence, precision, recall) =
-            choose_threshold(&ranked, truth_fruit, operating_point);
+        let (confidence, precision, recall) = threshold_of(
+            scores.iter().map(|&s| sigmoid.probability(s)),
+            is_true,
+            truth_fruit,
+            operating_point,
+        );
         Ok(Self {
             sigmoid,
             cues: None,
@@ -242,6 +238,19 @@ impl std::fmt::Display for ScoreCalibration {
             self.operating_confidence, e.precision, e.recall, e.truth_fruit
         )
     }
+}
+
+/// `(threshold, precision, recall)` for detections with `confidences` labelled `is_true`: ranks
+/// them by decreasing confidence, then [`choose_threshold`].
+fn threshold_of(
+    confidences: impl Iterator<Item = f64>,
+    is_true: &[bool],
+    truth_fruit: usize,
+    operating_point: OperatingPoint,
+) -> (f64, f64, f64) {
+    let mut ranked: Vec<(f64, bool)> = confidences.zip(is_true.iter().copied()).collect();
+    ranked.sort_by(|a, b| b.0.total_cmp(&a.0));
+    choose_threshold(&ranked, truth_fruit, operating_point)
 }
 
 /// `(threshold, precision, recall)` chosen over detections sorted by decreasing confidence;

@@ -13,3 +13,12 @@ pub fn progress_bar(len: usize, what: &str) -> ProgressBar {
     bar.set_message(what.to_owned());
     bar
 }
+
+/// A progress callback `(done, total)` that moves `bar` (and sets its length, which a training
+/// run knows only once it starts).
+pub fn counter(bar: &ProgressBar) -> impl Fn(usize, usize) + Sync + '_ {
+    |done, total| {
+        bar.set_length(total as u64);
+        bar.set_position(done as u64);
+    }
+}

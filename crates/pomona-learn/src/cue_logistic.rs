@@ -45,6 +45,19 @@ pub struct DetectionCues {
     pub elongated: bool,
 }
 
+impl DetectionCues {
+    /// The cues of a detection of which only the score is known (every other cue missing).
+    pub fn score_only(score: f64) -> Self {
+        Self {
+            score,
+            log_coverage: None,
+            log_depth: None,
+            relative_curvature: None,
+            elongated: false,
+        }
+    }
+}
+
 /// One number per cue, in the order of [`DetectionCues`]: a mean, a spread or a weight.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct CueVector {
@@ -106,13 +119,9 @@ const RIDGE: f64 = 1e-2;
 impl CueLogistic {
     /// The cues of `c` as numbers, a missing cue at its mean.
     fn values(&self, c: &DetectionCues) -> [f64; CueVector::LEN] {
-        [
-            c.score,
-            c.log_coverage.unwrap_or(self.mean.log_coverage),
-            c.log_depth.unwrap_or(self.mean.log_depth),
-            c.relative_curvature.unwrap_or(self.mean.relative_curvature),
-            f64::from(u8::from(c.elongated)),
-        ]
+        let mean = self.mean.to_array();
+        let raw = raw(c);
+        std::array::from_fn(|k| raw[k].unwrap_or(mean[k]))
     }
 
     /// The probability that the detection with cues `c` is a fruit, in `[0, 1]`; for fixed
@@ -207,13 +216,7 @@ impl CueLogistic {
                 reason: "must be finite and > 0",
             });
         }
-        let positives = is_true.iter().filter(|&&t| t).count();
-        if positives == 0 || positives == is_true.len() {
-            return bad(format!(
-                "cue calibration needs true and false detections, got {positives} true of {}",
-                is_true.len()
-            ));
-        }
+        true_and_false(is_true, "cue calibration needs true and false detections")?;
         // Means and spreads over the detections that have each cue.
         let mut mean = [0.0; CueVector::LEN];
         let mut spread = [1.0; CueVector::LEN];
@@ -259,6 +262,19 @@ impl CueLogistic {
         }
         Ok(model)
     }
+}
+
+/// The number of true labels in `is_true`, or an error (`needs`, then the count) unless both
+/// kinds are there: a calibration cannot be fitted to one kind of detection.
+pub(crate) fn true_and_false(is_true: &[bool], needs: &str) -> Result<usize, LearnError> {
+    let positives = is_true.iter().filter(|&&t| t).count();
+    if positives == 0 || positives == is_true.len() {
+        return Err(LearnError::InvalidSamples(format!(
+            "{needs}, got {positives} true of {}",
+            is_true.len()
+        )));
+    }
+    Ok(positives)
 }
 
 /// The cues of `c` in [`CueVector`] order, `None` where missing.

@@ -21,6 +21,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::cue_logistic::true_and_false;
 use crate::{CueLogistic, DetectionCues, LearnError, PlattSigmoid};
 
 /// How the operating threshold is chosen on held-out detections.
@@ -185,13 +186,10 @@ impl ScoreCalibration {
                 });
             }
         }
-        let positives = is_true.iter().filter(|&&t| t).count();
-        if positives == 0 || positives == is_true.len() {
-            return bad(format!(
-                "calibration needs true and false held-out detections, got {positives} true of {}",
-                is_true.len()
-            ));
-        }
+        let positives = true_and_false(
+            is_true,
+            "calibration needs true and false held-out detections",
+        )?;
         if truth_fruit < positives {
             return bad(format!(
                 "{positives} true detections but only {truth_fruit} findable fruit"

@@ -214,13 +214,7 @@ fn held_out_labels(
         if params.cues {
             detection_cues(d, &frame.frame, CUE_CURVATURE_PATCH_RADII)
         } else {
-            DetectionCues {
-                score: d.score,
-                log_coverage: None,
-                log_depth: None,
-                relative_curvature: None,
-                elongated: false,
-            }
+            DetectionCues::score_only(d.score)
         }
     };
     let labelled = detections
@@ -237,6 +231,27 @@ fn held_out_labels(
         findable: m.counted_truth(),
         complete: frame.truth.complete,
     }
+}
+
+/// The held-out evidence of `frames`' frames `indices` under `detector`, in their order;
+/// `frame_done` is called after each frame.
+fn held_out(
+    detector: &dyn Detector,
+    frames: &dyn FrameSource,
+    indices: &[usize],
+    params: &CalibrationParams,
+    frame_done: &(dyn Fn() + Sync),
+) -> Result<Vec<HeldOut>, PipelineError> {
+    indices
+        .par_iter()
+        .map(|&i| {
+            let frame = frames.load(i)?;
+            let detections = detector.detect(&frame.frame, &mut StageTimings::default())?;
+            let h = held_out_labels(&frame, &detections, params);
+            frame_done();
+            Ok(h)
+        })
+        .collect()
 }
 
 /// A trained model and, when it carries no calibration, why.
@@ -290,9 +305,7 @@ pub fn train_calibrated(
     // Training passes: each fold model sees n − |fold| frames, the final one n.
     let total = (folds - 1) * n + n;
     let mut done = 0;
-    let mut labelled = Vec::new();
-    let mut truth_fruit = 0;
-    let mut incomplete = 0;
+    let mut evidence = Evidence::over(n);
     for k in 0..folds {
         let (held, train): (Vec<usize>, Vec<usize>) = (0..n).partition(|&i| fold[i] == k);
         let train_set = FrameSubset {
@@ -309,28 +322,10 @@ pub fn train_calibrated(
         })?;
         done += train_set.len();
         let detector = pipeline.load(&model)?;
-        let per_frame: Vec<HeldOut> = held
-            .par_iter()
-            .map(|&i| {
-                let frame = frames.load(i)?;
-                let detections = detector.detect(&frame.frame, &mut StageTimings::default())?;
-                Ok(held_out_labels(&frame, &detections, params))
-            })
-            .collect::<Result<_, PipelineError>>()?;
-        for h in per_frame {
-            labelled.extend(h.labelled);
-            truth_fruit += h.findable;
-            incomplete += usize::from(!h.complete);
-        }
+        evidence.add(held_out(&*detector, frames, &held, params, &|| {})?);
     }
     let offset = done;
     let mut model = pipeline.train(frames, options, &|d, _| progress(offset + d, total))?;
-    let evidence = Evidence {
-        labelled,
-        truth_fruit,
-        incomplete,
-        frames: n,
-    };
     match evidence.calibration(params) {
         Ok(calibration) => {
             model.calibration = Some(calibration);
@@ -366,6 +361,25 @@ enum Uncalibrated {
 }
 
 impl Evidence {
+    /// No evidence yet, to come from `frames` frames.
+    fn over(frames: usize) -> Self {
+        Self {
+            labelled: Vec::new(),
+            truth_fruit: 0,
+            incomplete: 0,
+            frames,
+        }
+    }
+
+    /// Adds frames' held-out evidence.
+    fn add(&mut self, per_frame: Vec<HeldOut>) {
+        for h in per_frame {
+            self.labelled.extend(h.labelled);
+            self.truth_fruit += h.findable;
+            self.incomplete += usize::from(!h.complete);
+        }
+    }
+
     fn calibration(self, params: &CalibrationParams) -> Result<ScoreCalibration, Uncalibrated> {
         let (cues, is_true): (Vec<DetectionCues>, Vec<bool>) = self.labelled.into_iter().unzip();
         if !is_true.contains(&false) && self.incomplete > 0 {
@@ -413,30 +427,14 @@ pub fn recalibrate(
     let detector = pipeline.load(model)?;
     let n = frames.len();
     let done = std::sync::atomic::AtomicUsize::new(0);
-    let per_frame: Vec<HeldOut> = (0..n)
-        .into_par_iter()
-        .map(|i| {
-            let frame = frames.load(i)?;
-            let detections = detector.detect(&frame.frame, &mut StageTimings::default())?;
-            let h = held_out_labels(&frame, &detections, params);
-            progress(
-                1 + done.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
-                n,
-            );
-            Ok(h)
-        })
-        .collect::<Result<_, PipelineError>>()?;
-    let mut evidence = Evidence {
-        labelled: Vec::new(),
-        truth_fruit: 0,
-        incomplete: 0,
-        frames: n,
-    };
-    for h in per_frame {
-        evidence.labelled.extend(h.labelled);
-        evidence.truth_fruit += h.findable;
-        evidence.incomplete += usize::from(!h.complete);
-    }
+    let all: Vec<usize> = (0..n).collect();
+    let mut evidence = Evidence::over(n);
+    evidence.add(held_out(&*detector, frames, &all, params, &|| {
+        progress(
+            1 + done.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
+            n,
+        );
+    })?);
     let not_enough = |reason: String| PipelineError::NotEnoughTrainingData {
         pipeline: pipeline.name(),
         reason,

@@ -17,7 +17,7 @@ use pomona_pipeline::{recalibrate, CalibrationParams, FrameSource};
 
 use crate::commands::train::open_frames;
 use crate::detection_run::thread_pool;
-use crate::progress::progress_bar;
+use crate::progress::{counter, progress_bar};
 
 /// Arguments of `pomona calibrate`.
 #[derive(Debug, Clone, clap::Args)]
@@ -83,10 +83,7 @@ pub fn run(args: &CalibrateArgs) -> Result<()> {
     let pool = thread_pool(args.threads.map(|n| n as usize))?;
     let bar = progress_bar(frames.len(), "calibrating");
     let started = Instant::now();
-    let progress = |done: usize, total: usize| {
-        bar.set_length(total as u64);
-        bar.set_position(done as u64);
-    };
+    let progress = counter(&bar);
     let calibrated = pool
         .install(|| recalibrate(pipeline, &model, &frames, &params, &progress))
         .with_context(|| format!("calibrating `{}`", pipeline.name()))?;

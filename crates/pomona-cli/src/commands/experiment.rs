@@ -38,7 +38,7 @@ use crate::commands::train::open_frames;
 use crate::detection_run::{detect_frames, thread_pool, RunTotals};
 use crate::matching_args::MatchingArgs;
 use crate::params;
-use crate::progress::progress_bar;
+use crate::progress::{counter, progress_bar};
 use pomona::{Detector, ModelSource, ParamOverride};
 
 /// Arguments of `pomona experiment`.
@@ -540,10 +540,7 @@ impl Splits<'_> {
             full_grid: self.args.full_grid,
         };
         let bar = progress_bar(train_set.len(), &format!("split {}: train", k + 1));
-        let progress = |done: usize, total: usize| {
-            bar.set_length(total as u64);
-            bar.set_position(done as u64);
-        };
+        let progress = counter(&bar);
         let pipeline = self.pipeline;
         let trained = train_calibrated(pipeline, train_set, &options, &self.calibration, &progress)
             .with_context(|| format!("training `{}` on split {}", pipeline.name(), k + 1))?;

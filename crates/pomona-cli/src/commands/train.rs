@@ -17,7 +17,7 @@ use pomona_pipeline::{
 };
 
 use crate::detection_run::{check_inputs, thread_pool};
-use crate::progress::progress_bar;
+use crate::progress::{counter, progress_bar};
 
 /// Arguments of `pomona train`.
 #[derive(Debug, Clone, clap::Args)]
@@ -148,10 +148,7 @@ pub fn run_with(pipelines: &[Box<dyn Pipeline>], args: &TrainArgs) -> Result<Tra
     let pool = thread_pool(args.threads.map(|n| n as usize))?;
     let bar = progress_bar(frames.len(), "training");
     let started = Instant::now();
-    let progress = |done: usize, total: usize| {
-        bar.set_length(total as u64);
-        bar.set_position(done as u64);
-    };
+    let progress = counter(&bar);
     let trained = pool
         .install(|| train_calibrated(pipeline, &frames, &args.options(), &calibration, &progress))
         .with_context(|| format!("training `{}`", pipeline.name()))?;

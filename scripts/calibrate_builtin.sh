@@ -1,0 +1,51 @@
+#!/usr/bin/env bash
+# The confidence calibration of the built-in models: the score and the detections' geometric
+# cues (`pomona calibrate --cues`), fitted on 16 sets of our generator's `wide` and `narrow`
+# frames (seeds 701-705, 711-715; never used for training, tuning or testing), the composition
+# of scripts/wide_builtin_eval.sh's sets. Each model's classifier and stage parameters stay as
+# trained; only its `calibration` changes.
+#
+#   scripts/calibrate_builtin.sh [WORKDIR] [PIPELINE...]   (default: shape-fit symmetry viewer-pose;
+#                                                           writes the models in place)
+#
+# POMONA=/path/to/pomona uses that binary instead of building one. Same seeds, same bytes.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+WORK=${1:-/tmp/pomona-calibrate-builtin}
+shift || true
+PIPELINES=("$@")
+[ ${#PIPELINES[@]} -gt 0 ] || PIPELINES=(shape-fit symmetry viewer-pose)
+if [ -z "${POMONA:-}" ]; then
+  cargo build --release -q -p pomona-cli
+  POMONA=$(pwd)/target/release/pomona
+fi
+mkdir -p "$WORK"
+DATA=()
+for batch in 700 710; do
+  while read -r name seed args; do
+    seed=$((seed - 500 + batch))
+    dir="$WORK/$name-$batch"
+    # shellcheck disable=SC2086
+    [ -f "$dir/camera.json" ] || "$POMONA" synth --out "$dir" --frames 10 --seed "$seed" $args --force > /dev/null
+    DATA+=(--data "$dir")
+  done <<'SETS'
+pepper 501 --fruit pepper
+eggplant 501 --fruit eggplant
+guava 501 --fruit guava
+apple 501 --fruit apple
+orange 501 --fruit orange
+mixed-d435 503 --fruit mixed --camera d435
+pepper-sr4000 504 --fruit pepper --camera sr4000
+narrow-mixed 505 --fruit mixed --domain narrow --noise tof
+SETS
+done
+for pipeline in "${PIPELINES[@]}"; do
+  case "$pipeline" in
+    shape-fit) MODEL=crates/pomona-shapefit/models/default.json ;;
+    symmetry | viewer-pose) MODEL=crates/pomona-symmetry/models/$pipeline.json ;;
+    *) echo "calibrate_builtin.sh: no built-in model for pipeline '$pipeline'" >&2; exit 2 ;;
+  esac
+  "$POMONA" calibrate --pipeline "$pipeline" --model "$MODEL" "${DATA[@]}" --cues \
+    --out "$WORK/$pipeline.json"
+  cp "$WORK/$pipeline.json" "$MODEL"
+done

@@ -272,6 +272,7 @@ fn train_args(pipeline: &str, data: &[&Path], out: &Path) -> train::TrainArgs {
         threads: None,
         set: Vec::new(),
         calibration_folds: 3,
+        cues: false,
         operating_precision: None,
     }
 }
@@ -308,6 +309,7 @@ fn experiment_args(data: &Path, seed: u64, json: &Path) -> experiment::Experimen
         test: Vec::new(),
         leave_one_out: false,
         calibration_folds: 3,
+        cues: false,
         kind: Vec::new(),
         splits: 2,
         train_fraction: 0.5,
@@ -575,6 +577,47 @@ fn experiment_splits_are_seeded_and_reported() {
         "same seed, same result"
     );
     assert_ne!(frames(&a), frames(&b), "another seed, other splits");
+}
+
+#[test]
+fn train_with_cues_stores_a_cue_calibration_that_detect_applies() {
+    let dir = tempfile::tempdir().unwrap();
+    let (train_ds, test_ds) = (dir.path().join("train"), dir.path().join("test"));
+    synth_dataset(&train_ds, 8, 31);
+    synth_dataset(&test_ds, 3, 32);
+    let pipelines = only(BlobPipeline::colour());
+    let (plain, with_cues) = (dir.path().join("plain.json"), dir.path().join("cues.json"));
+    train::run_with(&pipelines, &train_args(blob::NAME, &[&train_ds], &plain)).unwrap();
+    let mut args = train_args(blob::NAME, &[&train_ds], &with_cues);
+    args.cues = true;
+    train::run_with(&pipelines, &args).unwrap();
+    let plain = ModelFile::load(&plain, blob::NAME).unwrap();
+    let cued = ModelFile::load(&with_cues, blob::NAME).unwrap();
+    assert!(plain.calibration.expect("calibrated").cues.is_none());
+    let calibration = cued.calibration.expect("calibrated");
+    let cues = calibration
+        .cues
+        .as_ref()
+        .expect("--cues stores a cue regression");
+    assert!(cues.weight.score > 0.0, "confidence rises with the score");
+    // Same classifier: --cues changes only how the score becomes a confidence.
+    assert_eq!(plain.svm, cued.svm);
+
+    let det = dir.path().join("det");
+    let mut dargs = detect_args(blob::NAME, Some(&with_cues), &test_ds, &det);
+    dargs.min_confidence = Some(0.0);
+    detect::run_with(&pipelines, &dargs).unwrap();
+    let detections: Vec<Detection> = read_detections(&det)
+        .into_iter()
+        .flat_map(|f| f.detections)
+        .collect();
+    assert!(!detections.is_empty());
+    for d in &detections {
+        let c = d
+            .confidence
+            .expect("a calibrated model gives every detection a confidence");
+        assert!((0.0..=1.0).contains(&c), "confidence {c}");
+    }
 }
 
 #[test]

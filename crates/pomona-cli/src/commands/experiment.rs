@@ -81,6 +81,10 @@ pub struct ExperimentArgs {
     #[arg(long, value_name = "K", default_value_t = 3,
           value_parser = clap::value_parser!(u64).range(0..=100))]
     pub calibration_folds: u64,
+    /// Fit every trained model's confidence to the held-out detections' geometric cues beside
+    /// their score (as `pomona train --cues`).
+    #[arg(long)]
+    pub cues: bool,
     /// Evaluate only truth objects of this kind (repeat for several), e.g. `apple`.
     #[arg(long, value_name = "KIND")]
     pub kind: Vec<String>,
@@ -618,6 +622,7 @@ pub fn run_with(
     config.validate()?;
     let calibration = CalibrationParams {
         folds: args.calibration_folds as usize,
+        cues: args.cues,
         tolerance_m: config.tolerance_m,
         min_visibility: config.min_visibility,
         radius_fraction_2d: config.radius_fraction_2d,

@@ -50,6 +50,11 @@ pub struct TrainArgs {
     #[arg(long, value_name = "K", default_value_t = 3,
           value_parser = clap::value_parser!(u64).range(0..=100))]
     pub calibration_folds: u64,
+    /// Fit the confidence to the held-out detections' geometric cues beside their score
+    /// (coverage of the disc, depth, seen curvature, elongation; as `pomona calibrate --cues`),
+    /// which can reorder detections; without it, Platt's sigmoid of the score.
+    #[arg(long)]
+    pub cues: bool,
     /// Choose the operating confidence as the lowest reaching this held-out precision (0–1]
     /// instead of the one with the best F1.
     #[arg(long, value_name = "P")]
@@ -73,6 +78,7 @@ impl TrainArgs {
     pub fn calibration(&self) -> CalibrationParams {
         CalibrationParams {
             folds: self.calibration_folds as usize,
+            cues: self.cues,
             operating_point: match self.operating_precision {
                 Some(p) => OperatingPoint::Precision(p),
                 None => OperatingPoint::MaxF1,

@@ -2,7 +2,7 @@
 # The confidence calibration of the built-in models: the score and the detections' geometric
 # cues (`pomona calibrate --cues`), fitted on 16 sets of our generator's `wide` and `narrow`
 # frames (seeds 701-705, 711-715; never used for training, tuning or testing), the composition
-# of scripts/wide_builtin_eval.sh's sets. Each model's classifier and stage parameters stay as
+# of scripts/wide_sets.txt, as the held-out sets of scripts/wide_builtin_eval.sh. Each model's classifier and stage parameters stay as
 # trained; only its `calibration` changes.
 #
 #   scripts/calibrate_builtin.sh [WORKDIR] [PIPELINE...]   (default: shape-fit symmetry viewer-pose;
@@ -28,16 +28,7 @@ for batch in 700 710; do
     # shellcheck disable=SC2086
     [ -f "$dir/camera.json" ] || "$POMONA" synth --out "$dir" --frames 10 --seed "$seed" $args --force > /dev/null
     DATA+=(--data "$dir")
-  done <<'SETS'
-pepper 501 --fruit pepper
-eggplant 501 --fruit eggplant
-guava 501 --fruit guava
-apple 501 --fruit apple
-orange 501 --fruit orange
-mixed-d435 503 --fruit mixed --camera d435
-pepper-sr4000 504 --fruit pepper --camera sr4000
-narrow-mixed 505 --fruit mixed --domain narrow --noise tof
-SETS
+  done < <(grep -v '^#' scripts/wide_sets.txt)
 done
 for pipeline in "${PIPELINES[@]}"; do
   case "$pipeline" in

@@ -23,17 +23,8 @@ if [ -z "${POMONA:-}" ]; then
 fi
 mkdir -p "$OUT"
 
-# name seed args... : one test set, 10 frames.
-SETS=(
-  "pepper 501 --fruit pepper"
-  "eggplant 501 --fruit eggplant"
-  "guava 501 --fruit guava"
-  "apple 501 --fruit apple"
-  "orange 501 --fruit orange"
-  "mixed-d435 503 --fruit mixed --camera d435"
-  "pepper-sr4000 504 --fruit pepper --camera sr4000"
-  "narrow-mixed 505 --fruit mixed --domain narrow --noise tof"
-)
+# name seed args... : one test set, 10 frames (scripts/wide_sets.txt).
+mapfile -t SETS < <(grep -v '^#' scripts/wide_sets.txt)
 BATCHES=${BATCHES:-500}
 DETECT_ARGS=${DETECT_ARGS:-}
 ROWS=()

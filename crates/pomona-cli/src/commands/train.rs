@@ -52,7 +52,8 @@ pub struct TrainArgs {
     pub calibration_folds: u64,
     /// Fit the confidence to the held-out detections' geometric cues beside their score
     /// (coverage of the disc, depth, seen curvature, elongation; as `pomona calibrate --cues`),
-    /// which can reorder detections; without it, Platt's sigmoid of the score.
+    /// which can reorder detections; without it, Platt's sigmoid of the score. The cues are
+    /// only as general as the cameras of the training frames (docs/results.md).
     #[arg(long)]
     pub cues: bool,
     /// Choose the operating confidence as the lowest reaching this held-out precision (0–1]

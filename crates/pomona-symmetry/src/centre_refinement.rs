@@ -129,6 +129,10 @@ pub struct RefinedBox {
     pub merged: ScoredBox,
     /// The accepted sphere, if any.
     pub sphere: Option<Sphere>,
+    /// The accepted sphere's inliers counted in image pixels (each gathered point stands for
+    /// the `step × step` pixels of the thinned grid it was read on), as shape-fit counts its
+    /// support; `None` without a sphere.
+    pub support_px: Option<usize>,
 }
 
 impl RefinedBox {
@@ -246,10 +250,19 @@ impl CentreRefinement {
     /// The scene points within `search_radius_m` of `center`, read on an even pixel grid thinned
     /// to at most about `max_points`.
     pub fn gather(&self, cloud: &SceneCloud, center: &Point3<f64>) -> Vec<Point3<f64>> {
+        self.gather_thinned(cloud, center).0
+    }
+
+    /// [`Self::gather`] and the pixel step of the grid it read.
+    fn gather_thinned(
+        &self,
+        cloud: &SceneCloud,
+        center: &Point3<f64>,
+    ) -> (Vec<Point3<f64>>, usize) {
         let cam = &cloud.camera;
         let r = self.params.search_radius_m;
         let Some(px) = cam.project(center).filter(|_| center.z > r) else {
-            return Vec::new();
+            return (Vec::new(), 1);
         };
         // Pixel half-width of the ball at its nearest depth.
         let half_px = cam.fx.max(cam.fy) * r / (center.z - r);
@@ -269,14 +282,25 @@ impl CentreRefinement {
                 }
             }
         }
-        points
+        (points, step)
     }
 
     /// The accepted sphere of the points around `center`, its radius calibrated when the
     /// parameters hold a calibration, or `None` (see the module docs).
     pub fn fit(&self, cloud: &SceneCloud, center: &Point3<f64>) -> Option<Sphere> {
+        self.fit_with_support(cloud, center)
+            .map(|(sphere, _)| sphere)
+    }
+
+    /// [`Self::fit`] and the accepted sphere's inliers counted in image pixels
+    /// ([`RefinedBox::support_px`]).
+    pub fn fit_with_support(
+        &self,
+        cloud: &SceneCloud,
+        center: &Point3<f64>,
+    ) -> Option<(Sphere, usize)> {
         let p = &self.params;
-        let points = self.gather(cloud, center);
+        let (points, step) = self.gather_thinned(cloud, center);
         if points.len() < p.min_inliers {
             return None;
         }
@@ -302,27 +326,32 @@ impl CentreRefinement {
         if !believable {
             return None;
         }
-        Some(match &p.radius_calibration {
+        let sphere = match &p.radius_calibration {
             Some(c) => {
                 let inlier_points: Vec<Point3<f64>> =
                     fit.inliers.iter().map(|&i| points[i]).collect();
                 c.apply_to_sphere(&sphere, &inlier_points, p.radius_range_m)
             }
             None => sphere,
-        })
+        };
+        Some((sphere, inliers * step * step))
     }
 
     /// Every merged box, refined when enabled (boxes in, same order out).
     pub fn refine(&self, cloud: &SceneCloud, merged: &[ScoredBox]) -> Vec<RefinedBox> {
         merged
             .iter()
-            .map(|&b| RefinedBox {
-                merged: b,
-                sphere: self
+            .map(|&b| {
+                let fitted = self
                     .params
                     .enabled
-                    .then(|| self.fit(cloud, &b.center))
-                    .flatten(),
+                    .then(|| self.fit_with_support(cloud, &b.center))
+                    .flatten();
+                RefinedBox {
+                    merged: b,
+                    sphere: fitted.map(|(sphere, _)| sphere),
+                    support_px: fitted.map(|(_, support)| support),
+                }
             })
             .collect()
     }
@@ -390,6 +419,31 @@ mod tests {
         assert!((refined[0].center() - c).norm() < 1e-3, "{sphere:?}");
         assert!((refined[0].diameter_m().unwrap() - 0.08).abs() < 1e-3);
         assert_eq!(refined[0].merged, boxed(off));
+    }
+
+    #[test]
+    fn support_counts_the_sphere_pixels_whatever_the_thinning() {
+        // A 40 mm ball at 0.8 m on a 300 px focal: its disc is π (300 · 0.04 / 0.8)² ≈ 707
+        // pixels; the fit sees almost all of it inside the search ball.
+        let c = Point3::new(0.0, 0.0, 0.8);
+        let cloud = scene(c, 0.04);
+        let disc_px = std::f64::consts::PI * (300.0_f64 * 0.04 / 0.8).powi(2);
+        for max_points in [300, 600, 5000] {
+            let stage = CentreRefinement::new(CentreRefinementParams {
+                max_points,
+                ..CentreRefinementParams::default()
+            })
+            .unwrap();
+            let refined = stage.refine(&cloud, &[boxed(c)]);
+            let support = refined[0].support_px.expect("fit accepted") as f64;
+            assert!(
+                (0.7 * disc_px..=1.3 * disc_px).contains(&support),
+                "max_points {max_points}: {support} against {disc_px:.0}"
+            );
+        }
+        // No sphere, no support.
+        let off = CentreRefinement::new(CentreRefinementParams::disabled()).unwrap();
+        assert_eq!(off.refine(&cloud, &[boxed(c)])[0].support_px, None);
     }
 
     #[test]

@@ -7,6 +7,7 @@ use std::collections::BTreeMap;
 
 use pomona_core::{median, Detection, FrameTruth, PinholeCamera};
 
+use crate::frame_matching::ranking_of;
 use crate::report::{CenterError, DiameterError, FrameReport};
 use crate::{match_frame, DetectionOutcome, EvalConfig, EvalError, EvalReport, PrCurve};
 
@@ -63,7 +64,7 @@ struct Tally {
     per_frame: Vec<FrameReport>,
     /// Every matched or unmatched detection's score, confidence and whether it is a true
     /// positive (the PR curve ranks all of them, whatever the threshold: by confidence when
-    /// every detection has one, else by score; see [`crate::ranking_values`]).
+    /// every detection has one, else by score: `ranking_of`).
     scored: Vec<(f64, Option<f64>, bool)>,
     center_errors: Vec<f64>,
     center_errors_radii: Vec<f64>,
@@ -181,16 +182,10 @@ impl Tally {
                 None
             }
             (None, n) => {
-                let by_confidence = self.scored.iter().all(|s| s.1.is_some());
-                let ranked: Vec<(f64, bool)> = self
-                    .scored
-                    .iter()
-                    .map(
-                        |&(score, confidence, hit)| match (by_confidence, confidence) {
-                            (true, Some(c)) => (c, hit),
-                            _ => (score, hit),
-                        },
-                    )
+                let rank = ranking_of(self.scored.iter().map(|&(s, c, _)| (s, c)));
+                let ranked: Vec<(f64, bool)> = rank
+                    .into_iter()
+                    .zip(self.scored.iter().map(|s| s.2))
                     .collect();
                 Some(PrCurve::new(&ranked, n))
             }

@@ -234,12 +234,13 @@ pub fn match_frame(
 /// calibration) can order detections differently from their scores, and it is the ranking a
 /// user thresholds on; with the score alone (Platt's sigmoid) both orders are the same.
 pub fn ranking_values(detections: &[Detection]) -> Vec<f64> {
-    match detections
-        .iter()
-        .map(|d| d.confidence)
-        .collect::<Option<Vec<f64>>>()
-    {
+    ranking_of(detections.iter().map(|d| (d.score, d.confidence)))
+}
+
+/// [`ranking_values`] of `(score, confidence)` pairs.
+pub(crate) fn ranking_of(scored: impl Iterator<Item = (f64, Option<f64>)> + Clone) -> Vec<f64> {
+    match scored.clone().map(|(_, c)| c).collect::<Option<Vec<f64>>>() {
         Some(confidences) => confidences,
-        None => detections.iter().map(|d| d.score).collect(),
+        None => scored.map(|(score, _)| score).collect(),
     }
 }

@@ -123,24 +123,17 @@ impl ScoreCalibration {
         curvature_patch_radii: f64,
     ) -> Result<Self, LearnError> {
         let scores: Vec<f64> = cues.iter().map(|c| c.score).collect();
-        let by_score = Self::fit(&scores, is_true, truth_fruit, operating_point)?;
+        let (sigmoid, positives) = fit_sigmoid(&scores, is_true, truth_fruit, operating_point)?;
         let model = CueLogistic::fit(cues, is_true, curvature_patch_radii)?;
-        let (confidence, precision, recall) = threshold_of(
-            cues.iter().map(|c| model.probability(c)),
+        let confidences = cues.iter().map(|c| model.probability(c));
+        Ok(Self::at_operating_point(
+            sigmoid,
+            Some(model),
+            confidences,
             is_true,
-            truth_fruit,
+            (positives, truth_fruit),
             operating_point,
-        );
-        Ok(Self {
-            operating_confidence: confidence,
-            evidence: CalibrationEvidence {
-                precision,
-                recall,
-                ..by_score.evidence
-            },
-            cues: Some(model),
-            ..by_score
-        })
+        ))
     }
 
     /// Fits the calibration to held-out detections: `scores[i]` with `is_true[i]` (whether it
@@ -166,64 +159,94 @@ impl ScoreCalibration {
         truth_fruit: usize,
         operating_point: OperatingPoint,
     ) -> Result<Self, LearnError> {
-        let bad = |reason: String| Err(LearnError::InvalidSamples(reason));
-        if scores.len() != is_true.len() {
-            return bad(format!(
-                "{} scores but {} labels",
-                scores.len(),
-                is_true.len()
-            ));
-        }
-        if let Some(s) = scores.iter().find(|s| !s.is_finite()) {
-            return bad(format!("a held-out score is not finite ({s})"));
-        }
-        if let OperatingPoint::Precision(p) = operating_point {
-            if !(p > 0.0 && p <= 1.0) {
-                return Err(LearnError::InvalidParameter {
-                    name: "operating_point.precision",
-                    value: p,
-                    reason: "must be in (0, 1]",
-                });
-            }
-        }
-        let positives = true_and_false(
-            is_true,
-            "calibration needs true and false held-out detections",
-        )?;
-        if truth_fruit < positives {
-            return bad(format!(
-                "{positives} true detections but only {truth_fruit} findable fruit"
-            ));
-        }
-        let sigmoid = PlattSigmoid::fit(scores, is_true);
-        if sigmoid.a >= 0.0 {
-            return bad(format!(
-                "held-out scores do not rank true detections above false ones (sigmoid slope \
-                 {:.3} ≤ 0 over {} detections)",
-                -sigmoid.a,
-                scores.len()
-            ));
-        }
-        let (confidence, precision, recall) = threshold_of(
-            scores.iter().map(|&s| sigmoid.probability(s)),
-            is_true,
-            truth_fruit,
-            operating_point,
-        );
-        Ok(Self {
+        let (sigmoid, positives) = fit_sigmoid(scores, is_true, truth_fruit, operating_point)?;
+        let confidences = scores.iter().map(|&s| sigmoid.probability(s));
+        Ok(Self::at_operating_point(
             sigmoid,
-            cues: None,
+            None,
+            confidences,
+            is_true,
+            (positives, truth_fruit),
+            operating_point,
+        ))
+    }
+
+    /// The calibration that rates detections by `confidences` (the sigmoid's, or the cue
+    /// regression's when `cues` is set), its operating confidence chosen over them, out of
+    /// `true_positives` true detections and `truth_fruit` findable fruit.
+    fn at_operating_point(
+        sigmoid: PlattSigmoid,
+        cues: Option<CueLogistic>,
+        confidences: impl Iterator<Item = f64>,
+        is_true: &[bool],
+        (true_positives, truth_fruit): (usize, usize),
+        operating_point: OperatingPoint,
+    ) -> Self {
+        let (confidence, precision, recall) =
+            threshold_of(confidences, is_true, truth_fruit, operating_point);
+        Self {
+            sigmoid,
+            cues,
             operating_confidence: confidence,
             operating_point,
             evidence: CalibrationEvidence {
-                detections: scores.len(),
-                true_positives: positives,
+                detections: is_true.len(),
+                true_positives,
                 truth_fruit,
                 precision,
                 recall,
             },
-        })
+        }
     }
+}
+
+/// Checks held-out `scores` labelled `is_true` (see [`ScoreCalibration::fit`]'s errors) and fits
+/// Platt's sigmoid to them; also returns the number of true detections.
+fn fit_sigmoid(
+    scores: &[f64],
+    is_true: &[bool],
+    truth_fruit: usize,
+    operating_point: OperatingPoint,
+) -> Result<(PlattSigmoid, usize), LearnError> {
+    let bad = |reason: String| Err(LearnError::InvalidSamples(reason));
+    if scores.len() != is_true.len() {
+        return bad(format!(
+            "{} scores but {} labels",
+            scores.len(),
+            is_true.len()
+        ));
+    }
+    if let Some(s) = scores.iter().find(|s| !s.is_finite()) {
+        return bad(format!("a held-out score is not finite ({s})"));
+    }
+    if let OperatingPoint::Precision(p) = operating_point {
+        if !(p > 0.0 && p <= 1.0) {
+            return Err(LearnError::InvalidParameter {
+                name: "operating_point.precision",
+                value: p,
+                reason: "must be in (0, 1]",
+            });
+        }
+    }
+    let positives = true_and_false(
+        is_true,
+        "calibration needs true and false held-out detections",
+    )?;
+    if truth_fruit < positives {
+        return bad(format!(
+            "{positives} true detections but only {truth_fruit} findable fruit"
+        ));
+    }
+    let sigmoid = PlattSigmoid::fit(scores, is_true);
+    if sigmoid.a >= 0.0 {
+        return bad(format!(
+            "held-out scores do not rank true detections above false ones (sigmoid slope \
+             {:.3} ≤ 0 over {} detections)",
+            -sigmoid.a,
+            scores.len()
+        ));
+    }
+    Ok((sigmoid, positives))
 }
 
 /// `operating confidence 0.271 (held-out precision 0.868, recall 0.709 over 251 fruit)`.

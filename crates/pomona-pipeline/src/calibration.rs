@@ -98,21 +98,15 @@ impl Detector for CalibratedDetector {
         timings: &mut StageTimings,
     ) -> Result<Vec<Detection>, PipelineError> {
         let mut detections = self.inner.detect(frame, timings)?;
-        match &self.calibration.cues {
-            Some(cues) => {
-                let patch = cues.curvature_patch_radii;
-                let started = std::time::Instant::now();
-                for d in &mut detections {
-                    let c = detection_cues(d, frame, patch);
-                    d.confidence = Some(cues.probability(&c));
-                }
-                timings.add("confidence", started.elapsed());
-            }
-            None => {
-                for d in &mut detections {
-                    d.confidence = Some(self.calibration.confidence(d.score));
-                }
-            }
+        let patch = self.calibration.cues.map(|c| c.curvature_patch_radii);
+        let started = std::time::Instant::now();
+        for d in &mut detections {
+            let cues = cues_of(d, frame, patch);
+            d.confidence = Some(self.calibration.confidence_of(&cues));
+        }
+        if patch.is_some() {
+            // Measuring the cues takes time worth seeing; the sigmoid alone does not.
+            timings.add("confidence", started.elapsed());
         }
         Ok(detections)
     }
@@ -186,6 +180,19 @@ fn fold_of_frames(n: usize, folds: usize, seed: u64) -> Vec<usize> {
     fold
 }
 
+/// The cues of `detection` in `frame` with its curvature measured over `curvature_patch_radii`
+/// fruit radii, or only its score when that is `None` (a calibration by the score alone).
+fn cues_of(
+    detection: &Detection,
+    frame: &RgbdFrame,
+    curvature_patch_radii: Option<f64>,
+) -> DetectionCues {
+    match curvature_patch_radii {
+        Some(patch) => detection_cues(detection, frame, patch),
+        None => DetectionCues::score_only(detection.score),
+    }
+}
+
 /// Held-out evidence of one frame.
 struct HeldOut {
     /// `(cues, is_true)` per detection whose truth status is known (only the score is measured
@@ -210,19 +217,14 @@ fn held_out_labels(
         ..EvalConfig::default()
     };
     let m = match_frame(&frame.truth, detections, frame.frame.camera(), &config);
-    let cues_of = |d: &Detection| {
-        if params.cues {
-            detection_cues(d, &frame.frame, CUE_CURVATURE_PATCH_RADII)
-        } else {
-            DetectionCues::score_only(d.score)
-        }
-    };
+    let patch = params.cues.then_some(CUE_CURVATURE_PATCH_RADII);
+    let measured = |d: &Detection| cues_of(d, &frame.frame, patch);
     let labelled = detections
         .iter()
         .zip(&m.detections)
         .filter_map(|(d, outcome)| match outcome {
-            DetectionOutcome::TruePositive { .. } => Some((cues_of(d), true)),
-            DetectionOutcome::FalsePositive if frame.truth.complete => Some((cues_of(d), false)),
+            DetectionOutcome::TruePositive { .. } => Some((measured(d), true)),
+            DetectionOutcome::FalsePositive if frame.truth.complete => Some((measured(d), false)),
             _ => None,
         })
         .collect();

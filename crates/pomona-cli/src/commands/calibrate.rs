@@ -12,10 +12,10 @@ use std::time::Instant;
 
 use anyhow::{Context, Result};
 use pomona_eval::EvalConfig;
-use pomona_learn::{ModelFile, OperatingPoint};
+use pomona_learn::ModelFile;
 use pomona_pipeline::{recalibrate, CalibrationParams, FrameSource};
 
-use crate::commands::train::open_frames;
+use crate::commands::train::{open_frames, operating_point};
 use crate::detection_run::thread_pool;
 use crate::progress::{counter, progress_bar};
 
@@ -71,10 +71,7 @@ pub fn run(args: &CalibrateArgs) -> Result<()> {
     let frames = open_frames(pipeline, &args.data)?;
     let params = CalibrationParams {
         cues: args.cues,
-        operating_point: match args.operating_precision {
-            Some(p) => OperatingPoint::Precision(p),
-            None => OperatingPoint::MaxF1,
-        },
+        operating_point: operating_point(args.operating_precision),
         radius_fraction_2d: EvalConfig::default()
             .for_data(frames.has_depth())
             .radius_fraction_2d,

@@ -80,13 +80,16 @@ impl TrainArgs {
         CalibrationParams {
             folds: self.calibration_folds as usize,
             cues: self.cues,
-            operating_point: match self.operating_precision {
-                Some(p) => OperatingPoint::Precision(p),
-                None => OperatingPoint::MaxF1,
-            },
+            operating_point: operating_point(self.operating_precision),
             ..CalibrationParams::default()
         }
     }
+}
+
+/// The operating point of `--operating-precision P`: the lowest confidence reaching precision P,
+/// or the best F1 without it.
+pub fn operating_point(precision: Option<f64>) -> OperatingPoint {
+    precision.map_or(OperatingPoint::MaxF1, OperatingPoint::Precision)
 }
 
 /// What a training run did.

@@ -6,6 +6,7 @@
 # test frames' detections are pooled and scored together.
 #
 #   scripts/ak_apples_loo.sh [OUT] [-- extra `pomona train` arguments, e.g. --set size_prior=\"fixed\"]
+#   (POMONA=path/to/pomona uses that binary instead of building one)
 #
 # OUT (default /tmp/pomona-ak-loo) receives the dataset folders (symlinks into the shared data,
 # outside the repository), models, detections and JSON reports. Truth there is incomplete
@@ -22,8 +23,7 @@ if [ $# -gt 0 ] && [ "$1" != "--" ]; then OUT=$1; shift; fi
 EXTRA=("$@")
 [ -d "$DATA" ] || { echo "no data at $DATA" >&2; exit 2; }
 DATA=$(cd "$DATA" && pwd)
-cargo build --release -q -p pomona-cli
-POMONA=$ROOT/target/release/pomona
+. scripts/pomona_binary.sh
 rm -rf "$OUT"
 mkdir -p "$OUT"
 

@@ -7,10 +7,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 DATA=${1:-../shared/data/ak-apples}
 OUT=${2:-/tmp/pomona-ak-light}
-if [ -z "${POMONA:-}" ]; then
-  cargo build --release -q -p pomona-cli
-  POMONA=$(pwd)/target/release/pomona
-fi
+. scripts/pomona_binary.sh
 python3 scripts/ak_other_light.py "$DATA" "$OUT"
 frames=$(ls "$DATA/color" | sed 's/\.png$//')
 for t in $frames; do

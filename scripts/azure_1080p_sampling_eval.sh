@@ -18,10 +18,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 OUT=${1:-/tmp/pomona-1080p}
-if [ -z "${POMONA:-}" ]; then
-  cargo build --release -q -p pomona-cli
-  POMONA=$(pwd)/target/release/pomona
-fi
+. scripts/pomona_binary.sh
 mkdir -p "$OUT/data" "$OUT/det" "$OUT/reports"
 SETS=(pepper-3210 pepper-3240 pepper-3241 apple-3211 apple-3242)
 for set in "${SETS[@]}"; do

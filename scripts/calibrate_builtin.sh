@@ -15,10 +15,7 @@ WORK=${1:-/tmp/pomona-calibrate-builtin}
 shift || true
 PIPELINES=("$@")
 [ ${#PIPELINES[@]} -gt 0 ] || PIPELINES=(shape-fit symmetry viewer-pose)
-if [ -z "${POMONA:-}" ]; then
-  cargo build --release -q -p pomona-cli
-  POMONA=$(pwd)/target/release/pomona
-fi
+. scripts/pomona_binary.sh
 mkdir -p "$WORK"
 DATA=()
 for batch in 700 710; do

@@ -33,10 +33,7 @@ read -r -a EXTRA <<< "${EXPERIMENT_ARGS:-}"
 # Reports are kept between runs; those made with other EXPERIMENT_ARGS get other names.
 ARGS_TAG=""
 [ -z "${EXPERIMENT_ARGS:-}" ] || ARGS_TAG="-args$(printf %s "$EXPERIMENT_ARGS" | cksum | cut -d' ' -f1)"
-if [ -z "${POMONA:-}" ]; then
-  cargo build --release -q -p pomona-cli
-  POMONA=$(pwd)/target/release/pomona
-fi
+. scripts/pomona_binary.sh
 mkdir -p "$OUT/data" "$OUT/reports"
 # Reports are reused only when the same binary made them: another binary's are moved aside.
 BIN_SUM=$(cksum < "$POMONA" | cut -d' ' -f1)

@@ -12,10 +12,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 DATA=${1:-../shared/data/ecopom-apples-2d}
 OUT=${2:-/tmp/pomona-ecopom-640}
-if [ -z "${POMONA:-}" ]; then
-  cargo build --release -q -p pomona-cli
-  POMONA=$(pwd)/target/release/pomona
-fi
+. scripts/pomona_binary.sh
 mkdir -p "$OUT/data/color"
 python3 - "$DATA" "$OUT/data" <<'PY'
 import json, pathlib, sys

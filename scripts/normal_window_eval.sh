@@ -16,10 +16,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 OUT=${1:-/tmp/pomona-window}
 SEEDS=${2:-1 2}
-if [ -z "${POMONA:-}" ]; then
-  cargo build --release -q -p pomona-cli
-  POMONA=$(pwd)/target/release/pomona
-fi
+. scripts/pomona_binary.sh
 mkdir -p "$OUT/data" "$OUT/models" "$OUT/det"
 
 render() { # name seed frames args...

@@ -2,7 +2,8 @@
 # Seed 000's Tables 1–2 (mean AP and time per frame, pruning × symmetry) and its noise-free
 # control, reproduced on synthetic data with `pomona experiment` (issue 5).
 #
-#   scripts/symmetry_tables.sh [OUT]      (default OUT: /tmp/pomona-symmetry-tables)
+#   scripts/symmetry_tables.sh [OUT]      (default OUT: /tmp/pomona-symmetry-tables;
+#                                          POMONA=path/to/pomona uses that binary)
 #
 # Data: 60 synthetic SR4000 frames of peppers, half of them green, `tof` noise (and the same
 # scenes without noise for the control), dataset seed 11. Protocol: 4 random image-level splits
@@ -18,8 +19,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 OUT=${1:-/tmp/pomona-symmetry-tables}
 mkdir -p "$OUT"
-cargo build --release -q -p pomona-cli
-POMONA=target/release/pomona
+. scripts/pomona_binary.sh
 
 for noise in tof none low; do
   [ -d "$OUT/sr4000-$noise" ] || "$POMONA" synth --out "$OUT/sr4000-$noise" --frames 60 \

@@ -17,10 +17,7 @@ OUT=${1:-/tmp/pomona-wide-eval}
 shift || true
 PIPELINES=("$@")
 [ ${#PIPELINES[@]} -gt 0 ] || PIPELINES=(shape-fit symmetry viewer-pose)
-if [ -z "${POMONA:-}" ]; then
-  cargo build --release -q -p pomona-cli
-  POMONA=$(pwd)/target/release/pomona
-fi
+. scripts/pomona_binary.sh
 mkdir -p "$OUT"
 
 # name seed args... : one test set, 10 frames (scripts/wide_sets.txt).

@@ -32,13 +32,19 @@ pub fn load_detector(
     if let Some(path) = model {
         builder = builder.model_file(path);
     }
-    builder.build().map_err(|e| match e {
+    builder.build().map_err(with_model_hint)
+}
+
+/// A library error as the CLI reports it: a pipeline without a built-in model is told which
+/// commands make one and which option passes it.
+pub fn with_model_hint(e: pomona::Error) -> anyhow::Error {
+    match e {
         pomona::Error::NoBuiltInModel { pipeline } => anyhow!(
             "pipeline `{pipeline}` has no built-in model yet; train one with \
              `pomona train --pipeline {pipeline} --data DIR --out MODEL` and pass it with --model MODEL"
         ),
         other => other.into(),
-    })
+    }
 }
 
 /// The threshold of a detection run: `--min-confidence` when given, else the model's operating

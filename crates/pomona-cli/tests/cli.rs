@@ -253,7 +253,7 @@ fn eval_scores_hand_made_detections() {
 mod blob;
 
 use blob::BlobPipeline;
-use pomona_cli::commands::{demo, detect, experiment, train};
+use pomona_cli::commands::{calibrate, demo, detect, experiment, train};
 use pomona_core::{Detection, FrameDetections};
 use pomona_pipeline::{ModelFile, Pipeline};
 
@@ -618,6 +618,57 @@ fn train_with_cues_stores_a_cue_calibration_that_detect_applies() {
             .expect("a calibrated model gives every detection a confidence");
         assert!((0.0..=1.0).contains(&c), "confidence {c}");
     }
+}
+
+fn calibrate_args(model: Option<&Path>, data: &Path, out: &Path) -> calibrate::CalibrateArgs {
+    calibrate::CalibrateArgs {
+        pipeline: blob::NAME.into(),
+        model: model.map(Path::to_path_buf),
+        data: vec![data.to_path_buf()],
+        out: out.to_path_buf(),
+        cues: false,
+        operating_precision: None,
+        threads: Some(1),
+    }
+}
+
+#[test]
+fn calibrate_refits_only_the_calibration_and_names_the_missing_model() {
+    let dir = tempfile::tempdir().unwrap();
+    let (train_ds, other_ds) = (dir.path().join("train"), dir.path().join("other"));
+    synth_dataset(&train_ds, 8, 31);
+    synth_dataset(&other_ds, 6, 33);
+    let pipelines = only(BlobPipeline::colour());
+    let model = dir.path().join("m.json");
+    train::run_with(&pipelines, &train_args(blob::NAME, &[&train_ds], &model)).unwrap();
+
+    // The test pipeline ships no model: without --model the message says how to get one.
+    let refitted = dir.path().join("refit.json");
+    let err = calibrate::run_with(&pipelines, &calibrate_args(None, &other_ds, &refitted))
+        .expect_err("no built-in model");
+    let message = format!("{err:#}");
+    assert!(
+        message.contains("has no built-in model") && message.contains("--model MODEL"),
+        "{message}"
+    );
+    assert!(!refitted.exists(), "nothing written on error");
+
+    let mut args = calibrate_args(Some(&model), &other_ds, &refitted);
+    args.cues = true;
+    calibrate::run_with(&pipelines, &args).unwrap();
+    let before = ModelFile::load(&model, blob::NAME).unwrap();
+    let after = ModelFile::load(&refitted, blob::NAME).unwrap();
+    // Only how scores become confidences changes: same classifier, same stages.
+    assert_eq!(before.svm, after.svm);
+    assert_eq!(before.stage_params, after.stage_params);
+    let calibration = after.calibration.expect("calibrated");
+    assert!(calibration.cues.is_some(), "--cues stores a cue regression");
+    assert!((0.0..=1.0).contains(&calibration.operating_confidence));
+    assert_ne!(
+        before.calibration,
+        Some(calibration),
+        "refitted on other frames"
+    );
 }
 
 #[test]

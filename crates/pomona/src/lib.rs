@@ -90,6 +90,7 @@ pub use detector::{Detector, DetectorBuilder};
 pub use error::Error;
 pub use failures_list::{write_failures, FailedFrame};
 pub use frame_record::KeepRule;
+pub use model_choice::load_model;
 pub use model_info::{ModelInfo, ModelSource};
 pub use param_override::{apply_overrides, overrides_to_json, settable_keys, ParamOverride};
 pub use registry::{find_pipeline, pipeline, pipeline_names, pipelines};

@@ -48,6 +48,29 @@ impl ModelChoice {
     }
 }
 
+/// The model a command or program would run for `pipeline`: the file at `path` when given,
+/// else the pipeline's built-in model — found, parsed and labelled as the builders do, for
+/// callers that need the model itself (to recalibrate or inspect it) rather than a detector.
+///
+/// ```
+/// let pipeline = pomona::pipeline("shape-fit")?;
+/// let (model, source) = pomona::load_model(pipeline.as_ref(), None)?;
+/// assert_eq!(source, pomona::ModelSource::BuiltIn);
+/// assert_eq!(model.pipeline, "shape-fit");
+/// # Ok::<(), pomona::Error>(())
+/// ```
+///
+/// # Errors
+/// [`Error::ModelFile`] for a file that is unreadable or made for another pipeline or version,
+/// [`Error::NoBuiltInModel`] without `path` when the pipeline ships no model.
+pub fn load_model(
+    pipeline: &dyn Pipeline,
+    path: Option<&Path>,
+) -> Result<(ModelFile, ModelSource), Error> {
+    path.map_or(ModelChoice::BuiltIn, |p| ModelChoice::File(p.to_path_buf()))
+        .load(pipeline)
+}
+
 /// Parses a built-in model's JSON text.
 pub(crate) fn built_in(
     pipeline: &str,

@@ -7,16 +7,15 @@
 //! `pomona_learn::CueLogistic`), which can reorder detections; without it, Platt's sigmoid of
 //! the score, which cannot.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::{Context, Result};
 use pomona_eval::EvalConfig;
-use pomona_learn::ModelFile;
-use pomona_pipeline::{recalibrate, CalibrationParams, FrameSource};
+use pomona_pipeline::{recalibrate, CalibrationParams, FrameSource, Pipeline};
 
 use crate::commands::train::{open_frames, operating_point};
-use crate::detection_run::thread_pool;
+use crate::detection_run::{thread_pool, with_model_hint};
 use crate::progress::{counter, progress_bar};
 
 /// Arguments of `pomona calibrate`.
@@ -53,21 +52,17 @@ pub struct CalibrateArgs {
 /// or dataset (naming it), frames that cannot be calibrated on (no detection known to be
 /// false, or scores that do not rank fruit above the rest), an unwritable output.
 pub fn run(args: &CalibrateArgs) -> Result<()> {
-    let pipelines = pomona::pipelines();
-    let pipeline = pomona::find_pipeline(&pipelines, &args.pipeline)?;
-    let model = match &args.model {
-        Some(path) => ModelFile::load(path, pipeline.name())?,
-        None => {
-            let text = pipeline.default_model().with_context(|| {
-                format!(
-                    "pipeline `{}` has no built-in model; pass one with --model MODEL",
-                    pipeline.name()
-                )
-            })?;
-            let label = format!("<built-in model of {}>", pipeline.name());
-            ModelFile::from_json(text, Path::new(&label), pipeline.name())?
-        }
-    };
+    run_with(&pomona::pipelines(), args)
+}
+
+/// Runs `pomona calibrate` choosing the pipeline from `pipelines` (tests pass their own).
+///
+/// # Errors
+/// As [`run`].
+pub fn run_with(pipelines: &[Box<dyn Pipeline>], args: &CalibrateArgs) -> Result<()> {
+    let pipeline = pomona::find_pipeline(pipelines, &args.pipeline)?;
+    let (model, _) =
+        pomona::load_model(pipeline, args.model.as_deref()).map_err(with_model_hint)?;
     let frames = open_frames(pipeline, &args.data)?;
     let params = CalibrationParams {
         cues: args.cues,

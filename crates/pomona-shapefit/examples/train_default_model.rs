@@ -10,14 +10,14 @@
 //! folds (`pomona_pipeline::train_calibrated`). `models/default.json` with colour and
 //! `models/default-depth.json` from the same frames without colour (used for depth-only
 //! datasets). The shipped files hold the classifiers and stage settings this writes; their
-//! calibrations were fitted before the free-space check existed, and refitting them with it was
-//! measured and not adopted (colour model: operating confidence 0.313 → 0.357, the same score
-//! within 0.02, pooled held-out precision / recall 0.807 / 0.858 → 0.799 / 0.858; depth-only
-//! model: 0.466 → 0.257, held-out F1 0.535 → 0.502; docs/results.md, "Normal window scaled to
-//! the depth"). Rerun after changing the pipeline:
+//! calibrations are then replaced by `scripts/calibrate_builtin.sh`, which fits both models'
+//! confidence to the score and the seen surface on frames of other seeds (the depth-only model's
+//! on those frames without colour; docs/results.md, "Confidence from the score and the seen
+//! surface" and "The depth-only model's confidence"). Rerun both after changing the pipeline:
 //!
 //! ```sh
 //! cargo run --release -p pomona-shapefit --example train_default_model -- crates/pomona-shapefit/models
+//! scripts/calibrate_builtin.sh /tmp/pomona-calibrate-builtin shape-fit
 //! ```
 
 use pomona_core::RgbdFrame;

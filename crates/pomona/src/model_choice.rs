@@ -1,6 +1,7 @@
 //! Which model a builder loads ([`crate::DetectorBuilder`], [`crate::TrackerBuilder`]): the
 //! pipeline's built-in one, a file from `pomona train`, or one handed over in memory. One type so
-//! that both builders find, parse and label models the same way.
+//! that both builders — and [`load_model`], for callers that want the model rather than a
+//! detector — find, parse and label models the same way.
 
 use std::path::{Path, PathBuf};
 

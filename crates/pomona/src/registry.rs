@@ -103,4 +103,37 @@ mod tests {
             assert_eq!(pipeline(p.name()).map(|q| q.name()).ok(), Some(p.name()));
         }
     }
+
+    /// Retraining a built-in model writes a calibration by the score alone; the shipped
+    /// 3D detectors' models (colour and depth-only) rate detections by their cues as well, fitted
+    /// by `scripts/calibrate_builtin.sh` — which a retrain must be followed by. `color-contour`
+    /// keeps its sigmoid (docs/results.md, "The depth-only model's confidence").
+    #[test]
+    fn built_in_3d_models_carry_a_cue_calibration() -> Result<(), Error> {
+        use crate::model_choice::built_in;
+        use crate::ModelSource;
+        for p in pipelines() {
+            let models = [
+                p.default_model().map(|m| (m, ModelSource::BuiltIn)),
+                p.default_depth_only_model()
+                    .map(|m| (m, ModelSource::BuiltInDepthOnly)),
+            ];
+            for (text, source) in models.into_iter().flatten() {
+                let (model, source) = built_in(p.name(), text, source)?;
+                let calibration = model.calibration.as_ref();
+                assert!(
+                    calibration.is_some(),
+                    "{source} of {} is uncalibrated",
+                    p.name()
+                );
+                assert_eq!(
+                    calibration.is_some_and(|c| c.cues.is_some()),
+                    p.name() != "color-contour",
+                    "{source} of {}: run scripts/calibrate_builtin.sh after retraining",
+                    p.name()
+                );
+            }
+        }
+        Ok(())
+    }
 }

@@ -122,7 +122,8 @@ pub fn open_frames(pipeline: &dyn Pipeline, data: &[PathBuf]) -> Result<DatasetF
     if frames.is_empty() {
         let dirs: Vec<String> = data.iter().map(|d| d.display().to_string()).collect();
         bail!(
-            "no frame has a truth file (truth/<frame>.json) in {}; training needs labelled frames",
+            "no frame has a truth file (truth/<frame>.json) in {}; training, calibrating and \
+             testing need labelled frames",
             dirs.join(", ")
         );
     }

@@ -39,11 +39,12 @@ const CAMERAS: [(Domain, CameraPreset, usize, u64); 4] = [
 const TRAIN_SEED: u64 = 1;
 /// Posterior threshold of the built-in model's colour mask (see `main`).
 const COLOR_THRESHOLD: f64 = 0.03;
-/// Detection-only settings written into the colour model's file after training (training keeps
-/// the lower cost and no pair test): a round's cylinder wins only below 70 % of its sphere's
-/// cost, and a cylinder whose two halves two spheres fit at under 85 % of its cost gives way to
-/// them (docs/results.md, "Spheres preferred over marginally cheaper cylinders", "Two touching
-/// round fruit under one cylinder"). The depth-only model keeps the training values.
+/// Detection-only settings written into both models' files after training (training keeps the
+/// lower cost and no pair test): a round's cylinder wins only below 70 % of its sphere's cost,
+/// and a cylinder whose two halves two spheres fit at under 85 % of its cost gives way to them
+/// (docs/results.md, "Spheres preferred over marginally cheaper cylinders", "Two touching round
+/// fruit under one cylinder"; for the depth-only model since its cue calibration, "The
+/// depth-only model's confidence").
 const SPHERE_PREFERENCE: f64 = 0.3;
 const ROUND_PAIR_COST_RATIO: f64 = 0.85;
 
@@ -132,13 +133,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         )?;
         eprintln!();
         let mut model = trained.model;
-        if name == "default.json" {
-            let mut stage: ShapeFitStageParams =
-                serde_json::from_value(model.stage_params.clone())?;
-            stage.params.shapes.sphere_preference = SPHERE_PREFERENCE;
-            stage.params.shapes.round_pair_cost_ratio = Some(ROUND_PAIR_COST_RATIO);
-            model.stage_params = serde_json::to_value(&stage)?;
-        }
+        let mut stage: ShapeFitStageParams = serde_json::from_value(model.stage_params.clone())?;
+        stage.params.shapes.sphere_preference = SPHERE_PREFERENCE;
+        stage.params.shapes.round_pair_cost_ratio = Some(ROUND_PAIR_COST_RATIO);
+        model.stage_params = serde_json::to_value(&stage)?;
         let out = dir.join(name);
         model.save(&out)?;
         let calibration = match &model.calibration {

@@ -620,6 +620,24 @@ fn train_with_cues_stores_a_cue_calibration_that_detect_applies() {
     }
 }
 
+/// The test pipeline with a model trained on 8 synthetic frames (seed 31, `dir/train`), written
+/// to `dir/m.json`, and a second dataset `dir/<name>` of `frames` frames (`seed`) to test or
+/// calibrate on: (pipelines, training data, model, other data).
+fn trained_blob_model(
+    dir: &Path,
+    name: &str,
+    frames: u32,
+    seed: u64,
+) -> (Vec<Box<dyn Pipeline>>, PathBuf, PathBuf, PathBuf) {
+    let (train_ds, other_ds) = (dir.join("train"), dir.join(name));
+    synth_dataset(&train_ds, 8, 31);
+    synth_dataset(&other_ds, frames, seed);
+    let pipelines = only(BlobPipeline::colour());
+    let model = dir.join("m.json");
+    train::run_with(&pipelines, &train_args(blob::NAME, &[&train_ds], &model)).unwrap();
+    (pipelines, train_ds, model, other_ds)
+}
+
 fn calibrate_args(model: Option<&Path>, data: &Path, out: &Path) -> calibrate::CalibrateArgs {
     calibrate::CalibrateArgs {
         pipeline: blob::NAME.into(),
@@ -635,12 +653,7 @@ fn calibrate_args(model: Option<&Path>, data: &Path, out: &Path) -> calibrate::C
 #[test]
 fn calibrate_refits_only_the_calibration_and_names_the_missing_model() {
     let dir = tempfile::tempdir().unwrap();
-    let (train_ds, other_ds) = (dir.path().join("train"), dir.path().join("other"));
-    synth_dataset(&train_ds, 8, 31);
-    synth_dataset(&other_ds, 6, 33);
-    let pipelines = only(BlobPipeline::colour());
-    let model = dir.path().join("m.json");
-    train::run_with(&pipelines, &train_args(blob::NAME, &[&train_ds], &model)).unwrap();
+    let (pipelines, _, model, other_ds) = trained_blob_model(dir.path(), "other", 6, 33);
 
     // The test pipeline ships no model: without --model the message says how to get one.
     let refitted = dir.path().join("refit.json");
@@ -674,12 +687,7 @@ fn calibrate_refits_only_the_calibration_and_names_the_missing_model() {
 #[test]
 fn calibrated_model_round_trips_and_sets_the_default_operating_point() {
     let dir = tempfile::tempdir().unwrap();
-    let (train_ds, test_ds) = (dir.path().join("train"), dir.path().join("test"));
-    synth_dataset(&train_ds, 8, 31);
-    synth_dataset(&test_ds, 3, 32);
-    let pipelines = only(BlobPipeline::colour());
-    let model = dir.path().join("m.json");
-    train::run_with(&pipelines, &train_args(blob::NAME, &[&train_ds], &model)).unwrap();
+    let (pipelines, train_ds, model, test_ds) = trained_blob_model(dir.path(), "test", 3, 32);
     let saved = ModelFile::load(&model, blob::NAME).unwrap();
     let calibration = saved
         .calibration

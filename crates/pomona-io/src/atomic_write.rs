@@ -22,7 +22,7 @@ pub(crate) fn write_atomically<E>(
         .prefix(".pomona-")
         .suffix(".partial")
         .tempfile_in(dir)
-        .map_err(|e| io_error(dir, e))?;
+        .map_err(|e| io_error(path, temp_file_error(dir, &e)))?;
     {
         let mut w = BufWriter::new(tmp.as_file_mut());
         fill(&mut w)?;
@@ -40,9 +40,37 @@ pub(crate) fn write_atomically<E>(
     Ok(())
 }
 
+/// Why no temporary file could be made in `dir`, said of the destination (the temporary file's
+/// own name would only confuse): a missing folder, or the system's reason.
+fn temp_file_error(dir: &Path, e: &std::io::Error) -> std::io::Error {
+    let reason = if dir.is_dir() {
+        format!("cannot create a file in {}: {}", dir.display(), e.kind())
+    } else {
+        format!("its folder {} does not exist", dir.display())
+    };
+    std::io::Error::new(e.kind(), reason)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_missing_folder_is_named_with_the_destination() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("missing").join("x.json");
+        let err = write_atomically(
+            &path,
+            |w| w.write_all(b"{}").map_err(|e| e.to_string()),
+            |p, e| format!("{}: {e}", p.display()),
+        )
+        .unwrap_err();
+        assert!(
+            err.contains("x.json") && err.contains("does not exist"),
+            "{err}"
+        );
+        assert!(!err.contains(".partial"), "{err}");
+    }
 
     #[test]
     fn failure_keeps_previous_contents() {

@@ -223,7 +223,7 @@ impl BoxDetector {
             .into_iter()
             .map(|b| Detection {
                 diameter_m: b.diameter_m(),
-                support_points: b.support_px,
+                support_points: b.support_px(),
                 symmetry_plane_normal: b.merged.symmetry_plane_normal,
                 ..Detection::new(b.center(), b.merged.score)
             })

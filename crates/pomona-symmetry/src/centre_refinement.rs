@@ -121,29 +121,45 @@ pub struct CentreRefinement {
     estimator: pomona_consensus::SphereEstimator,
 }
 
+/// An accepted sphere and its support.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FittedSphere {
+    /// The sphere (radius calibrated when the parameters hold a calibration).
+    pub sphere: Sphere,
+    /// Its inliers counted in image pixels (each gathered point stands for the `step × step`
+    /// pixels of the thinned grid it was read on), as shape-fit counts its support.
+    pub support_px: usize,
+}
+
 /// A merged box after refinement: its centre (fitted, or the box centre) and, when the fit was
 /// accepted, the fitted sphere.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RefinedBox {
     /// The merged box (score and symmetry-plane normal unchanged; centre as merged).
     pub merged: ScoredBox,
-    /// The accepted sphere, if any.
-    pub sphere: Option<Sphere>,
-    /// The accepted sphere's inliers counted in image pixels (each gathered point stands for
-    /// the `step × step` pixels of the thinned grid it was read on), as shape-fit counts its
-    /// support; `None` without a sphere.
-    pub support_px: Option<usize>,
+    /// The accepted fit, if any.
+    pub fitted: Option<FittedSphere>,
 }
 
 impl RefinedBox {
+    /// The accepted sphere, if any.
+    pub fn sphere(&self) -> Option<Sphere> {
+        self.fitted.map(|f| f.sphere)
+    }
+
+    /// The accepted sphere's support in image pixels ([`FittedSphere::support_px`]).
+    pub fn support_px(&self) -> Option<usize> {
+        self.fitted.map(|f| f.support_px)
+    }
+
     /// The detection centre: the sphere's when accepted, otherwise the box centre.
     pub fn center(&self) -> Point3<f64> {
-        self.sphere.map_or(self.merged.center, |s| s.center)
+        self.sphere().map_or(self.merged.center, |s| s.center)
     }
 
     /// The diameter, metres, when the sphere was accepted.
     pub fn diameter_m(&self) -> Option<f64> {
-        self.sphere.map(|s| 2.0 * s.radius_m)
+        self.sphere().map(|s| 2.0 * s.radius_m)
     }
 }
 
@@ -248,17 +264,8 @@ impl CentreRefinement {
     }
 
     /// The scene points within `search_radius_m` of `center`, read on an even pixel grid thinned
-    /// to at most about `max_points`.
-    pub fn gather(&self, cloud: &SceneCloud, center: &Point3<f64>) -> Vec<Point3<f64>> {
-        self.gather_thinned(cloud, center).0
-    }
-
-    /// [`Self::gather`] and the pixel step of the grid it read.
-    fn gather_thinned(
-        &self,
-        cloud: &SceneCloud,
-        center: &Point3<f64>,
-    ) -> (Vec<Point3<f64>>, usize) {
+    /// to at most about `max_points`, and the grid's pixel step.
+    fn gather(&self, cloud: &SceneCloud, center: &Point3<f64>) -> (Vec<Point3<f64>>, usize) {
         let cam = &cloud.camera;
         let r = self.params.search_radius_m;
         let Some(px) = cam.project(center).filter(|_| center.z > r) else {
@@ -286,21 +293,10 @@ impl CentreRefinement {
     }
 
     /// The accepted sphere of the points around `center`, its radius calibrated when the
-    /// parameters hold a calibration, or `None` (see the module docs).
-    pub fn fit(&self, cloud: &SceneCloud, center: &Point3<f64>) -> Option<Sphere> {
-        self.fit_with_support(cloud, center)
-            .map(|(sphere, _)| sphere)
-    }
-
-    /// [`Self::fit`] and the accepted sphere's inliers counted in image pixels
-    /// ([`RefinedBox::support_px`]).
-    pub fn fit_with_support(
-        &self,
-        cloud: &SceneCloud,
-        center: &Point3<f64>,
-    ) -> Option<(Sphere, usize)> {
+    /// parameters hold a calibration, with its support, or `None` (see the module docs).
+    pub fn fit(&self, cloud: &SceneCloud, center: &Point3<f64>) -> Option<FittedSphere> {
         let p = &self.params;
-        let (points, step) = self.gather_thinned(cloud, center);
+        let (points, step) = self.gather(cloud, center);
         if points.len() < p.min_inliers {
             return None;
         }
@@ -334,24 +330,23 @@ impl CentreRefinement {
             }
             None => sphere,
         };
-        Some((sphere, inliers * step * step))
+        Some(FittedSphere {
+            sphere,
+            support_px: inliers * step * step,
+        })
     }
 
     /// Every merged box, refined when enabled (boxes in, same order out).
     pub fn refine(&self, cloud: &SceneCloud, merged: &[ScoredBox]) -> Vec<RefinedBox> {
         merged
             .iter()
-            .map(|&b| {
-                let fitted = self
+            .map(|&b| RefinedBox {
+                merged: b,
+                fitted: self
                     .params
                     .enabled
-                    .then(|| self.fit_with_support(cloud, &b.center))
-                    .flatten();
-                RefinedBox {
-                    merged: b,
-                    sphere: fitted.map(|(sphere, _)| sphere),
-                    support_px: fitted.map(|(_, support)| support),
-                }
+                    .then(|| self.fit(cloud, &b.center))
+                    .flatten(),
             })
             .collect()
     }
@@ -415,7 +410,7 @@ mod tests {
         let stage = CentreRefinement::new(CentreRefinementParams::default()).unwrap();
         let off = c + nalgebra::Vector3::new(0.012, -0.015, -0.02);
         let refined = stage.refine(&cloud, &[boxed(off)]);
-        let sphere = refined[0].sphere.expect("fit accepted");
+        let sphere = refined[0].sphere().expect("fit accepted");
         assert!((refined[0].center() - c).norm() < 1e-3, "{sphere:?}");
         assert!((refined[0].diameter_m().unwrap() - 0.08).abs() < 1e-3);
         assert_eq!(refined[0].merged, boxed(off));
@@ -435,7 +430,7 @@ mod tests {
             })
             .unwrap();
             let refined = stage.refine(&cloud, &[boxed(c)]);
-            let support = refined[0].support_px.expect("fit accepted") as f64;
+            let support = refined[0].support_px().expect("fit accepted") as f64;
             assert!(
                 (0.7 * disc_px..=1.3 * disc_px).contains(&support),
                 "max_points {max_points}: {support} against {disc_px:.0}"
@@ -443,7 +438,7 @@ mod tests {
         }
         // No sphere, no support.
         let off = CentreRefinement::new(CentreRefinementParams::disabled()).unwrap();
-        assert_eq!(off.refine(&cloud, &[boxed(c)])[0].support_px, None);
+        assert_eq!(off.refine(&cloud, &[boxed(c)])[0].support_px(), None);
     }
 
     #[test]
@@ -457,7 +452,7 @@ mod tests {
             })
             .unwrap()
         };
-        let free = with(None).fit(&cloud, &c).expect("fit accepted");
+        let free = with(None).fit(&cloud, &c).expect("fit accepted").sphere;
         // Trusting the fit entirely changes nothing.
         let identity = with(Some(RadiusCalibration {
             intercept_m: 0.0,
@@ -465,7 +460,8 @@ mod tests {
             samples: 9,
         }))
         .fit(&cloud, &c)
-        .unwrap();
+        .unwrap()
+        .sphere;
         assert!((identity.center - free.center).norm() < 1e-9);
         assert!((identity.radius_m - free.radius_m).abs() < 1e-12);
         // "Fruit here are 35 mm": the radius is set and the centre moves towards the visible
@@ -476,7 +472,8 @@ mod tests {
             samples: 9,
         }))
         .fit(&cloud, &c)
-        .unwrap();
+        .unwrap()
+        .sphere;
         assert!((shrunk.radius_m - 0.035).abs() < 1e-12);
         let towards_camera = (free.center - shrunk.center).dot(&c.coords.normalize());
         assert!(
@@ -503,7 +500,7 @@ mod tests {
             ..Default::default()
         })
         .unwrap();
-        assert_eq!(off.refine(&cloud, &[boxed(c)])[0].sphere, None);
+        assert_eq!(off.refine(&cloud, &[boxed(c)])[0].sphere(), None);
     }
 
     #[test]

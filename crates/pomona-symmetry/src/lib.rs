@@ -52,7 +52,7 @@ mod viewer_features;
 mod viewer_pose_pipeline;
 
 pub use box_detector::BoxDetector;
-pub use centre_refinement::{CentreRefinement, CentreRefinementParams, RefinedBox};
+pub use centre_refinement::{CentreRefinement, CentreRefinementParams, FittedSphere, RefinedBox};
 pub use error::SymmetryError;
 pub use frame_result::{FrameResult, PruningState};
 pub use highlight::{orientation_map, HighlightDetector, Highlights, PruningMask};

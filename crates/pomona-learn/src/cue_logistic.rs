@@ -202,13 +202,7 @@ impl CueLogistic {
         curvature_patch_radii: f64,
     ) -> Result<Self, LearnError> {
         let bad = |reason: String| Err(LearnError::InvalidSamples(reason));
-        if cues.len() != is_true.len() {
-            return bad(format!(
-                "{} cue sets but {} labels",
-                cues.len(),
-                is_true.len()
-            ));
-        }
+        one_label_each(cues.len(), is_true.len(), "cue sets")?;
         if !(curvature_patch_radii.is_finite() && curvature_patch_radii > 0.0) {
             return Err(LearnError::InvalidParameter {
                 name: "curvature_patch_radii",
@@ -265,6 +259,15 @@ impl CueLogistic {
 }
 
 /// The number of true labels in `is_true`, or an error (`needs`, then the count) unless both
+/// Held-out samples and their labels pair up: `samples` of `what` need as many labels.
+pub(crate) fn one_label_each(samples: usize, labels: usize, what: &str) -> Result<(), LearnError> {
+    if samples == labels {
+        return Ok(());
+    }
+    Err(LearnError::InvalidSamples(format!(
+        "{samples} {what} but {labels} labels"
+    )))
+}
 /// kinds are there: a calibration cannot be fitted to one kind of detection.
 pub(crate) fn true_and_false(is_true: &[bool], needs: &str) -> Result<usize, LearnError> {
     let positives = is_true.iter().filter(|&&t| t).count();

@@ -21,7 +21,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::cue_logistic::true_and_false;
+use crate::cue_logistic::{one_label_each, true_and_false};
 use crate::{CueLogistic, DetectionCues, LearnError, PlattSigmoid};
 
 /// How the operating threshold is chosen on held-out detections.
@@ -209,13 +209,7 @@ fn fit_sigmoid(
     operating_point: OperatingPoint,
 ) -> Result<(PlattSigmoid, usize), LearnError> {
     let bad = |reason: String| Err(LearnError::InvalidSamples(reason));
-    if scores.len() != is_true.len() {
-        return bad(format!(
-            "{} scores but {} labels",
-            scores.len(),
-            is_true.len()
-        ));
-    }
+    one_label_each(scores.len(), is_true.len(), "scores")?;
     if let Some(s) = scores.iter().find(|s| !s.is_finite()) {
         return bad(format!("a held-out score is not finite ({s})"));
     }

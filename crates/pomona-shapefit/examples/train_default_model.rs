@@ -25,7 +25,7 @@ use pomona_pipeline::{
     train_calibrated, CalibrationParams, ChainedFrames, FrameSource, LabelledFrame, PipelineError,
     SyntheticFrames, TrainOptions,
 };
-use pomona_shapefit::{ShapeFitPipeline, ShapeFitStageParams};
+use pomona_shapefit::{OversizedSplit, ShapeFitPipeline, ShapeFitStageParams};
 use pomona_synth::{CameraPreset, Domain};
 
 /// Frames rendered for training per domain and camera; seeds 1000–1003 are reserved for the default models
@@ -106,6 +106,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     // the depth").
     pipeline.params.normals.reference_depth_m = None;
     pipeline.params.normals.grow_only = false;
+    // Splitting oversized clusters is a detection-only setting of the built-in models too (their
+    // classifiers were trained before it existed; on our generator's frames it changes almost no
+    // cluster), written with the trained size prior's largest radius (docs/results.md,
+    // "Clusters the size of the canopy").
+    let split = pipeline.params.regions.split_oversized.take();
     let options = TrainOptions {
         seed: TRAIN_SEED,
         ..TrainOptions::default()
@@ -136,6 +141,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let mut stage: ShapeFitStageParams = serde_json::from_value(model.stage_params.clone())?;
         stage.params.shapes.sphere_preference = SPHERE_PREFERENCE;
         stage.params.shapes.round_pair_cost_ratio = Some(ROUND_PAIR_COST_RATIO);
+        let (sphere, cylinder) = (
+            stage.params.shapes.sphere.radius_range_m,
+            stage.params.shapes.cylinder.radius_range_m,
+        );
+        stage.params.regions.split_oversized = split.map(|s| OversizedSplit {
+            radius_m: sphere.1.max(cylinder.1),
+            ..s
+        });
         model.stage_params = serde_json::to_value(&stage)?;
         let out = dir.join(name);
         model.save(&out)?;

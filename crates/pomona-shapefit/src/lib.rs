@@ -33,6 +33,7 @@ mod curvature_check;
 mod depth_proposals;
 mod gpcd;
 mod negative_selection;
+mod oversized_split;
 mod params;
 mod piece_joining;
 mod pipeline;
@@ -47,6 +48,7 @@ pub use curvature_check::CurvatureCheck;
 pub use depth_proposals::DepthProposalParams;
 pub use gpcd::{gpcd, GpcdParams, HueStatistics, GPCD_LEN};
 pub use negative_selection::MINING_MIN_SCORE;
+pub use oversized_split::OversizedSplit;
 pub use params::{
     CoaxialMergeParams, LabelRule, ShapeFitParams, BUILT_IN_DOUBLE_CURVATURE_PATCH_RADII,
 };

@@ -12,8 +12,11 @@ use serde::{Deserialize, Serialize};
 
 use crate::{
     ClusterLattice, ColorBayesParams, CurvatureCheck, DepthProposalParams, GpcdParams,
-    RadiusCalibration, RegionGrowingParams, SizePrior, SizePriorMode,
+    OversizedSplit, RadiusCalibration, RegionGrowingParams, SizePrior, SizePriorMode,
 };
+
+/// The largest sphere radius, metres, of untrained parameters (training's size prior replaces it).
+const DEFAULT_MAX_RADIUS_M: f64 = 0.08;
 
 /// Depth, metres, below which new models grow the normal window (`normals.reference_depth_m`):
 /// where seed 002's 5×5 Kinect v2 window spans the patch it was designed for.
@@ -202,6 +205,21 @@ impl ShapeFitParams {
             .or_else(|| positive("regions.max_step_m", regions.max_step_m))
             .or_else(|| positive("regions.reference_focal_px", regions.reference_focal_px))
             .or_else(|| {
+                regions.split_oversized.and_then(|split| {
+                    positive("regions.split_oversized.radius_m", split.radius_m)
+                        .or_else(|| positive("regions.split_oversized.max_discs", split.max_discs))
+                        .or_else(|| {
+                            (!(split.min_kept_fraction > 0.0 && split.min_kept_fraction <= 1.0))
+                                .then(|| {
+                                    (
+                                        "regions.split_oversized.min_kept_fraction",
+                                        format!("{} must lie in (0, 1]", split.min_kept_fraction),
+                                    )
+                                })
+                        })
+                })
+            })
+            .or_else(|| {
                 regions.min_fruit_area.and_then(|a| {
                     positive("regions.min_fruit_area.radius_m", a.radius_m).or_else(|| {
                         (!(a.fraction > 0.0 && a.fraction <= 1.0)).then(|| {
@@ -299,7 +317,13 @@ impl Default for ShapeFitParams {
         Self {
             color: ColorBayesParams::default(),
             max_depth_m: 1.5,
-            regions: RegionGrowingParams::default(),
+            // Clusters larger than any fruit split where their surface separates (training's
+            // size prior sets the largest radius; docs/results.md, "Clusters the size of the
+            // canopy").
+            regions: RegionGrowingParams {
+                split_oversized: Some(OversizedSplit::for_radius(DEFAULT_MAX_RADIUS_M)),
+                ..RegionGrowingParams::default()
+            },
             // Scaled to each camera's focal length, sampled sparsely on high-resolution ones
             // (`keep_sample_count`, see docs/results.md "Window normals at sensor resolution"),
             // and grown for surfaces nearer than 1 m ("Normal window scaled to the depth").
@@ -446,7 +470,7 @@ fn default_shapes() -> ShapeExtractionParams {
         },
         cylinder_msac: Some(msac),
         sphere: SphereEstimatorParams {
-            radius_range_m: (0.015, 0.08),
+            radius_range_m: (0.015, DEFAULT_MAX_RADIUS_M),
             ..SphereEstimatorParams::default()
         },
         cylinder: CylinderEstimatorParams::default(),
@@ -693,7 +717,41 @@ mod tests {
             }),
             Some("depth_proposals.free_space.see_through_disc_fraction".to_owned())
         );
+        assert_eq!(
+            named(|p| {
+                if let Some(split) = p.regions.split_oversized.as_mut() {
+                    split.min_kept_fraction = 1.5;
+                }
+            }),
+            Some("regions.split_oversized.min_kept_fraction".to_owned())
+        );
+        assert_eq!(
+            named(|p| {
+                if let Some(split) = p.regions.split_oversized.as_mut() {
+                    split.radius_m = 0.0;
+                }
+            }),
+            Some("regions.split_oversized.radius_m".to_owned())
+        );
         // Merging off (0 or less) is a setting, not an error.
         assert_eq!(named(|p| p.merge_radius_m = -1.0), None);
+    }
+
+    #[test]
+    fn new_models_split_oversized_clusters_and_older_files_do_not() {
+        let fresh = ShapeFitParams::default();
+        assert!(fresh.regions.split_oversized.is_some());
+        let mut json = serde_json::to_value(&fresh).unwrap();
+        let regions = json["regions"].as_object_mut().unwrap();
+        assert!(regions.remove("split_oversized").is_some());
+        let old: ShapeFitParams = serde_json::from_value(json).unwrap();
+        assert_eq!(old.regions.split_oversized, None);
+        assert_eq!(
+            ShapeFitParams {
+                regions: fresh.regions,
+                ..old
+            },
+            fresh
+        );
     }
 }

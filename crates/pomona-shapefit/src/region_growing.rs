@@ -7,6 +7,8 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::OversizedSplit;
+
 /// Parameters of region growing.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct RegionGrowingParams {
@@ -34,6 +36,11 @@ pub struct RegionGrowingParams {
     /// rejects whole apples at 1.9 m. Absent in older model files (then `None`).
     #[serde(default)]
     pub min_fruit_area: Option<MinFruitArea>,
+    /// Clusters larger than any fruit grown again with a smaller step where their surface
+    /// separates (not in the paper; see [`OversizedSplit`]). Absent in older model files (then
+    /// off).
+    #[serde(default)]
+    pub split_oversized: Option<OversizedSplit>,
 }
 
 /// The smallest cluster as a fraction of the image area of the smallest expected fruit.
@@ -64,6 +71,7 @@ impl Default for RegionGrowingParams {
             reference_focal_px: 365.0,
             rim_px: 0,
             min_fruit_area: None,
+            split_oversized: None,
         }
     }
 }
@@ -129,6 +137,9 @@ pub fn grow_regions(
         })
         .map(|(cluster, _)| cluster)
         .collect();
+    if let Some(split) = &params.split_oversized {
+        clusters = split.apply(width, height, fx_px, depth_m, clusters, params);
+    }
     if params.rim_px > 0 {
         for cluster in &mut clusters {
             *cluster = erode(width, height, cluster, params.rim_px);

@@ -25,7 +25,9 @@
 //!   curved surface ([`crate::CurvatureCheck`] from that depth on);
 //! * **minimum cluster**: a cluster must cover [`MIN_VISIBLE_FRACTION`] (15 %) of the image
 //!   area of the smallest expected fruit at the cluster's own depth
-//!   ([`crate::MinFruitArea`]), instead of a fixed pixel count.
+//!   ([`crate::MinFruitArea`]), instead of a fixed pixel count;
+//! * **largest cluster**: when oversized clusters are split ([`crate::OversizedSplit`]), the
+//!   largest expected fruit is the upper end of the widest radius range.
 //!
 //! Only annotated fruit with a diameter and a 3D centre count; kinds listed in
 //! `reference_kinds` (default `reference_ball`: the white calibration spheres annotated beside
@@ -182,6 +184,19 @@ impl SizePrior {
         } else {
             params.max_depth_m = fruit_depth_m;
         }
+        let largest = [self.sphere_range_m(), self.cylinder_range_m()]
+            .into_iter()
+            .flatten()
+            .map(|r| r.1)
+            .fold(0.0, f64::max);
+        if let Some(split) = params
+            .regions
+            .split_oversized
+            .as_mut()
+            .filter(|_| largest > 0.0)
+        {
+            split.radius_m = largest;
+        }
         let smallest = [self.sphere_range_m(), self.cylinder_range_m()]
             .into_iter()
             .flatten()
@@ -243,7 +258,17 @@ mod tests {
         let area = params.regions.min_fruit_area.unwrap();
         assert!((area.radius_m - 0.027).abs() < 1e-12);
         assert_eq!(area.fraction, MIN_VISIBLE_FRACTION);
+        // The largest training fruit, with the margin (only spheres are fitted here).
+        let split = params.regions.split_oversized.unwrap();
+        assert!((split.radius_m - 0.044).abs() < 1e-12);
         assert_eq!(params.learnt_size_prior, Some(prior));
+        // A model without the split keeps none.
+        let mut without = ShapeFitParams::default();
+        without.regions.split_oversized = None;
+        SizePrior::from_truth(&fruits, &refs)
+            .unwrap()
+            .apply(&mut without);
+        assert_eq!(without.regions.split_oversized, None);
     }
 
     #[test]

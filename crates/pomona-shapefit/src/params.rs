@@ -12,11 +12,8 @@ use serde::{Deserialize, Serialize};
 
 use crate::{
     ClusterLattice, ColorBayesParams, CurvatureCheck, DepthProposalParams, GpcdParams,
-    OversizedSplit, RadiusCalibration, RegionGrowingParams, SizePrior, SizePriorMode,
+    RadiusCalibration, RegionGrowingParams, SizePrior, SizePriorMode,
 };
-
-/// The largest sphere radius, metres, of untrained parameters (training's size prior replaces it).
-const DEFAULT_MAX_RADIUS_M: f64 = 0.08;
 
 /// Depth, metres, below which new models grow the normal window (`normals.reference_depth_m`):
 /// where seed 002's 5×5 Kinect v2 window spans the patch it was designed for.
@@ -317,13 +314,7 @@ impl Default for ShapeFitParams {
         Self {
             color: ColorBayesParams::default(),
             max_depth_m: 1.5,
-            // Clusters larger than any fruit split where their surface separates (training's
-            // size prior sets the largest radius; docs/results.md, "Clusters the size of the
-            // canopy").
-            regions: RegionGrowingParams {
-                split_oversized: Some(OversizedSplit::for_radius(DEFAULT_MAX_RADIUS_M)),
-                ..RegionGrowingParams::default()
-            },
+            regions: RegionGrowingParams::default(),
             // Scaled to each camera's focal length, sampled sparsely on high-resolution ones
             // (`keep_sample_count`, see docs/results.md "Window normals at sensor resolution"),
             // and grown for surfaces nearer than 1 m ("Normal window scaled to the depth").
@@ -470,7 +461,7 @@ fn default_shapes() -> ShapeExtractionParams {
         },
         cylinder_msac: Some(msac),
         sphere: SphereEstimatorParams {
-            radius_range_m: (0.015, DEFAULT_MAX_RADIUS_M),
+            radius_range_m: (0.015, 0.08),
             ..SphereEstimatorParams::default()
         },
         cylinder: CylinderEstimatorParams::default(),
@@ -493,6 +484,7 @@ fn default_shapes() -> ShapeExtractionParams {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::OversizedSplit;
 
     #[test]
     fn shape_choice_is_kebab_case_and_old_names_still_load() {
@@ -719,18 +711,15 @@ mod tests {
         );
         assert_eq!(
             named(|p| {
-                if let Some(split) = p.regions.split_oversized.as_mut() {
-                    split.min_kept_fraction = 1.5;
-                }
+                p.regions.split_oversized = Some(OversizedSplit {
+                    min_kept_fraction: 1.5,
+                    ..OversizedSplit::for_radius(0.06)
+                })
             }),
             Some("regions.split_oversized.min_kept_fraction".to_owned())
         );
         assert_eq!(
-            named(|p| {
-                if let Some(split) = p.regions.split_oversized.as_mut() {
-                    split.radius_m = 0.0;
-                }
-            }),
+            named(|p| p.regions.split_oversized = Some(OversizedSplit::for_radius(0.0))),
             Some("regions.split_oversized.radius_m".to_owned())
         );
         // Merging off (0 or less) is a setting, not an error.
@@ -738,20 +727,13 @@ mod tests {
     }
 
     #[test]
-    fn new_models_split_oversized_clusters_and_older_files_do_not() {
+    fn oversized_clusters_are_split_only_when_a_model_says_so() {
         let fresh = ShapeFitParams::default();
-        assert!(fresh.regions.split_oversized.is_some());
+        assert_eq!(fresh.regions.split_oversized, None);
         let mut json = serde_json::to_value(&fresh).unwrap();
         let regions = json["regions"].as_object_mut().unwrap();
         assert!(regions.remove("split_oversized").is_some());
         let old: ShapeFitParams = serde_json::from_value(json).unwrap();
-        assert_eq!(old.regions.split_oversized, None);
-        assert_eq!(
-            ShapeFitParams {
-                regions: fresh.regions,
-                ..old
-            },
-            fresh
-        );
+        assert_eq!(old, fresh);
     }
 }

@@ -26,8 +26,8 @@
 //! * **minimum cluster**: a cluster must cover [`MIN_VISIBLE_FRACTION`] (15 %) of the image
 //!   area of the smallest expected fruit at the cluster's own depth
 //!   ([`crate::MinFruitArea`]), instead of a fixed pixel count;
-//! * **largest cluster**: when oversized clusters are split ([`crate::OversizedSplit`]), the
-//!   largest expected fruit is the upper end of the widest radius range.
+//! * **largest cluster**: when oversized clusters are split ([`crate::OversizedSplit`], opt-in),
+//!   the largest expected fruit is the upper end of the widest radius range.
 //!
 //! Only annotated fruit with a diameter and a 3D centre count; kinds listed in
 //! `reference_kinds` (default `reference_ball`: the white calibration spheres annotated beside
@@ -258,17 +258,18 @@ mod tests {
         let area = params.regions.min_fruit_area.unwrap();
         assert!((area.radius_m - 0.027).abs() < 1e-12);
         assert_eq!(area.fraction, MIN_VISIBLE_FRACTION);
-        // The largest training fruit, with the margin (only spheres are fitted here).
-        let split = params.regions.split_oversized.unwrap();
-        assert!((split.radius_m - 0.044).abs() < 1e-12);
+        // Oversized clusters are split only when asked for.
+        assert_eq!(params.regions.split_oversized, None);
         assert_eq!(params.learnt_size_prior, Some(prior));
-        // A model without the split keeps none.
-        let mut without = ShapeFitParams::default();
-        without.regions.split_oversized = None;
+        // Asked for, the largest training fruit, with the margin, is the limit (only spheres
+        // are fitted here).
+        let mut split = ShapeFitParams::default();
+        split.regions.split_oversized = Some(crate::OversizedSplit::for_radius(0.08));
         SizePrior::from_truth(&fruits, &refs)
             .unwrap()
-            .apply(&mut without);
-        assert_eq!(without.regions.split_oversized, None);
+            .apply(&mut split);
+        let radius_m = split.regions.split_oversized.map(|s| s.radius_m);
+        assert!((radius_m.unwrap() - 0.044).abs() < 1e-12);
     }
 
     #[test]

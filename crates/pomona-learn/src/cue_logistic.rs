@@ -258,7 +258,6 @@ impl CueLogistic {
     }
 }
 
-/// The number of true labels in `is_true`, or an error (`needs`, then the count) unless both
 /// Held-out samples and their labels pair up: `samples` of `what` need as many labels.
 pub(crate) fn one_label_each(samples: usize, labels: usize, what: &str) -> Result<(), LearnError> {
     if samples == labels {
@@ -268,6 +267,8 @@ pub(crate) fn one_label_each(samples: usize, labels: usize, what: &str) -> Resul
         "{samples} {what} but {labels} labels"
     )))
 }
+
+/// The number of true labels in `is_true`, or an error (`needs`, then the count) unless both
 /// kinds are there: a calibration cannot be fitted to one kind of detection.
 pub(crate) fn true_and_false(is_true: &[bool], needs: &str) -> Result<usize, LearnError> {
     let positives = is_true.iter().filter(|&&t| t).count();

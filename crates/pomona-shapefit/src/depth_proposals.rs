@@ -149,11 +149,9 @@ impl DepthProposalParams {
         fx_px: f64,
         (min_radius_m, max_radius_m): (f64, f64),
     ) -> bool {
-        let z_m = crate::region_growing::median_depth(depth_m, cluster);
-        if !(z_m.is_finite() && z_m > 0.0) {
+        let Some(disc_px) = crate::region_growing::disc_area_px(depth_m, fx_px, cluster) else {
             return false;
-        }
-        let disc_px = |r_m: f64| std::f64::consts::PI * (r_m * fx_px / z_m).powi(2);
+        };
         let n = cluster.len() as f64;
         n >= self.min_fruit_discs * disc_px(min_radius_m)
             && n <= self.max_fruit_discs * disc_px(max_radius_m)

@@ -19,7 +19,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::region_growing::{grow_regions_over, median_depth, RegionGrowingParams};
+use crate::region_growing::{disc_area_px, grow_regions_over, RegionGrowingParams};
 
 /// When and how far oversized clusters are split.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -50,12 +50,8 @@ impl OversizedSplit {
     /// Whether `cluster` covers more than `max_discs` discs of `radius_m` at its median depth
     /// (`depth_m`, focal length `fx_px`).
     fn oversized(&self, cluster: &[usize], depth_m: &[f32], fx_px: f64) -> bool {
-        let z_m = median_depth(depth_m, cluster);
-        if !(z_m.is_finite() && z_m > 0.0) {
-            return false;
-        }
-        let disc_px = std::f64::consts::PI * (self.radius_m * fx_px / z_m).powi(2);
-        cluster.len() as f64 > self.max_discs * disc_px
+        disc_area_px(depth_m, fx_px, cluster)
+            .is_some_and(|disc_px| cluster.len() as f64 > self.max_discs * disc_px(self.radius_m))
     }
 
     /// `clusters` (grown with `params`) with every oversized one replaced by its pieces where

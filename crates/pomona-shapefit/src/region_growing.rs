@@ -300,6 +300,20 @@ fn connected_components(
 }
 
 /// Median depth of the pixels of `cluster` (all finite); `NaN` for an empty cluster.
+/// The image area, pixels, of a disc of radius `r` metres at `cluster`'s median depth
+/// (`depth_m`, focal length `fx_px`): `π (r · fx_px / z)²`, as a function of `r`; `None` when
+/// the median depth is not a positive number. What the size tests on whole clusters compare
+/// their pixel counts with.
+pub(crate) fn disc_area_px(
+    depth_m: &[f32],
+    fx_px: f64,
+    cluster: &[usize],
+) -> Option<impl Fn(f64) -> f64> {
+    let z_m = median_depth(depth_m, cluster);
+    (z_m.is_finite() && z_m > 0.0)
+        .then_some(move |r_m: f64| std::f64::consts::PI * (r_m * fx_px / z_m).powi(2))
+}
+
 pub(crate) fn median_depth(depth_m: &[f32], cluster: &[usize]) -> f64 {
     let mut z: Vec<f32> = cluster.iter().map(|&i| depth_m[i]).collect();
     let mid = z.len() / 2;

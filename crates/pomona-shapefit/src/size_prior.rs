@@ -184,11 +184,8 @@ impl SizePrior {
         } else {
             params.max_depth_m = fruit_depth_m;
         }
-        let largest = [self.sphere_range_m(), self.cylinder_range_m()]
-            .into_iter()
-            .flatten()
-            .map(|r| r.1)
-            .fold(0.0, f64::max);
+        let ranges = [self.sphere_range_m(), self.cylinder_range_m()];
+        let largest = ranges.iter().flatten().map(|r| r.1).fold(0.0, f64::max);
         if let Some(split) = params
             .regions
             .split_oversized
@@ -197,8 +194,8 @@ impl SizePrior {
         {
             split.radius_m = largest;
         }
-        let smallest = [self.sphere_range_m(), self.cylinder_range_m()]
-            .into_iter()
+        let smallest = ranges
+            .iter()
             .flatten()
             .map(|r| r.0)
             .fold(f64::INFINITY, f64::min);

@@ -7,6 +7,11 @@
 //! typo is an error that lists the keys there are, and the value must have the same JSON type as
 //! the one it replaces (`null` may be replaced by anything, and may replace anything: it switches
 //! an optional parameter off, and the typed parameters refuse it where it is required).
+//!
+//! An object given for a group of parameters that is on updates the members it names, each as
+//! its own override (`split={"radius_m":0.05}` is `split.radius_m=0.05`); given for a group that
+//! is off (`null`), it is the whole group. So one override switches a group on, or retunes it,
+//! in two models of which only one has it on (a pipeline's colour and depth-only built-ins).
 
 use std::str::FromStr;
 
@@ -146,6 +151,21 @@ pub fn apply_overrides(
     what: &str,
 ) -> Result<(), Error> {
     for o in overrides {
+        // An object for a group that is on: each member as its own override.
+        if let Value::Object(members) = &o.value {
+            let mut group = Some(&*params);
+            for segment in o.key.split('.') {
+                group = group.and_then(|v| v.get(segment));
+            }
+            if group.is_some_and(Value::is_object) {
+                let each: Vec<ParamOverride> = members
+                    .iter()
+                    .map(|(k, v)| ParamOverride::new(format!("{}.{k}", o.key), v.clone()))
+                    .collect();
+                apply_overrides(params, &each, what)?;
+                continue;
+            }
+        }
         let keys = settable_keys(params);
         let mut slot = Some(&mut *params);
         for segment in o.key.split('.') {
@@ -153,7 +173,8 @@ pub fn apply_overrides(
                 .and_then(|v| v.as_object_mut())
                 .and_then(|m| m.get_mut(segment));
         }
-        // A group of parameters is not set whole, only switched off (`null`), when optional.
+        // A group of parameters that is on is not replaced by a value that is not an object
+        // (objects were merged above), only switched off (`null`), when optional.
         let Some(slot) = slot.filter(|s| !s.is_object() || o.value.is_null()) else {
             let known = if keys.is_empty() {
                 "it has no stage parameters".to_owned()
@@ -238,5 +259,31 @@ mod tests {
         // A group is switched off whole (an optional stage), never replaced by a value.
         apply_overrides(&mut p, &[parse("msac=null")], "m").unwrap();
         assert_eq!(p["msac"], Value::Null);
+    }
+
+    #[test]
+    fn an_object_updates_a_group_that_is_on_and_sets_one_that_is_off() {
+        let on = json!({"split": {"radius_m": 0.06, "max_discs": 2.0}, "x": 1});
+        let off = json!({"split": null, "x": 1});
+        let whole = parse(r#"split={"radius_m": 0.05, "max_discs": 3.0}"#);
+        for start in [&on, &off] {
+            let mut p = start.clone();
+            apply_overrides(&mut p, std::slice::from_ref(&whole), "m").unwrap();
+            assert_eq!(p["split"], json!({"radius_m": 0.05, "max_discs": 3.0}));
+        }
+        // On, only the members named change; each must exist and keep its type.
+        let mut p = on.clone();
+        apply_overrides(&mut p, &[parse(r#"split={"radius_m": 0.04}"#)], "m").unwrap();
+        assert_eq!(p["split"], json!({"radius_m": 0.04, "max_discs": 2.0}));
+        let typo = apply_overrides(&mut p, &[parse(r#"split={"radius": 0.04}"#)], "m");
+        assert!(
+            matches!(&typo, Err(Error::UnknownParameter { key, .. }) if key == "split.radius"),
+            "{typo:?}"
+        );
+        let wrong = apply_overrides(&mut p, &[parse(r#"split={"max_discs": "two"}"#)], "m");
+        assert!(
+            matches!(wrong, Err(Error::ParameterType { .. })),
+            "{wrong:?}"
+        );
     }
 }

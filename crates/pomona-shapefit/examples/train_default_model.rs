@@ -136,20 +136,18 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let mut stage: ShapeFitStageParams = serde_json::from_value(model.stage_params.clone())?;
         stage.params.shapes.sphere_preference = SPHERE_PREFERENCE;
         stage.params.shapes.round_pair_cost_ratio = Some(ROUND_PAIR_COST_RATIO);
-        // The depth-only model also splits oversized clusters, a detection-only setting (its
-        // classifier was trained before the split existed; on our generator's frames it changes
-        // almost no cluster, on real 1920×1080 frames it separates fruit from the canopy), with
-        // its largest fitted radius. The colour model does not: there it found 3 more of 78 real
-        // apples for about half as much time again (docs/results.md, "Clusters the size of the
-        // canopy").
-        if name == "default-depth.json" {
-            let (sphere, cylinder) = (
-                stage.params.shapes.sphere.radius_range_m,
-                stage.params.shapes.cylinder.radius_range_m,
-            );
-            stage.params.regions.split_oversized =
-                Some(OversizedSplit::for_radius(sphere.1.max(cylinder.1)));
-        }
+        // Both models split oversized clusters, a detection-only setting (their classifiers
+        // were trained before the split existed; on our generator's frames it changes almost no
+        // cluster, on real 1920×1080 frames it separates fruit from the canopy), with their
+        // largest fitted radius. In the colour model it splits only the colour mask's clusters,
+        // never the depth proposals (docs/results.md, "Clusters the size of the canopy" and
+        // "The split on the colour path only").
+        let (sphere, cylinder) = (
+            stage.params.shapes.sphere.radius_range_m,
+            stage.params.shapes.cylinder.radius_range_m,
+        );
+        stage.params.regions.split_oversized =
+            Some(OversizedSplit::for_radius(sphere.1.max(cylinder.1)));
         model.stage_params = serde_json::to_value(&stage)?;
         let out = dir.join(name);
         model.save(&out)?;

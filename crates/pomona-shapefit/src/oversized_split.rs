@@ -16,6 +16,17 @@
 //! When they do not, halving the step shattered a noisy surface, and the cluster is kept as it
 //! was. Clusters of fruit size are never touched, so on the cameras the step was chosen for
 //! the clusters that hold fruit stay what they were.
+//!
+//! # Where it runs
+//! On the clusters the classifier's candidates come from: the colour mask's, or, in a
+//! depth-only model, those of every pixel in depth range. Not on a colour model's depth
+//! proposals (every pixel in range, for fruit the mask misses): split there, the canopy turns
+//! into many more fruit-sized proposals, each screened and fitted, for no fruit more. Measured
+//! on the real `ak-apples` frames with the built-in colour model (docs/results.md, "The split
+//! on the colour path only"): split in both places 50 → 53 tagged apples at the operating
+//! confidence and 10 → 13 other detections, at +25–75 % time a frame; in the colour path only,
+//! the same 53 apples with 10 others, at the time of no split; in the proposals only, no apple
+//! more.
 
 use serde::{Deserialize, Serialize};
 

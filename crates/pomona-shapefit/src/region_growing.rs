@@ -37,8 +37,8 @@ pub struct RegionGrowingParams {
     #[serde(default)]
     pub min_fruit_area: Option<MinFruitArea>,
     /// Clusters larger than any fruit grown again with a smaller step where their surface
-    /// separates (not in the paper; see [`OversizedSplit`]). Absent in older model files (then
-    /// off).
+    /// separates (not in the paper; see [`OversizedSplit`]; never in a colour model's depth
+    /// proposals). Absent in older model files (then off).
     #[serde(default)]
     pub split_oversized: Option<OversizedSplit>,
 }

@@ -148,7 +148,13 @@ impl DepthProposalStage {
         Self {
             params: p.depth_proposals,
             in_range: ColorMaskStage::depth_range(p.max_depth_m),
-            regions: RegionGrowingStage { params: p.regions },
+            // Never split here: see `OversizedSplit` ("Where it runs").
+            regions: RegionGrowingStage {
+                params: RegionGrowingParams {
+                    split_oversized: None,
+                    ..p.regions
+                },
+            },
             radius_range_m,
             joining: p
                 .depth_proposals
@@ -700,6 +706,24 @@ mod tests {
         assert_eq!(regrown, missed_pixels);
         let off = stage(false).run((&frame, color_mask.as_slice())).unwrap();
         assert_eq!(off, DepthProposals::default());
+    }
+
+    #[test]
+    fn the_depth_proposals_never_split_oversized_clusters() {
+        // A model that splits: its colour path does, its proposals over every pixel in range
+        // grow with the same step but leave the canopy whole (see `OversizedSplit`).
+        let mut p = ShapeFitParams::default();
+        p.regions.split_oversized = Some(crate::OversizedSplit::for_radius(0.06));
+        let proposals = DepthProposalStage::of_params(&p);
+        assert_eq!(proposals.regions.params.split_oversized, None);
+        assert_eq!(
+            proposals.regions.params,
+            RegionGrowingParams {
+                split_oversized: None,
+                ..p.regions
+            }
+        );
+        assert!(p.regions.split_oversized.is_some());
     }
 
     #[test]

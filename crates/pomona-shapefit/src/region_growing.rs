@@ -299,7 +299,6 @@ fn connected_components(
     }
 }
 
-/// Median depth of the pixels of `cluster` (all finite); `NaN` for an empty cluster.
 /// The image area, pixels, of a disc of radius `r` metres at `cluster`'s median depth
 /// (`depth_m`, focal length `fx_px`): `π (r · fx_px / z)²`, as a function of `r`; `None` when
 /// the median depth is not a positive number. What the size tests on whole clusters compare
@@ -314,6 +313,7 @@ pub(crate) fn disc_area_px(
         .then_some(move |r_m: f64| std::f64::consts::PI * (r_m * fx_px / z_m).powi(2))
 }
 
+/// Median depth of the pixels of `cluster` (all finite); `NaN` for an empty cluster.
 pub(crate) fn median_depth(depth_m: &[f32], cluster: &[usize]) -> f64 {
     let mut z: Vec<f32> = cluster.iter().map(|&i| depth_m[i]).collect();
     let mid = z.len() / 2;

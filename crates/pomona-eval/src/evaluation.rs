@@ -8,8 +8,11 @@ use std::collections::BTreeMap;
 use pomona_core::{median, Detection, FrameTruth, PinholeCamera};
 
 use crate::frame_matching::ranking_of;
-use crate::report::{CenterError, DiameterError, FrameReport};
-use crate::{match_frame, DetectionOutcome, EvalConfig, EvalError, EvalReport, PrCurve};
+use crate::report::{CenterError, DiameterError, FrameReport, MissedFruit, ScoreAndConfidence};
+use crate::{
+    match_frame, DetectionOutcome, EvalConfig, EvalError, EvalReport, FrameMatch, PrCurve,
+    TruthStatus,
+};
 
 /// One frame to evaluate.
 #[derive(Debug, Clone, PartialEq)]
@@ -56,6 +59,39 @@ pub fn evaluate(
         tally.add(input, camera, config);
     }
     Ok(tally.into_report(config))
+}
+
+/// The counted fruit of `input` that no detection at the threshold found in `m`.
+fn missed_fruit(input: &FrameInput, m: &FrameMatch, config: &EvalConfig) -> Vec<MissedFruit> {
+    let dets = &input.detections;
+    input
+        .truth
+        .fruits
+        .iter()
+        .zip(&m.truth)
+        .filter_map(|(fruit, status)| {
+            let below_threshold = match *status {
+                TruthStatus::Ignored => return None,
+                TruthStatus::Found { by } if config.keeps(&dets[by]) => return None,
+                TruthStatus::Found { by } => Some(ScoreAndConfidence {
+                    score: dets[by].score,
+                    confidence: dets[by].confidence,
+                }),
+                TruthStatus::Missed => None,
+            };
+            let nearest_detection_m = fruit.center_m.and_then(|c| {
+                dets.iter()
+                    .map(|d| (d.center_m - c).norm())
+                    .min_by(f64::total_cmp)
+            });
+            Some(MissedFruit {
+                id: fruit.id.clone(),
+                kind: fruit.kind.clone(),
+                below_threshold,
+                nearest_detection_m,
+            })
+        })
+        .collect()
 }
 
 /// Counts over frames, before they become a report.
@@ -127,6 +163,7 @@ impl Tally {
                 None
             },
             recall: ratio(tp, counted),
+            missed: missed_fruit(input, &m, config),
         });
     }
 

@@ -37,5 +37,7 @@ pub use evaluation::{evaluate, FrameInput};
 pub use frame_matching::{match_frame, ranking_values, DetectionOutcome, FrameMatch, TruthStatus};
 pub use pr_curve::{PrCurve, PrPoint};
 pub use pr_plot::write_pr_plot;
-pub use report::{CenterError, DiameterError, EvalReport, FrameReport};
+pub use report::{
+    CenterError, DiameterError, EvalReport, FrameReport, MissedFruit, ScoreAndConfidence,
+};
 pub use split_summary::{MeanSd, SplitSummary};

@@ -51,6 +51,36 @@ pub struct FrameReport {
     pub precision: Option<f64>,
     /// Recall at the threshold (`null` without counted fruit).
     pub recall: Option<f64>,
+    /// The counted truth fruit not found at the threshold, in truth order (absent in reports
+    /// written before it existed).
+    #[serde(default)]
+    pub missed: Vec<MissedFruit>,
+}
+
+/// A counted truth fruit that no detection at the threshold found, and how near the detector
+/// came: whether one of its detections below the threshold found it (a ranking miss, which a
+/// lower threshold recovers) or none did (a detection miss), and how far the nearest detection
+/// of any score lies from it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct MissedFruit {
+    /// The fruit's truth id.
+    pub id: String,
+    /// Its kind.
+    pub kind: String,
+    /// The detection below the threshold that matched it, if any.
+    pub below_threshold: Option<ScoreAndConfidence>,
+    /// Distance, metres, from its truth centre to the nearest detection centre of any score
+    /// (`null` without a 3D truth centre or without detections).
+    pub nearest_detection_m: Option<f64>,
+}
+
+/// A detection's classifier score and calibrated confidence.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct ScoreAndConfidence {
+    /// Raw classifier score.
+    pub score: f64,
+    /// Calibrated confidence, when the model has one.
+    pub confidence: Option<f64>,
 }
 
 /// The whole evaluation.
@@ -165,6 +195,14 @@ impl EvalReport {
                 "diameter error mean abs",
                 fmt_mm(self.diameter_error_m.mean_abs),
             ),
+            ("missed: never detected / only below the threshold", {
+                let missed = self.per_frame.iter().flat_map(|f| &f.missed);
+                let below = missed
+                    .clone()
+                    .filter(|m| m.below_threshold.is_some())
+                    .count();
+                format!("{} / {below}", missed.count() - below)
+            }),
         ];
         let radii = |v: Option<f64>| v.map_or_else(|| "n/a".into(), |v| format!("{v:.3} r"));
         let rows_2d = self.center_error_radii.map(|e| {

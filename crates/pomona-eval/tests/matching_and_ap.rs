@@ -587,3 +587,53 @@ fn confidences_rank_when_every_detection_has_one() {
     .unwrap();
     assert!(close(r.ap_voc11.unwrap(), 1.0), "{:?}", r.ap_voc11);
 }
+
+/// Three counted fruit and one too hidden to count, at z = 1 m, threshold score 0.5: A is found
+/// by a detection at 0.9; B only by one at 0.2 (below the threshold); C by none, the nearest
+/// detection (an unmatched one at 0.7) 80 mm from it; D (visibility 0.2) by none. The report
+/// lists B and C as missed, B with the detection that would find it, C with the distance, and
+/// counts them in the summary.
+#[test]
+fn missed_fruit_say_whether_a_lower_threshold_would_find_them() {
+    let t = truth(
+        true,
+        vec![
+            fruit("A", Some([0.0, 0.0, 1.0]), None),
+            fruit("B", Some([0.3, 0.0, 1.0]), None),
+            fruit("C", Some([0.6, 0.0, 1.0]), None),
+            fruit("D", Some([0.9, 0.0, 1.0]), Some(0.2)),
+        ],
+    );
+    let d = vec![
+        det([0.01, 0.0, 1.0], 0.9),
+        det([0.3, 0.02, 1.0], 0.2),
+        det([0.6, 0.08, 1.0], 0.7),
+    ];
+    let config = EvalConfig {
+        threshold: 0.5,
+        ..EvalConfig::default()
+    };
+    let report = evaluate(&[frame("f", t, d)], &camera(), &config).unwrap();
+    let missed = &report.per_frame[0].missed;
+    let ids: Vec<&str> = missed.iter().map(|m| m.id.as_str()).collect();
+    assert_eq!(ids, ["B", "C"]);
+    let b = missed[0].below_threshold.unwrap();
+    assert!(close(b.score, 0.2) && b.confidence.is_none(), "{b:?}");
+    assert!(close(missed[0].nearest_detection_m.unwrap(), 0.02));
+    assert!(missed[1].below_threshold.is_none());
+    assert!(close(missed[1].nearest_detection_m.unwrap(), 0.08));
+    assert_eq!(missed[1].kind, "pepper");
+    assert_eq!(report.recall, Some(1.0 / 3.0));
+    assert!(
+        report
+            .to_markdown()
+            .contains("| missed: never detected / only below the threshold | 1 / 1 |"),
+        "{}",
+        report.to_markdown()
+    );
+    // Reports written before the list existed still read.
+    let mut json = serde_json::to_value(&report).unwrap();
+    json["per_frame"][0].as_object_mut().unwrap().remove("missed");
+    let old: pomona_eval::EvalReport = serde_json::from_value(json).unwrap();
+    assert!(old.per_frame[0].missed.is_empty());
+}

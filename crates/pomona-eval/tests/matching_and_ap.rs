@@ -633,7 +633,10 @@ fn missed_fruit_say_whether_a_lower_threshold_would_find_them() {
     );
     // Reports written before the list existed still read.
     let mut json = serde_json::to_value(&report).unwrap();
-    json["per_frame"][0].as_object_mut().unwrap().remove("missed");
+    json["per_frame"][0]
+        .as_object_mut()
+        .unwrap()
+        .remove("missed");
     let old: pomona_eval::EvalReport = serde_json::from_value(json).unwrap();
     assert!(old.per_frame[0].missed.is_empty());
 }

@@ -127,6 +127,18 @@ pub fn settable_keys(params: &Value) -> Vec<String> {
     keys
 }
 
+/// The value at the dotted `key` through nested objects of `params`.
+fn at<'a>(params: &'a Value, key: &str) -> Option<&'a Value> {
+    key.split('.')
+        .try_fold(params, |v, k| v.as_object()?.get(k))
+}
+
+/// [`at`], mutable.
+fn at_mut<'a>(params: &'a mut Value, key: &str) -> Option<&'a mut Value> {
+    key.split('.')
+        .try_fold(params, |v, k| v.as_object_mut()?.get_mut(k))
+}
+
 /// Applies `overrides` in order to `params`; `what` names the parameters' owner in messages
 /// ("the model of `shape-fit` (the built-in model)"). A value replaces one parameter; `null`
 /// also switches off an optional group of them (`ray_circles=null`).
@@ -153,11 +165,7 @@ pub fn apply_overrides(
     for o in overrides {
         // An object for a group that is on: each member as its own override.
         if let Value::Object(members) = &o.value {
-            let mut group = Some(&*params);
-            for segment in o.key.split('.') {
-                group = group.and_then(|v| v.get(segment));
-            }
-            if group.is_some_and(Value::is_object) {
+            if at(params, &o.key).is_some_and(Value::is_object) {
                 let each: Vec<ParamOverride> = members
                     .iter()
                     .map(|(k, v)| ParamOverride::new(format!("{}.{k}", o.key), v.clone()))
@@ -166,16 +174,11 @@ pub fn apply_overrides(
                 continue;
             }
         }
-        let keys = settable_keys(params);
-        let mut slot = Some(&mut *params);
-        for segment in o.key.split('.') {
-            slot = slot
-                .and_then(|v| v.as_object_mut())
-                .and_then(|m| m.get_mut(segment));
-        }
         // A group of parameters that is on is not replaced by a value that is not an object
         // (objects were merged above), only switched off (`null`), when optional.
-        let Some(slot) = slot.filter(|s| !s.is_object() || o.value.is_null()) else {
+        let slot = at_mut(params, &o.key).filter(|s| !s.is_object() || o.value.is_null());
+        let Some(slot) = slot else {
+            let keys = settable_keys(params);
             let known = if keys.is_empty() {
                 "it has no stage parameters".to_owned()
             } else if keys.len() > MAX_LISTED {

@@ -142,8 +142,10 @@ pub struct TrackParams {
     /// less than that between frames (the image patch follows the camera's turn); a circle
     /// further away is a neighbour the check landed on when the fruit's own pixels failed it
     /// (a leaf across its middle, an unripe colour weaker than the table's threshold). Circles
-    /// of the local re-detection, which chooses the one most like the expected circle, and
-    /// circles found after a lost frame are taken as before. Default 1 (0.75, 1 and 1.5 gave the
+    /// of the local re-detection, which chooses the one most like the expected circle,
+    /// circles found after a lost frame, and circles of a frame whose image patch was not found
+    /// again (the view moved beyond its range: the fruit may be anywhere the search reaches)
+    /// are taken as before. Default 1 (0.75, 1 and 1.5 gave the
     /// same tracks on the approaches of seeds 41, 43–46, 48 and 49; docs/results.md, "A far
     /// circle is not a jump of the fruit"); `None` (and older files) takes any circle, as the
     /// paper does.
@@ -401,7 +403,12 @@ impl ApproachTracker {
             scan_threshold,
         };
         let limits = self.radius_limits();
-        let shift = self.template.take().and_then(|t| t.shift_in(image));
+        let template = self.template.take();
+        // A patch that was not found again: the image moved beyond its range (or it left the
+        // image), so where the fruit went is not known.
+        let motion_unknown = template.is_some() && self.params.patch_shift.is_some();
+        let shift = template.and_then(|t| t.shift_in(image));
+        let motion_unknown = motion_unknown && shift.is_none();
         let predicted = (
             self.center_px + shift.unwrap_or_else(Vector2::zeros),
             self.radius_px,
@@ -429,7 +436,10 @@ impl ApproachTracker {
                     status = TrackStatus::Redetected;
                 }
             }
-            if status != TrackStatus::Redetected && self.jumps_too_far(found, predicted) {
+            if status != TrackStatus::Redetected
+                && !motion_unknown
+                && self.jumps_too_far(found, predicted)
+            {
                 found = Some(predicted);
                 status = TrackStatus::Predicted;
             }
@@ -1069,6 +1079,31 @@ mod tests {
             ..TrackParams::default()
         };
         assert!(bad.invalid_reason().is_some());
+    }
+
+    /// Where the patch is not found again (the view moved beyond its range), where the fruit
+    /// went is not known, and the jump limit does not refuse the circle the search finds.
+    #[test]
+    fn a_jump_beyond_the_patch_range_is_taken() {
+        let fruit = (60.0, 60.0, 12.0);
+        let mut t = ApproachTracker::new(
+            orange_lut(),
+            128,
+            TrackParams::default(),
+            Point2::new(60.0, 60.0),
+            12.0,
+        )
+        .unwrap();
+        let first = t.update(&sliding_scene(0.0, &[fruit]));
+        assert!((first.center_px - Point2::new(60.0, 60.0)).norm() < 1.0);
+        // 23 px to the right: beyond the patch's ±2 radii (24 px, its edge gives no shift),
+        // within the bounded search.
+        let est = t.update(&sliding_scene(23.0, &[fruit]));
+        assert_eq!(est.status, TrackStatus::Searched, "{est:?}");
+        assert!(
+            (est.center_px - Point2::new(83.0, 60.0)).norm() < 1.5,
+            "{est:?}"
+        );
     }
 
     #[test]

@@ -1096,8 +1096,8 @@ mod tests {
         .unwrap();
         let first = t.update(&sliding_scene(0.0, &[fruit]));
         assert!((first.center_px - Point2::new(60.0, 60.0)).norm() < 1.0);
-        // 23 px to the right: beyond the patch's ±2 radii (24 px, its edge gives no shift),
-        // within the bounded search.
+        // 23 px to the right: the patch's best match falls on the edge of its ±2 radii
+        // (24 px) range, which gives no shift; the fruit is within the bounded search.
         let est = t.update(&sliding_scene(23.0, &[fruit]));
         assert_eq!(est.status, TrackStatus::Searched, "{est:?}");
         assert!(

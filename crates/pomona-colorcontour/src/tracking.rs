@@ -145,10 +145,10 @@ pub struct TrackParams {
     /// of the local re-detection, which chooses the one most like the expected circle,
     /// circles found after a lost frame, and circles of a frame whose image patch was not found
     /// again (the view moved beyond its range: the fruit may be anywhere the search reaches)
-    /// are taken as before. Default 1 (0.75, 1 and 1.5 gave the
-    /// same tracks on the approaches of seeds 41, 43–46, 48 and 49; docs/results.md, "A far
-    /// circle is not a jump of the fruit"); `None` (and older files) takes any circle, as the
-    /// paper does.
+    /// are taken as before. Default 1 (chosen on the approaches of seeds 41, 43–46, 48 and 49,
+    /// where 0.75, 1 and 1.5 gave the same tracks on six of the seven sets; docs/results.md, "A
+    /// far circle is not a jump of the fruit"); `None` (and older files) takes any circle, as
+    /// the paper does.
     #[serde(default)]
     pub max_jump_radii: Option<f64>,
 }

@@ -2,8 +2,8 @@
 //! `pomona synth --approach`, with seed 004's approach tracker (§3.3, the facade's
 //! `pomona::Tracker`; by default with the local contour re-detection,
 //! `--set redetect="off" --set max_search_radii=null --set min_fruit_share=0 --set
-//! patch_shift=null --set max_jump_radii=null` for the paper's tracker alone), and score it. The tracker uses the
-//! model's colour table and, for the re-detection, its stage parameters.
+//! patch_shift=null --set max_jump_radii=null` for the paper's tracker alone), and score it.
+//! The tracker uses the model's colour table and, for the re-detection, its stage parameters.
 //!
 //! Per sequence (`DIR/seq-*/`, a dataset with `approach.json` naming the target):
 //! * the track starts from the first frame's `color-contour` detection nearest the target's

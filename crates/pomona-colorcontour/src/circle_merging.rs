@@ -114,7 +114,7 @@ impl Moments {
 /// merge settings of `params` (`merge_max_rms` is the module docs' `max_rms`). Arcs are
 /// returned unchanged, in their order, when `max_rms <= 0`; merged circles take the place of
 /// the first of their arcs. With `merge_ellipse_min_axis_ratio > 0`, the circles of pairs left
-/// apart that lie on one ellipse follow ([`ellipse_circle`]); the pair's own circles stay.
+/// apart that lie on one ellipse follow (`ellipse_circle` below); the pair's own circles stay.
 pub fn merge_arcs(
     contours: &[Contour],
     arcs: Vec<(usize, ContourArc)>,

@@ -51,9 +51,10 @@
 //! around the last estimate moved to rather than at the last estimate, so that the image sliding
 //! under a turning camera does not put the 5×5 check on a neighbour, and a circle found further
 //! than half a radius from there is not taken ([`TrackStatus::Predicted`]); and a **jump limit**
-//! (`max_jump_radii`, default 1): while tracking, a circle of the check or the spiral search
-//! more than a radius from the expected centre is not taken either — when the fruit's own
-//! pixels fail the check (a leaf over it, an unripe colour) the search lands on a neighbour.
+//! (`max_jump_radii`, default 1): where no patch says where the fruit went (the first frame, or
+//! with the patch off), a circle of the check or the spiral search more than a radius from the
+//! expected centre is not taken either — when the fruit's own pixels fail the check (a leaf over
+//! it, an unripe colour) the search lands on a neighbour.
 //! `--set 'redetect="off"' --set max_search_radii=null --set min_fruit_share=0 --set
 //! patch_shift=null --set max_jump_radii=null` is the paper's tracker.
 
@@ -136,19 +137,20 @@ pub struct TrackParams {
     /// starts each frame at the last estimate, as the paper does.
     #[serde(default)]
     pub patch_shift: Option<PatchShiftParams>,
-    /// Not in the paper: while tracking, a circle from the 5×5 check and the spiral search
-    /// whose centre lies more than this many radii from the expected centre is not taken; the
-    /// expected circle is the frame's estimate ([`TrackStatus::Predicted`]). The fruit moved
-    /// less than that between frames (the image patch follows the camera's turn); a circle
-    /// further away is a neighbour the check landed on when the fruit's own pixels failed it
-    /// (a leaf across its middle, an unripe colour weaker than the table's threshold). Circles
-    /// of the local re-detection, which chooses the one most like the expected circle,
-    /// circles found after a lost frame, and circles of a frame whose image patch was not found
-    /// again (the view moved beyond its range: the fruit may be anywhere the search reaches)
-    /// are taken as before. Default 1 (chosen on the approaches of seeds 41, 43–46, 48 and 49,
-    /// where 0.75, 1 and 1.5 gave the same tracks on six of the seven sets; docs/results.md, "A
-    /// far circle is not a jump of the fruit"); `None` (and older files) takes any circle, as
-    /// the paper does.
+    /// Not in the paper: where no image patch says where the fruit went — the first frame, whose
+    /// expected circle is the start circle, and every frame with `patch_shift` off — a circle
+    /// from the 5×5 check and the spiral search whose centre lies more than this many radii from
+    /// the expected centre is not taken while tracking; the expected circle is the frame's
+    /// estimate ([`TrackStatus::Predicted`]). A circle further away is a neighbour the check
+    /// landed on when the fruit's own pixels failed it (a leaf across its middle, an unripe
+    /// colour weaker than the table's threshold). Where the patch moved, its own, tighter
+    /// `max_offset_radii` decides; where a patch was not found again (the view moved beyond its
+    /// range) the fruit may be anywhere the search reaches, and no limit applies. Circles of the
+    /// local re-detection, which chooses the one most like the expected circle, and circles
+    /// found after a lost frame are taken as before. Default 1 (chosen on the approaches of
+    /// seeds 41, 43–46, 48 and 49, where 0.75, 1 and 1.5 gave the same tracks on six of the
+    /// seven sets; docs/results.md, "A far circle is not a jump of the fruit"); `None` (and
+    /// older files) takes any circle, as the paper does.
     #[serde(default)]
     pub max_jump_radii: Option<f64>,
 }
@@ -403,12 +405,10 @@ impl ApproachTracker {
             scan_threshold,
         };
         let limits = self.radius_limits();
+        // A patch exists only with `patch_shift`, after a frame whose circle it was sampled on.
         let template = self.template.take();
-        // A patch that was not found again: the image moved beyond its range (or it left the
-        // image), so where the fruit went is not known.
-        let motion_unknown = template.is_some() && self.params.patch_shift.is_some();
+        let had_patch = template.is_some();
         let shift = template.and_then(|t| t.shift_in(image));
-        let motion_unknown = motion_unknown && shift.is_none();
         let predicted = (
             self.center_px + shift.unwrap_or_else(Vector2::zeros),
             self.radius_px,
@@ -436,19 +436,24 @@ impl ApproachTracker {
                     status = TrackStatus::Redetected;
                 }
             }
-            if status != TrackStatus::Redetected
-                && !motion_unknown
-                && self.jumps_too_far(found, predicted)
-            {
-                found = Some(predicted);
-                status = TrackStatus::Predicted;
-            }
         }
-        if let (Some((c, _)), Some(_), Some(p)) = (found, shift, &self.params.patch_shift) {
-            if (c - predicted.0).norm() > p.max_offset_radii * predicted.1 {
-                found = Some(predicted);
-                status = TrackStatus::Predicted;
+        // A circle too far from the expected one is not taken. Where the patch moved to, any
+        // circle beyond `max_offset_radii`; with no patch (the first frame, or `patch_shift`
+        // off), a circle of the check or the search beyond `max_jump_radii`; where a patch was
+        // not found again (the view moved beyond its range), the fruit may be anywhere the
+        // search reaches.
+        let too_far = match (shift, &self.params.patch_shift) {
+            (Some(_), Some(p)) => found
+                .is_some_and(|(c, _)| (c - predicted.0).norm() > p.max_offset_radii * predicted.1),
+            _ => {
+                !had_patch
+                    && status != TrackStatus::Redetected
+                    && self.jumps_too_far(found, predicted)
             }
+        };
+        if too_far {
+            found = Some(predicted);
+            status = TrackStatus::Predicted;
         }
         match found {
             Some((c, r)) => {

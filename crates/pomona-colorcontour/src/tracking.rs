@@ -442,15 +442,17 @@ impl ApproachTracker {
         // off), a circle of the check or the search beyond `max_jump_radii`; where a patch was
         // not found again (the view moved beyond its range), the fruit may be anywhere the
         // search reaches.
-        let too_far = match (shift, &self.params.patch_shift) {
-            (Some(_), Some(p)) => found
-                .is_some_and(|(c, _)| (c - predicted.0).norm() > p.max_offset_radii * predicted.1),
-            _ => {
-                !had_patch
-                    && status != TrackStatus::Redetected
-                    && self.jumps_too_far(found, predicted)
+        // The jump limit also spares re-detected circles and circles after a lost frame.
+        let limit_radii = match (shift, &self.params.patch_shift) {
+            (Some(_), Some(p)) => Some(p.max_offset_radii),
+            _ if !had_patch && status != TrackStatus::Redetected && self.lost_in_a_row == 0 => {
+                self.params.max_jump_radii
             }
+            _ => None,
         };
+        let too_far = limit_radii.is_some_and(|k| {
+            found.is_some_and(|(c, _)| (c - predicted.0).norm() > k * predicted.1)
+        });
         if too_far {
             found = Some(predicted);
             status = TrackStatus::Predicted;
@@ -474,19 +476,6 @@ impl ApproachTracker {
             radius_px: self.radius_px,
             status,
             probes,
-        }
-    }
-
-    /// Whether `found` lies beyond [`TrackParams::max_jump_radii`] of the `predicted` circle
-    /// while the track is not lost.
-    fn jumps_too_far(
-        &self,
-        found: Option<(Point2<f64>, f64)>,
-        (center, radius): (Point2<f64>, f64),
-    ) -> bool {
-        match (found, self.params.max_jump_radii) {
-            (Some((c, _)), Some(k)) => self.lost_in_a_row == 0 && (c - center).norm() > k * radius,
-            _ => false,
         }
     }
 
@@ -651,9 +640,13 @@ mod tests {
     }
 
     fn tracker(c: (f64, f64), r: f64) -> ApproachTracker {
+        tracker_with(paper(), c, r)
+    }
+
+    fn tracker_with(params: TrackParams, c: (f64, f64), r: f64) -> ApproachTracker {
         let lut = orange_lut();
         assert!(lut.value(ORANGE) > 200 && lut.value(LEAF) < 50);
-        ApproachTracker::new(lut, 128, paper(), Point2::new(c.0, c.1), r).unwrap()
+        ApproachTracker::new(lut, 128, params, Point2::new(c.0, c.1), r).unwrap()
     }
 
     #[test]
@@ -1056,9 +1049,7 @@ mod tests {
                 max_jump_radii,
                 ..paper()
             };
-            let mut t =
-                ApproachTracker::new(orange_lut(), 128, params, Point2::new(60.0, 60.0), 20.0)
-                    .unwrap();
+            let mut t = tracker_with(params, (60.0, 60.0), 20.0);
             (t.update(&covered), t.update(&uncovered))
         };
         let (jumped, after) = run(None);
@@ -1091,14 +1082,7 @@ mod tests {
     #[test]
     fn a_jump_beyond_the_patch_range_is_taken() {
         let fruit = (60.0, 60.0, 12.0);
-        let mut t = ApproachTracker::new(
-            orange_lut(),
-            128,
-            TrackParams::default(),
-            Point2::new(60.0, 60.0),
-            12.0,
-        )
-        .unwrap();
+        let mut t = tracker_with(TrackParams::default(), (60.0, 60.0), 12.0);
         let first = t.update(&sliding_scene(0.0, &[fruit]));
         assert!((first.center_px - Point2::new(60.0, 60.0)).norm() < 1.0);
         // 23 px to the right: the patch's best match falls on the edge of its ±2 radii

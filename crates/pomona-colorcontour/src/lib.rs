@@ -46,6 +46,7 @@ mod circle_pruning;
 mod contour;
 mod contour_circles;
 mod depth_cut;
+mod depth_spheres;
 mod disc_share;
 mod distance_transform;
 mod edge_scan;
@@ -82,6 +83,7 @@ pub use contour_circles::{
     contour_arcs, contour_circles, ContourArc, ContourCircle, EdgeFitParams, GroupCircle,
 };
 pub use depth_cut::{cut_at_depth_steps, DepthCutParams};
+pub use depth_spheres::{depth_sphere_circles, DepthSphereParams};
 pub use distance_transform::squared_distance_to_background;
 pub use edge_scan::{
     circle_from_boundaries, scan_four_directions, EdgeScanParams, ScanEnd, SCAN_DIRECTIONS,

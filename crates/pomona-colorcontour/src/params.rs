@@ -5,7 +5,8 @@
 use serde::{Deserialize, Serialize};
 
 use crate::{
-    DepthCutParams, EdgeFitParams, HoughCircleParams, MlpParams, PruneRank, RayCircleParams,
+    DepthCutParams, DepthSphereParams, EdgeFitParams, HoughCircleParams, MlpParams, PruneRank,
+    RayCircleParams,
 };
 
 /// The model-file keys (dotted, under `stage_params`) of the circle sources beyond seed 004's
@@ -69,6 +70,12 @@ pub struct ColorContourParams {
     /// colour-only frames are never cut.
     #[serde(default)]
     pub depth_cut: Option<DepthCutParams>,
+    /// In a frame with depth, circles of spheres fitted to each mask component's depth
+    /// readings are added to the outline's ([`crate::depth_sphere_circles`]; not in the
+    /// paper). On by default (built-in model included); `None` (what model files without the
+    /// key mean): none.
+    #[serde(default)]
+    pub depth_spheres: Option<DepthSphereParams>,
     /// The adaptive edge fitting (Eq. 8).
     pub edge_fit: EdgeFitParams,
     /// Circles from rays cast out of the mask's inscribed discs, added to the edge fit's (not
@@ -174,6 +181,7 @@ impl Default for ColorContourParams {
             min_component_px: 40,
             mask_closing_px: 2,
             depth_cut: Some(DepthCutParams::default()),
+            depth_spheres: Some(DepthSphereParams::default()),
             edge_fit: EdgeFitParams::default(),
             ray_circles: None,
             hough_circles: Some(HoughCircleParams::default()),

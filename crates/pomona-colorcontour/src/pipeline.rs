@@ -1,7 +1,7 @@
 //! The `color-contour` pipeline: training (the colour perceptron on fruit and background pixels)
 //! and the detector that chains the stages.
 
-use pomona_core::{ColorImage, Detection, ImageCircle, RgbdFrame};
+use pomona_core::{ColorImage, Detection, ImageCircle, PinholeCamera, RgbdFrame};
 use pomona_learn::{ModelFile, SvmClassifier};
 use pomona_pipeline::{
     may_have_untagged_fruit, params_from_json, params_to_json, run_stage, untagged_fruit_circles,
@@ -11,13 +11,13 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::stages::{
-    ColorClassStage, ContourStage, DepthCutStage, EdgeFitStage, FruitStage, HoughCircleStage,
-    MaskCleaningStage, RayCircleStage,
+    ColorClassStage, ContourStage, DepthCutStage, DepthSphereStage, EdgeFitStage, FruitStage,
+    HoughCircleStage, MaskCleaningStage, RayCircleStage,
 };
 use crate::{
     best_f1_threshold, quantise_probability, taught_labels, training_pixels, value_histograms,
-    ColorContourParams, ContourCircle, DepthCutParams, HSigmaLut, HoughCircleParams, Mlp,
-    RayCircleParams, SampledRegion,
+    ColorContourParams, ContourCircle, DepthCutParams, DepthSphereParams, HSigmaLut,
+    HoughCircleParams, Mlp, RayCircleParams, SampledRegion,
 };
 
 /// Name of the pipeline on the command line and in model files.
@@ -252,6 +252,8 @@ pub struct ColorContourDetector {
     min_component_px: usize,
     mask_closing_px: usize,
     depth_cut: Option<DepthCutParams>,
+    depth_spheres: Option<DepthSphereParams>,
+    radius_range_m: (f64, f64),
     edge_fit: EdgeFitStage,
     ray_circles: Option<RayCircleParams>,
     hough_circles: Option<HoughCircleParams>,
@@ -322,6 +324,9 @@ impl ColorContourDetector {
         if let Some((name, reason)) = p.depth_cut.as_ref().and_then(|c| c.problem()) {
             return Err(invalid(name, reason));
         }
+        if let Some((name, reason)) = p.depth_spheres.as_ref().and_then(|c| c.problem()) {
+            return Err(invalid(name, reason));
+        }
         if !(p.depth_refit_tolerance_m.is_finite() && p.depth_refit_tolerance_m >= 0.0) {
             return Err(invalid(
                 "depth_refit_tolerance_m",
@@ -334,6 +339,8 @@ impl ColorContourDetector {
             min_component_px: p.min_component_px,
             mask_closing_px: p.mask_closing_px,
             depth_cut: p.depth_cut,
+            depth_spheres: p.depth_spheres,
+            radius_range_m: p.accepted_radius_range_m(),
             edge_fit: EdgeFitStage { params: p.edge_fit },
             ray_circles: p.ray_circles,
             hough_circles: p.hough_circles,
@@ -357,14 +364,17 @@ impl ColorContourDetector {
         let camera = frame.camera();
         // Merged circles no larger than the largest fruit the size test accepts.
         let (_, max_radius_px) = self.fruit.params.radius_px_range(camera.mean_focal_px());
-        // The depth is only read by the depth cut: no scan for readings without it.
+        // The depth is only read by the depth cut and the depth spheres: no scan for readings
+        // without them.
         let depth = frame.depth();
-        let depth_m = (self.depth_cut.is_some() && depth.has_readings()).then(|| depth.as_slice());
+        let depth_m = ((self.depth_cut.is_some() || self.depth_spheres.is_some())
+            && depth.has_readings())
+        .then(|| depth.as_slice());
         let circles = self.circles_of_mask(
             &fruit,
             camera.width as usize,
             max_radius_px,
-            depth_m,
+            depth_m.map(|d| (d, *camera)),
             timings,
         )?;
         Ok((fruit, circles))
@@ -379,7 +389,7 @@ impl ColorContourDetector {
         fruit: &[bool],
         width: usize,
         max_radius_px: f64,
-        depth_m: Option<&[f32]>,
+        depth: Option<(&[f32], PinholeCamera)>,
         timings: &mut StageTimings,
     ) -> Result<Vec<ContourCircle>, PipelineError> {
         let cleaning = MaskCleaningStage {
@@ -387,7 +397,7 @@ impl ColorContourDetector {
             width,
         };
         let mut cleaned = run_stage(&cleaning, fruit, timings)?;
-        if let (Some(params), Some(depth_m)) = (self.depth_cut, depth_m) {
+        if let (Some(params), Some((depth_m, _))) = (self.depth_cut, depth) {
             let cut = DepthCutStage { params, width };
             cleaned = run_stage(&cut, (cleaned.as_slice(), depth_m), timings)?;
         }
@@ -413,6 +423,14 @@ impl ColorContourDetector {
                 max_radius_px,
             };
             circles.extend(run_stage(&hough, cleaned.as_slice(), timings)?);
+        }
+        if let (Some(params), Some((depth_m, camera))) = (self.depth_spheres, depth) {
+            let spheres = DepthSphereStage {
+                params,
+                camera,
+                radius_range_m: self.radius_range_m,
+            };
+            circles.extend(run_stage(&spheres, (cleaned.as_slice(), depth_m), timings)?);
         }
         Ok(circles)
     }

@@ -1,18 +1,20 @@
 //! The stages of the detector, each behind [`pomona_pipeline::Stage`] so it can be timed,
 //! benchmarked or replaced alone: colour lookup → mask cleaning → (with depth, optionally, the
-//! depth cut) → contours → edge fitting (and, from the cleaned mask, the Hough circles and,
-//! optionally, the ray circles) → circles to fruit.
+//! depth cut) → contours → edge fitting (and, from the cleaned mask, the Hough circles,
+//! optionally the ray circles and, with depth, the circles of spheres fitted to the depth) →
+//! circles to fruit.
 
 use pomona_core::nalgebra::Point2;
-use pomona_core::{Detection, PixelBox, RgbdFrame};
+use pomona_core::{Detection, PinholeCamera, PixelBox, RgbdFrame};
 use pomona_pipeline::{PipelineError, Stage};
 
 use crate::disc_share::disc_share;
 use crate::{
-    close_mask, contour_arcs, cut_at_depth_steps, hough_circles, hysteresis_mask, merge_arcs,
-    prune_overlapping, quantise_probability, ray_circles, smooth_mask, sphere_from_depth,
-    sphere_from_size, trace_contours, ColorContourParams, Contour, ContourArc, ContourCircle,
-    DepthCutParams, EdgeFitParams, HSigmaLut, HoughCircleParams, RayCircleParams, PIPELINE_NAME,
+    close_mask, contour_arcs, cut_at_depth_steps, depth_sphere_circles, hough_circles,
+    hysteresis_mask, merge_arcs, prune_overlapping, quantise_probability, ray_circles, smooth_mask,
+    sphere_from_depth, sphere_from_size, trace_contours, ColorContourParams, Contour, ContourArc,
+    ContourCircle, DepthCutParams, DepthSphereParams, EdgeFitParams, HSigmaLut, HoughCircleParams,
+    RayCircleParams, PIPELINE_NAME,
 };
 
 /// Per pixel: the lookup table's value at or above the threshold (§3.1), or, with a lower
@@ -153,6 +155,35 @@ impl Stage<(&[bool], &[f32]), Vec<bool>> for DepthCutStage {
 
     fn run(&self, (mask, depth_m): (&[bool], &[f32])) -> Result<Vec<bool>, PipelineError> {
         Ok(cut_at_depth_steps(mask, depth_m, self.width, &self.params))
+    }
+}
+
+/// Circles of spheres fitted to the depth of each mask component
+/// ([`crate::depth_sphere_circles`]; not in the paper).
+#[derive(Debug, Clone)]
+pub struct DepthSphereStage {
+    /// The fit's settings.
+    pub params: DepthSphereParams,
+    /// The frame's camera (back-projection and projection).
+    pub camera: PinholeCamera,
+    /// Radii a sphere may have, metres (the size test's).
+    pub radius_range_m: (f64, f64),
+}
+
+/// Input: the cleaned (and cut) mask and the frame's depth, metres per pixel.
+impl Stage<(&[bool], &[f32]), Vec<ContourCircle>> for DepthSphereStage {
+    fn name(&self) -> &'static str {
+        "depth-spheres"
+    }
+
+    fn run(&self, (mask, depth_m): (&[bool], &[f32])) -> Result<Vec<ContourCircle>, PipelineError> {
+        Ok(depth_sphere_circles(
+            mask,
+            depth_m,
+            &self.camera,
+            self.radius_range_m,
+            &self.params,
+        ))
     }
 }
 

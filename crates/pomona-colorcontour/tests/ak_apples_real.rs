@@ -1,7 +1,7 @@
 //! Real data: the built-in colour-contour model (trained on synthetic oranges) on the Azure
 //! Kinect orchard frames (`../shared/data/ak-apples`) places the apples it finds within about
-//! 13 mm (median) once each circle's 3D centre is refitted to the fruit pixels' points, where the
-//! centre on the circle's ray lies about 2 cm beside them. Skips with a message when the data
+//! 12 mm (median) once each circle's 3D centre is refitted to the fruit pixels' points, nearer
+//! than the centre on the circle's ray. Skips with a message when the data
 //! folder is absent; fails instead when `POMONA_REQUIRE_DATA=1`.
 
 #![allow(clippy::unwrap_used, clippy::expect_used)] // test helpers outside test functions
@@ -49,10 +49,12 @@ fn built_in_model_places_real_apples_from_their_points() {
     eprintln!(
         "centre median: refitted {refit:.4} m ({found} apples), on the ray {ray:.4} m ({found_on_ray})"
     );
-    // Measured: 12.6 mm against 20.3 mm, 69 apples either way; 9.7 against 20.2 mm and 63
-    // apples before the radius tolerance, whose six more apples are placed 15–29 mm off
-    // (docs/results.md, "Radius tolerance").
-    assert!(refit <= 0.014, "refitted {refit}");
-    assert!(ray >= 0.016, "on the ray {ray}");
+    // Measured: 11.6 mm against 14.7 mm, 77 apples either way, since the circles of spheres
+    // fitted to the fruit's depth (whose centres already lie on the fruit's points:
+    // docs/results.md, "Circles from the fruit's surface in depth"); 12.6 against 20.3 mm and
+    // 69 apples before them; 9.7 against 20.2 mm and 63 apples before the radius tolerance,
+    // whose six more apples are placed 15–29 mm off ("Radius tolerance").
+    assert!(refit <= 0.013, "refitted {refit}");
+    assert!(ray >= refit + 0.002, "on the ray {ray}, refitted {refit}");
     assert!(found + 2 >= found_on_ray, "{found} against {found_on_ray}");
 }

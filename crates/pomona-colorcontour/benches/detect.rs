@@ -18,7 +18,9 @@
 //!   (`params.ray_circles`), end to end and the stage alone on their cleaned fruit masks;
 //!   `hough circles alone`: the Hough circles (on in the built-in model) on the same masks;
 //!   `depth cut alone`: the mask cut at depth steps (on in the built-in model) on the cleaned
-//!   masks and depth of both synthetic sets.
+//!   masks and depth of both synthetic sets; `depth spheres alone`: the circles of spheres
+//!   fitted to the depth (on in the built-in model) on those masks once cut, and both sets end
+//!   to end with them off.
 //! * `colour table compiled`: the built-in network compiled into its lookup table (with the
 //!   intensity input: eight planes, in the rayon pool of one thread), and the same network
 //!   without its intensity weights (the paper's single plane) — the cost of loading a model.
@@ -30,8 +32,8 @@
 use criterion::{criterion_group, criterion_main, Criterion};
 use pomona_colorcontour::stages::MaskCleaningStage;
 use pomona_colorcontour::{
-    cut_at_depth_steps, hough_circles, ray_circles, ColorContourDetector, ColorContourPipeline,
-    ColorContourStageParams, HSigmaLut,
+    cut_at_depth_steps, depth_sphere_circles, hough_circles, ray_circles, ColorContourDetector,
+    ColorContourPipeline, ColorContourStageParams, HSigmaLut,
 };
 use pomona_core::RgbdFrame;
 use pomona_io::Dataset;
@@ -189,6 +191,67 @@ fn detect(c: &mut Criterion) {
                 for (mask, depth_m, width) in &cut_inputs {
                     criterion::black_box(cut_at_depth_steps(mask, depth_m, *width, &depth_cut));
                 }
+            })
+        });
+    }
+    // The circles of spheres fitted to the depth (on in the built-in model) alone on the same
+    // cleaned (and cut) masks, and both synthetic sets end to end without them.
+    let spheres = stage_params.params.depth_spheres.unwrap_or_default();
+    let radius_range_m = stage_params.params.accepted_radius_range_m();
+    for (name, frames) in [
+        ("depth spheres alone on 3 wide d435 masks", &sets[0].1),
+        (
+            "depth spheres alone on 3 orchard kinect-v2 masks",
+            &sets[1].1,
+        ),
+    ] {
+        let inputs: Vec<(Vec<bool>, &RgbdFrame)> = frames
+            .iter()
+            .map(|f| {
+                let (cleaned, width) = cleaned_mask(f);
+                (
+                    cut_at_depth_steps(&cleaned, f.depth().as_slice(), width, &depth_cut),
+                    f,
+                )
+            })
+            .collect();
+        c.bench_function(name, |b| {
+            b.iter(|| {
+                for (mask, f) in &inputs {
+                    criterion::black_box(depth_sphere_circles(
+                        mask,
+                        f.depth().as_slice(),
+                        f.camera(),
+                        radius_range_m,
+                        &spheres,
+                    ));
+                }
+            })
+        });
+    }
+    let mut without_spheres = model.clone();
+    without_spheres.stage_params["params"]["depth_spheres"] = serde_json::Value::Null;
+    let plain = pipeline
+        .load(&without_spheres)
+        .unwrap_or_else(|e| panic!("{e}"));
+    for (name, frames) in [
+        (
+            "color-contour detect 3 wide d435 frames, depth spheres off",
+            &sets[0].1,
+        ),
+        (
+            "color-contour detect 3 orchard kinect-v2 frames, depth spheres off",
+            &sets[1].1,
+        ),
+    ] {
+        c.bench_function(name, |b| {
+            b.iter(|| {
+                one.install(|| {
+                    for frame in frames {
+                        let found = plain.detect(frame, &mut StageTimings::default());
+                        criterion::black_box(found.unwrap_or_else(|e| panic!("{e}")));
+                    }
+                })
             })
         });
     }
